@@ -1,0 +1,59 @@
+#pragma once
+// Recorded data per the CSV contract of design.md §4 / docs/data-formats.md:
+// one joint's proximal measurements, optionally the measured distal torque.
+
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "estimator/table.hpp"
+
+namespace tsmh::estimator {
+
+struct Recording {
+  std::string source;                       ///< where it came from, for messages
+  double radius_m = std::nan("");           ///< pulley radius R, m (NaN when unknown)
+  std::vector<double> t;                    ///< s, strictly increasing
+  std::vector<double> x_in;                 ///< rad, motor-side input pulley angle
+  std::vector<double> tau_in;               ///< N m, proximal torque (empty when unknown)
+  std::vector<double> tau_out;              ///< N m, measured distal torque (empty when unknown)
+  std::vector<double> x_out;                ///< rad, joint angle (optional)
+  std::vector<double> T1, T3;               ///< N, proximal tensions (optional)
+  std::vector<double> xd_in, xdd_in;        ///< exact derivatives (optional)
+
+  std::size_t size() const { return t.size(); }
+  bool has_tau_in() const { return !tau_in.empty(); }
+  bool has_tau_out() const { return !tau_out.empty(); }
+  bool has_derivatives() const { return !xd_in.empty() && !xdd_in.empty(); }
+  /// Measured total friction F = (tau_in - tau_out)/R, N. Needs tau_in, tau_out, radius.
+  std::vector<double> measured_friction() const;
+};
+
+struct RecordingRequirements {
+  bool tau_in = false;   ///< tau_in (or T1 and T3) must be present
+  bool tau_out = false;  ///< tau_out must be present
+  bool radius = false;   ///< a radius must be known (file comment or override)
+};
+
+/// Builds a Recording from a table read from the CSV contract. `radius_override`
+/// (from --radius) wins over the file's "# radius_m:" comment. When tau_in is
+/// absent but T1 and T3 are present, tau_in = R (T1 - T3). Validates time
+/// strictly increasing and the requirements; throws DataError naming file,
+/// line and column.
+Recording recording_from_table(const Table& table, std::optional<double> radius_override,
+                               const RecordingRequirements& need);
+
+/// The table form of a recording (columns present in it, "radius_m" meta).
+Table recording_to_table(const Recording& rec);
+
+/// Convenience: read_csv_table + recording_from_table.
+Recording read_recording_csv(const std::filesystem::path& path,
+                             std::optional<double> radius_override = std::nullopt,
+                             const RecordingRequirements& need = {});
+
+/// Convenience: recording_to_table + write_csv_table (atomic).
+void write_recording_csv(const Recording& rec, const std::filesystem::path& path);
+
+}  // namespace tsmh::estimator
