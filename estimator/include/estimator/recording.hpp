@@ -13,15 +13,15 @@
 namespace tsmh::estimator {
 
 struct Recording {
-  std::string source;                       ///< where it came from, for messages
-  double radius_m = std::nan("");           ///< pulley radius R, m (NaN when unknown)
-  std::vector<double> t;                    ///< s, strictly increasing
-  std::vector<double> x_in;                 ///< rad, motor-side input pulley angle
-  std::vector<double> tau_in;               ///< N m, proximal torque (empty when unknown)
-  std::vector<double> tau_out;              ///< N m, measured distal torque (empty when unknown)
-  std::vector<double> x_out;                ///< rad, joint angle (optional)
-  std::vector<double> T1, T3;               ///< N, proximal tensions (optional)
-  std::vector<double> xd_in, xdd_in;        ///< exact derivatives (optional)
+  std::string source;                 ///< where it came from, for messages
+  double radius_m = std::nan("");     ///< pulley radius R, m (NaN when unknown)
+  std::vector<double> t;              ///< s, strictly increasing
+  std::vector<double> x_in;           ///< rad, motor-side input pulley angle
+  std::vector<double> tau_in;         ///< N m, proximal torque (empty when unknown)
+  std::vector<double> tau_out;        ///< N m, measured distal torque (empty when unknown)
+  std::vector<double> x_out;          ///< rad, joint angle (optional)
+  std::vector<double> T1, T3;         ///< N, proximal tensions (optional)
+  std::vector<double> xd_in, xdd_in;  ///< exact derivatives (optional)
 
   std::size_t size() const { return t.size(); }
   bool has_tau_in() const { return !tau_in.empty(); }

@@ -26,11 +26,11 @@ class DataError : public std::runtime_error {
 };
 
 struct Table {
-  std::vector<std::string> names;             ///< column names, in file order
-  std::vector<std::vector<double>> columns;   ///< columns[i] holds names[i]
-  std::vector<long> line_of_row;              ///< file line of each row (for error messages)
-  std::map<std::string, std::string> meta;    ///< "# key: value" comment lines
-  std::string source;                         ///< file name, for error messages
+  std::vector<std::string> names;            ///< column names, in file order
+  std::vector<std::vector<double>> columns;  ///< columns[i] holds names[i]
+  std::vector<long> line_of_row;             ///< file line of each row (for error messages)
+  std::map<std::string, std::string> meta;   ///< "# key: value" comment lines
+  std::string source;                        ///< file name, for error messages
 
   std::size_t rows() const { return columns.empty() ? 0 : columns.front().size(); }
   bool has(const std::string& name) const;

@@ -1,0 +1,30 @@
+// tsm: the estimator's command line (design.md §4): simulate, fit, gap, convert.
+
+#include <iostream>
+
+#include "commands.hpp"
+#include "estimator/model_io.hpp"
+#include "estimator/table.hpp"
+
+int main(int argc, char** argv) {
+  using namespace tsmh::tsm_cli;
+  CLI::App app{"tsm: tendon-sheath friction models: simulate, identify, find model gaps"};
+  app.require_subcommand(1);
+  Context ctx;
+  add_simulate_command(app, ctx);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const tsmh::estimator::DataError& e) {
+    std::cerr << "tsm: error: " << e.what() << "\n";
+    return 2;
+  } catch (const tsmh::estimator::ParamsError& e) {
+    std::cerr << "tsm: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "tsm: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,23 @@
+#pragma once
+// Writing a result file so that it is either complete or absent: the content
+// goes to a temporary file beside the target, which is renamed into place
+// only after a successful flush. Readers never see half a file, and a failed
+// run leaves no output behind.
+
+#include <filesystem>
+#include <functional>
+#include <ostream>
+#include <string>
+
+namespace tsmh::estimator {
+
+/// Calls `write` with a stream to a temporary file, then renames it to
+/// `path`. Throws std::runtime_error naming the path on any failure (and
+/// removes the temporary file).
+void write_file_atomically(const std::filesystem::path& path,
+                           const std::function<void(std::ostream&)>& write);
+
+/// Convenience for ready text.
+void write_text_atomically(const std::filesystem::path& path, const std::string& text);
+
+}  // namespace tsmh::estimator

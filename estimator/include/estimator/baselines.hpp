@@ -1,0 +1,101 @@
+#pragma once
+// Baseline friction models behind the same interface, for comparison with the
+// paper's model (design.md §3, issue 2): Dahl, LuGre, and Kaneko's
+// Coulomb/capstan model of a tendon-sheath pair.
+
+#include "estimator/friction_model.hpp"
+
+namespace tsmh::estimator {
+
+/// Dahl: dF/dt = sigma0 (xd - |xd| F / Fc). Integrated exactly for the
+/// velocity held over each interval (F relaxes exponentially towards sgn(xd) Fc).
+struct DahlParams {
+  double sigma0 = 148.4;  ///< N/rad, initial stiffness
+  double fc = 9.2;        ///< N, Coulomb level
+};
+
+class DahlModel final : public FrictionModel {
+ public:
+  using Params = DahlParams;
+  explicit DahlModel(Params p = {});
+  std::string kind() const override { return "dahl"; }
+  std::vector<Parameter> parameters() const override;
+  void set_values(std::span<const double> values) override;
+  void reset() noexcept override { f_ = 0.0; }
+  double step(const Motion& m, double dt) noexcept override;
+  double friction() const noexcept override { return f_; }
+  std::unique_ptr<FrictionModel> clone() const override {
+    return std::make_unique<DahlModel>(*this);
+  }
+
+ private:
+  Params p_;
+  double f_ = 0.0;
+};
+
+/// LuGre: dz/dt = v - sigma0 |v| z / g(v), g(v) = Fc + (Fs - Fc) e^-(v/vs)^2,
+/// F = sigma0 z + sigma1 dz/dt + sigma2 v. Bristle state integrated exactly
+/// for the held velocity.
+struct LuGreParams {
+  double sigma0 = 148.4;  ///< N/rad, bristle stiffness
+  double sigma1 = 1.0;    ///< N s/rad, bristle damping
+  double sigma2 = 0.0;    ///< N s/rad, viscous
+  double fc = 9.2;        ///< N, Coulomb level
+  double fs = 15.0;       ///< N, static (Stribeck) level
+  double vs = 0.2;        ///< rad/s, Stribeck velocity
+};
+
+class LuGreModel final : public FrictionModel {
+ public:
+  using Params = LuGreParams;
+  explicit LuGreModel(Params p = {});
+  std::string kind() const override { return "lugre"; }
+  std::vector<Parameter> parameters() const override;
+  void set_values(std::span<const double> values) override;
+  void reset() noexcept override {
+    z_ = 0.0;
+    f_ = 0.0;
+  }
+  double step(const Motion& m, double dt) noexcept override;
+  double friction() const noexcept override { return f_; }
+  std::unique_ptr<FrictionModel> clone() const override {
+    return std::make_unique<LuGreModel>(*this);
+  }
+
+ private:
+  Params p_;
+  double z_ = 0.0;
+  double f_ = 0.0;
+};
+
+/// Kaneko's Coulomb model of a tendon-sheath pair with the capstan law: in
+/// sliding each tendon loses tension by e^(-mu Theta); for a pair carrying the
+/// load L = |tau_in|/R over pretension this gives F = sgn(xd) (f0 + capstan L).
+/// The sign is regularised over v_eps because the pure Coulomb switch is
+/// discontinuous at zero velocity (the paper's criticism of this model).
+struct CoulombCapstanParams {
+  double f0 = 9.2;       ///< N, friction at zero load (pretension 2 T0 sinh(mu Theta))
+  double capstan = 0.3;  ///< friction per N of transmitted load, 1 - e^(-mu Theta)
+  double v_eps = 0.02;   ///< rad/s, width of the regularised sign
+};
+
+class CoulombCapstanModel final : public FrictionModel {
+ public:
+  using Params = CoulombCapstanParams;
+  explicit CoulombCapstanModel(Params p = {});
+  std::string kind() const override { return "coulomb_capstan"; }
+  std::vector<Parameter> parameters() const override;
+  void set_values(std::span<const double> values) override;
+  void reset() noexcept override { f_ = 0.0; }
+  double step(const Motion& m, double dt) noexcept override;
+  double friction() const noexcept override { return f_; }
+  std::unique_ptr<FrictionModel> clone() const override {
+    return std::make_unique<CoulombCapstanModel>(*this);
+  }
+
+ private:
+  Params p_;
+  double f_ = 0.0;
+};
+
+}  // namespace tsmh::estimator

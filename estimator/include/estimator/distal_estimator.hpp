@@ -1,0 +1,54 @@
+#pragma once
+// The per-joint distal torque estimator the haptic loop calls every tick:
+// proximal tension and motor angle in, estimated distal (tip) torque out.
+//   tau_in = R (T1 - T3)            (eq. 1)
+//   F      = friction model         (eqs. 4-12), driven by the differentiated angle
+//   tau_out_est = tau_in - R F      (eq. 3)
+
+#include <memory>
+
+#include "estimator/differentiator.hpp"
+#include "estimator/friction_model.hpp"
+
+namespace tsmh::estimator {
+
+struct Estimate {
+  double xd = 0.0;   ///< rad/s (from the differentiator or given)
+  double xdd = 0.0;  ///< rad/s^2
+  int acc_sign = 0;
+  double tau_in = 0.0;       ///< N m, proximal torque
+  double friction = 0.0;     ///< N, total sheath friction F
+  double tau_out_est = 0.0;  ///< N m, estimated distal torque; NaN when !valid
+  bool valid = false;        ///< false: the sample was rejected (non-finite, time not increasing)
+};
+
+class DistalTorqueEstimator {
+ public:
+  /// `model` is owned; radius_m > 0 (throws std::invalid_argument otherwise).
+  DistalTorqueEstimator(std::unique_ptr<FrictionModel> model, double radius_m,
+                        const DifferentiatorConfig& diff = {});
+
+  /// One sample with the proximal torque given. Never allocates or throws.
+  Estimate update(double t, double x_in, double tau_in) noexcept;
+  /// One sample from the two proximal tensions (eq. 1).
+  Estimate update_tensions(double t, double x_in, double t1, double t3) noexcept {
+    return update(t, x_in, radius_ * (t1 - t3));
+  }
+  /// One sample with exact derivatives (a simulator that knows them).
+  Estimate update_exact(double t, double x_in, double xd, double xdd, double tau_in) noexcept;
+
+  void reset() noexcept;
+  double radius() const { return radius_; }
+  const FrictionModel& model() const { return *model_; }
+
+ private:
+  Estimate finish(double t, double x, double xd, double xdd, int acc_sign, double tau_in) noexcept;
+
+  std::unique_ptr<FrictionModel> model_;
+  double radius_;
+  Differentiator diff_;
+  bool started_ = false;
+  double t_prev_ = 0.0;
+};
+
+}  // namespace tsmh::estimator

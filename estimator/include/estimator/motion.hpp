@@ -1,0 +1,23 @@
+#pragma once
+// What a friction model sees at one sample: the input pulley's motion (from
+// the differentiator, or exact), the transmitted load and the time.
+
+namespace tsmh::estimator {
+
+struct Motion {
+  double t = 0.0;    ///< s, for time-varying terms
+  double x = 0.0;    ///< rad, input pulley angle
+  double xd = 0.0;   ///< rad/s
+  double xdd = 0.0;  ///< rad/s^2 (magnitude used by the acceleration terms)
+  /// sgn(xdd) as the model switches on it: -1, 0 or +1. A differentiator
+  /// debounces it (a Schmitt trigger) so eq. (4)-(10) do not chatter on noise.
+  int acc_sign = 0;
+  double load = 0.0;  ///< N, transmitted load |tau_in| / R, for load-dependent terms
+};
+
+/// sgn with sgn(0) = 0, as in the paper.
+constexpr int sign_of(double v) {
+  return (v > 0.0) - (v < 0.0);
+}
+
+}  // namespace tsmh::estimator

@@ -1,0 +1,73 @@
+#pragma once
+// The sliding level Ff of the tendon-sheath model (eqs. 5-11) as a sum of
+// named terms. The paper's Ff is one configuration of this catalog
+// (coulomb + direction_asymmetry + stribeck + acceleration_dependence, with
+// reversal_offset driving g in eq. 4); the model-gap workflow adds further
+// physical effects (viscous, load_dependent, ...) without a new class.
+//
+// Branch rule at the boundary xd = 0, which eq. (5) puts in both branches:
+// xd >= 0 takes the positive-velocity branch (S+v1 / S+v2), xd < 0 the
+// negative one (S-v). Tests pin this down.
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string_view>
+
+#include "estimator/motion.hpp"
+
+namespace tsmh::estimator {
+
+enum class TermKind : std::uint8_t {
+  coulomb,                  ///< rho1: the level (both directions unless direction_asymmetry)
+  direction_asymmetry,      ///< rho2: the level for xd < 0, replacing rho1 there
+  stribeck,                 ///< mu1 e^(-kappa1 |xd|)
+  acceleration_dependence,  ///< eqs. 6-10: +-mu2 (1 - e^-|kappa2 xdd|) and +-mu3 e^-f2
+  reversal_offset,          ///< lambda in g = xd + lambda sgn(xdd) (eq. 4); adds nothing to Ff
+  viscous,                  ///< c_v |xd|: friction grows with speed
+  load_dependent,           ///< c_load |tau_in|/R: capstan, friction grows with tension
+  position_dependent,       ///< p1 x + p2 x^2: friction varies along the stroke
+  time_varying,             ///< drift (t - t0) + step [t >= t_step]: sheath re-routed, wear
+};
+
+inline constexpr int kMaxTermParams = 5;
+
+struct ParamSpec {
+  std::string_view name;
+  double default_value;
+  double lower;
+  double upper;
+  std::string_view unit;
+  bool identified = true;  ///< false: set from the data (e.g. a time origin), never fitted
+};
+
+struct TermInfo {
+  TermKind kind;
+  std::string_view name;     ///< stable id, used in YAML and in gap reports
+  std::string_view meaning;  ///< the physical effect, one line
+  std::string_view where;    ///< where in the data its absence shows
+  std::span<const ParamSpec> params;
+};
+
+/// The whole catalog, in declaration order of TermKind.
+std::span<const TermInfo> term_catalog();
+const TermInfo& term_info(TermKind kind);
+std::optional<TermKind> term_kind_from_name(std::string_view name);
+
+struct Term {
+  TermKind kind = TermKind::coulomb;
+  std::array<double, kMaxTermParams> p{};  ///< in the order of term_info(kind).params
+};
+
+/// Contribution of one term to the sliding level Ff at motion `m`.
+/// `asymmetric` tells the coulomb term that direction_asymmetry is present,
+/// so rho1 only applies to the positive branch.
+double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept;
+
+/// True when xd takes the negative-velocity branch (xd < 0; xd = 0 is positive).
+constexpr bool negative_branch(double xd) {
+  return xd < 0.0;
+}
+
+}  // namespace tsmh::estimator

@@ -1,0 +1,211 @@
+#include "estimator/model_io.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "estimator/atomic_file.hpp"
+#include "estimator/baselines.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+[[noreturn]] void fail(const std::string& origin, const std::string& field,
+                       const std::string& why) {
+  throw ParamsError(origin + ": " + (field.empty() ? "" : field + ": ") + why);
+}
+
+double number(const YAML::Node& node, const std::string& origin, const std::string& field) {
+  if (!node || !node.IsScalar()) fail(origin, field, "must be a number");
+  double v = 0.0;
+  try {
+    v = node.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(origin, field, "must be a number, got '" + node.Scalar() + "'");
+  }
+  if (!std::isfinite(v)) fail(origin, field, "must be finite, got '" + node.Scalar() + "'");
+  return v;
+}
+
+void reject_unknown_keys(const YAML::Node& map, const std::set<std::string>& known,
+                         const std::string& origin, const std::string& where) {
+  for (const auto& kv : map) {
+    const auto key = kv.first.as<std::string>();
+    if (!known.count(key)) {
+      std::string list;
+      for (const auto& k : known)
+        list += (list.empty() ? "" : ", ") + k;
+      fail(origin, where.empty() ? key : where + "." + key,
+           "unknown field (expected one of: " + list + ")");
+    }
+  }
+}
+
+std::unique_ptr<FrictionModel> parse_tsm(const YAML::Node& root, const std::string& origin) {
+  reject_unknown_keys(root, {"model", "core", "terms", "fixed", "format", "radius_m"}, origin, "");
+  TsmModelSpec spec;
+  spec.fixed.clear();
+  const YAML::Node core = root["core"];
+  if (!core || !core.IsMap()) fail(origin, "core", "missing (a map with theta, gamma, n, sigma)");
+  reject_unknown_keys(core, {"theta", "gamma", "n", "sigma"}, origin, "core");
+  spec.theta = number(core["theta"], origin, "core.theta");
+  spec.gamma = number(core["gamma"], origin, "core.gamma");
+  spec.n = number(core["n"], origin, "core.n");
+  spec.sigma = number(core["sigma"], origin, "core.sigma");
+  const YAML::Node terms = root["terms"];
+  if (!terms || !terms.IsMap() || terms.size() == 0)
+    fail(origin, "terms", "missing (a map of term name to its parameters)");
+  for (const auto& kv : terms) {
+    const auto name = kv.first.as<std::string>();
+    const auto kind = term_kind_from_name(name);
+    if (!kind) {
+      std::string list;
+      for (const auto& info : term_catalog())
+        list += (list.empty() ? "" : ", ") + std::string(info.name);
+      fail(origin, "terms." + name, "unknown term (known: " + list + ")");
+    }
+    const auto& info = term_info(*kind);
+    const std::string where = "terms." + name;
+    if (!kv.second.IsMap()) fail(origin, where, "must be a map of parameter values");
+    std::set<std::string> known;
+    for (const auto& ps : info.params)
+      known.insert(std::string(ps.name));
+    reject_unknown_keys(kv.second, known, origin, where);
+    Term term{*kind, {}};
+    for (std::size_t k = 0; k < info.params.size(); ++k) {
+      const auto pname = std::string(info.params[k].name);
+      const YAML::Node v = kv.second[pname];
+      if (!v && !info.params[k].identified) {
+        term.p[k] = info.params[k].default_value;
+      } else {
+        term.p[k] = number(v, origin, where + "." + pname);
+      }
+    }
+    spec.terms.push_back(term);
+  }
+  if (const YAML::Node fixed = root["fixed"]) {
+    if (!fixed.IsSequence()) fail(origin, "fixed", "must be a list of parameter names");
+    for (const auto& f : fixed)
+      spec.fixed.push_back(f.as<std::string>());
+  }
+  try {
+    auto model = std::make_unique<TsmFrictionModel>(spec);
+    std::set<std::string> names;
+    for (const auto& p : model->parameters())
+      names.insert(p.name);
+    for (const auto& f : spec.fixed) {
+      if (!names.count(f)) fail(origin, "fixed", "'" + f + "' is not a parameter of this model");
+    }
+    return model;
+  } catch (const std::invalid_argument& e) {
+    fail(origin, "", e.what());
+  }
+}
+
+template <class Model>
+std::unique_ptr<FrictionModel> parse_baseline(const YAML::Node& root, const std::string& origin) {
+  reject_unknown_keys(root, {"model", "params", "format", "radius_m"}, origin, "");
+  const YAML::Node params = root["params"];
+  if (!params || !params.IsMap()) fail(origin, "params", "missing (a map of parameter values)");
+  Model model;
+  const auto spec = model.parameters();
+  std::set<std::string> known;
+  for (const auto& p : spec)
+    known.insert(p.name.substr(p.name.find('.') + 1));
+  reject_unknown_keys(params, known, origin, "params");
+  std::vector<double> values;
+  for (const auto& p : spec)
+    values.push_back(number(params[p.name.substr(p.name.find('.') + 1)], origin, p.name));
+  try {
+    model.set_values(values);
+  } catch (const std::invalid_argument& e) {
+    fail(origin, "", e.what());
+  }
+  return std::make_unique<Model>(model);
+}
+
+}  // namespace
+
+std::vector<std::string> preset_names() {
+  return {"paper", "dahl", "dahl_classic", "lugre", "coulomb_capstan"};
+}
+
+std::unique_ptr<FrictionModel> parse_model(const std::string& text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    fail(origin, "", "not valid YAML (line " + std::to_string(e.mark.line + 1) + "): " + e.msg);
+  }
+  if (!root.IsMap()) fail(origin, "", "expected a YAML map with a 'model' field");
+  const YAML::Node kind = root["model"];
+  if (!kind || !kind.IsScalar())
+    fail(origin, "model", "missing (tsm, dahl, lugre or coulomb_capstan)");
+  const auto k = kind.as<std::string>();
+  if (k == "tsm") return parse_tsm(root, origin);
+  if (k == "dahl") return parse_baseline<DahlModel>(root, origin);
+  if (k == "lugre") return parse_baseline<LuGreModel>(root, origin);
+  if (k == "coulomb_capstan") return parse_baseline<CoulombCapstanModel>(root, origin);
+  fail(origin, "model", "unknown model '" + k + "' (tsm, dahl, lugre or coulomb_capstan)");
+}
+
+std::unique_ptr<FrictionModel> load_model(const std::string& name) {
+  if (name == "paper") return std::make_unique<TsmFrictionModel>(paper_spec());
+  if (name == "dahl") return std::make_unique<TsmFrictionModel>(dahl_spec());
+  if (name == "dahl_classic") return std::make_unique<DahlModel>();
+  if (name == "lugre") return std::make_unique<LuGreModel>();
+  if (name == "coulomb_capstan") return std::make_unique<CoulombCapstanModel>();
+  std::ifstream in(name);
+  if (!in) {
+    std::string list;
+    for (const auto& p : preset_names())
+      list += (list.empty() ? "" : ", ") + p;
+    throw ParamsError(name + ": no such file, and not a preset (" + list + ")");
+  }
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_model(ss.str(), name);
+}
+
+std::string model_to_yaml(const FrictionModel& model, const std::vector<std::string>& header) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(10);
+  for (const auto& h : header)
+    out << YAML::Comment(h) << YAML::Newline;
+  out << YAML::BeginMap << YAML::Key << "model" << YAML::Value << model.kind();
+  const auto params = model.parameters();
+  if (const auto* tsm = dynamic_cast<const TsmFrictionModel*>(&model)) {
+    const auto& s = tsm->spec();
+    out << YAML::Key << "core" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+        << "theta" << YAML::Value << s.theta << YAML::Key << "gamma" << YAML::Value << s.gamma
+        << YAML::Key << "n" << YAML::Value << s.n << YAML::Key << "sigma" << YAML::Value << s.sigma
+        << YAML::EndMap;
+    out << YAML::Key << "terms" << YAML::Value << YAML::BeginMap;
+    for (const auto& t : s.terms) {
+      const auto& info = term_info(t.kind);
+      out << YAML::Key << std::string(info.name) << YAML::Value << YAML::Flow << YAML::BeginMap;
+      for (std::size_t k = 0; k < info.params.size(); ++k)
+        out << YAML::Key << std::string(info.params[k].name) << YAML::Value << t.p[k];
+      out << YAML::EndMap;
+    }
+    out << YAML::EndMap;
+    out << YAML::Key << "fixed" << YAML::Value << YAML::Flow << s.fixed;
+  } else {
+    out << YAML::Key << "params" << YAML::Value << YAML::BeginMap;
+    for (const auto& p : params)
+      out << YAML::Key << p.name.substr(p.name.find('.') + 1) << YAML::Value << p.value;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+void save_model(const FrictionModel& model, const std::filesystem::path& path,
+                const std::vector<std::string>& header) {
+  write_text_atomically(path, model_to_yaml(model, header));
+}
+
+}  // namespace tsmh::estimator

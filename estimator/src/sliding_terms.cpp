@@ -1,0 +1,114 @@
+#include "estimator/sliding_terms.hpp"
+
+#include <cmath>
+
+namespace tsmh::estimator {
+namespace {
+
+// Bounds are what identification searches in; they are wide around the
+// paper's values (design.md §3) and keep every term physically signed.
+constexpr ParamSpec kCoulomb[] = {{"rho1", 1.038, 0.01, 20.0, "level"}};
+constexpr ParamSpec kAsymmetry[] = {{"rho2", 0.8904, 0.01, 20.0, "level"}};
+constexpr ParamSpec kStribeck[] = {{"mu1", 1.0978, 0.0, 20.0, "level"},
+                                   {"kappa1", 6.1264, 0.0, 100.0, "s/rad"}};
+constexpr ParamSpec kAcceleration[] = {{"mu2", 0.0458, 0.0, 10.0, "level"},
+                                       {"kappa2", 0.0269, 0.0, 10.0, "s^2/rad"},
+                                       {"mu3", 0.145, 0.0, 10.0, "level"},
+                                       {"kappa3", 13.248, 0.0, 200.0, "s/rad"},
+                                       {"kappa4", 6.0297, 0.01, 200.0, "rad/s^2"}};
+constexpr ParamSpec kReversal[] = {{"lambda", 0.2, 0.0, 2.0, "rad/s"}};
+constexpr ParamSpec kViscous[] = {{"c_v", 0.0, 0.0, 20.0, "level s/rad"}};
+constexpr ParamSpec kLoad[] = {{"c_load", 0.0, -1.0, 5.0, "level/N"}};
+constexpr ParamSpec kPosition[] = {{"p1", 0.0, -10.0, 10.0, "level/rad"},
+                                   {"p2", 0.0, -10.0, 10.0, "level/rad^2"}};
+constexpr ParamSpec kTime[] = {{"drift", 0.0, -1.0, 1.0, "level/s"},
+                               {"step", 0.0, -20.0, 20.0, "level"},
+                               {"t_step", 0.0, 0.0, 1e6, "s"},
+                               {"t0", 0.0, -1e9, 1e9, "s", false}};
+
+constexpr TermInfo kCatalog[] = {
+    {TermKind::coulomb, "coulomb", "Coulomb sliding level rho1 (eqs. 6, 7)",
+     "everywhere in sliding", kCoulomb},
+    {TermKind::direction_asymmetry, "direction_asymmetry",
+     "different sliding level for negative velocity, rho2 (eqs. 9-11): unequal sheaths and "
+     "pretensions",
+     "sliding with xd < 0 vs xd > 0", kAsymmetry},
+    {TermKind::stribeck, "stribeck", "Stribeck rise of friction at low speed, mu1 e^(-kappa1 |xd|)",
+     "low |xd|, both directions", kStribeck},
+    {TermKind::acceleration_dependence, "acceleration_dependence",
+     "different levels accelerating vs decelerating (mu2 terms of eqs. 6-7, mu3 of eqs. 9-10)",
+     "same speed, opposite sign of xdd", kAcceleration},
+    {TermKind::reversal_offset, "reversal_offset",
+     "offset lambda of the hysteresis near zero velocity, g = xd + lambda sgn(xdd) (eq. 4)",
+     "near velocity reversals", kReversal},
+    {TermKind::viscous, "viscous", "viscous drag, friction grows linearly with speed",
+     "high |xd|, both directions", kViscous},
+    {TermKind::load_dependent, "load_dependent",
+     "capstan effect: friction grows with the transmitted load (tension)",
+     "high |tau_in|, in contact", kLoad},
+    {TermKind::position_dependent, "position_dependent",
+     "friction varies with the pulley angle (wrap changes along the stroke)",
+     "one end of the stroke vs the other", kPosition},
+    {TermKind::time_varying, "time_varying",
+     "friction drifts or steps over time (sheath re-routed, wear, temperature)",
+     "late vs early in the recording", kTime},
+};
+
+}  // namespace
+
+std::span<const TermInfo> term_catalog() {
+  return kCatalog;
+}
+
+const TermInfo& term_info(TermKind kind) {
+  return kCatalog[static_cast<int>(kind)];
+}
+
+std::optional<TermKind> term_kind_from_name(std::string_view name) {
+  for (const auto& info : kCatalog) {
+    if (info.name == name) return info.kind;
+  }
+  return std::nullopt;
+}
+
+double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
+  const auto& p = term.p;
+  const bool negative = negative_branch(m.xd);
+  const double speed = std::fabs(m.xd);
+  switch (term.kind) {
+    case TermKind::coulomb:
+      return (negative && asymmetric) ? 0.0 : p[0];
+    case TermKind::direction_asymmetry:
+      return negative ? p[0] : 0.0;
+    case TermKind::stribeck:
+      return p[0] * std::exp(-p[1] * speed);
+    case TermKind::acceleration_dependence: {
+      if (!negative) {
+        // eqs. (6)/(7): + when accelerating (xdd >= 0), - when decelerating;
+        // at xdd = 0 both give 0, so the shared boundary is consistent.
+        const double mag = p[0] * (1.0 - std::exp(-std::fabs(p[1] * m.xdd)));
+        return m.acc_sign >= 0 ? mag : -mag;
+      }
+      // eqs. (9)-(11). Eq. (8)'s compact form writes "+ sgn(xdd) mu3 e^-f2",
+      // which contradicts its own sub-cases: (9) has +mu3 for xdd < 0 and (10)
+      // has -mu3 for xdd > 0. We follow (9)-(11): s = -sgn(xdd).
+      const int s = -m.acc_sign;
+      if (s == 0) return 0.0;
+      const double f2 = p[3] * speed / (std::fabs(m.xdd) + p[4]);
+      return s * p[2] * std::exp(-f2);
+    }
+    case TermKind::reversal_offset:
+      return 0.0;  // acts on g, not on Ff
+    case TermKind::viscous:
+      return p[0] * speed;
+    case TermKind::load_dependent:
+      return p[0] * m.load;
+    case TermKind::position_dependent:
+      return (p[0] + p[1] * m.x) * m.x;
+    case TermKind::time_varying:
+      return p[0] * (m.t - p[3]) + (m.t >= p[2] ? p[1] : 0.0);
+  }
+  return 0.0;
+}
+
+}  // namespace tsmh::estimator

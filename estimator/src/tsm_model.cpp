@@ -1,0 +1,178 @@
+#include "estimator/tsm_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace tsmh::estimator {
+
+bool TsmModelSpec::has(TermKind kind) const {
+  return std::any_of(terms.begin(), terms.end(), [&](const Term& t) { return t.kind == kind; });
+}
+
+Term& TsmModelSpec::add(TermKind kind) {
+  for (auto& t : terms) {
+    if (t.kind == kind) return t;
+  }
+  Term term{kind, {}};
+  const auto& params = term_info(kind).params;
+  for (std::size_t i = 0; i < params.size(); ++i)
+    term.p[i] = params[i].default_value;
+  terms.push_back(term);
+  for (const auto& ps : params) {
+    if (!ps.identified)
+      fixed.push_back(std::string(term_info(kind).name) + "." + std::string(ps.name));
+  }
+  return terms.back();
+}
+
+TsmModelSpec paper_spec() {
+  TsmModelSpec s;
+  s.theta = 15.5181;
+  s.gamma = 9.5651;
+  s.n = 2.0;
+  s.sigma = 1.0;
+  s.add(TermKind::coulomb).p = {1.038};
+  s.add(TermKind::direction_asymmetry).p = {0.8904};
+  s.add(TermKind::stribeck).p = {1.0978, 6.1264};
+  s.add(TermKind::acceleration_dependence).p = {0.0458, 0.0269, 0.145, 13.248, 6.0297};
+  s.add(TermKind::reversal_offset).p = {0.2};
+  return s;
+}
+
+TsmModelSpec dahl_spec() {
+  TsmModelSpec s;
+  s.theta = 15.5181;
+  s.gamma = 9.5651;
+  s.n = 1.0;
+  s.sigma = 1.0;
+  s.add(TermKind::coulomb).p = {1.0};
+  return s;
+}
+
+void validate(const TsmModelSpec& s) {
+  const auto bad = [](const std::string& field, const std::string& why) {
+    throw std::invalid_argument(field + ": " + why);
+  };
+  const auto finite = [&](const std::string& field, double v) {
+    if (!std::isfinite(v)) bad(field, "must be a finite number");
+  };
+  finite("core.theta", s.theta);
+  finite("core.gamma", s.gamma);
+  finite("core.n", s.n);
+  finite("core.sigma", s.sigma);
+  if (s.theta <= 0.0) bad("core.theta", "must be > 0");
+  if (s.gamma <= 0.0) bad("core.gamma", "must be > 0");
+  if (s.n < 1.0) bad("core.n", "must be >= 1");
+  if (s.sigma < 0.5) bad("core.sigma", "must be >= 0.5 (smaller values make the state unbounded)");
+  if (s.terms.empty()) bad("terms", "at least one term (e.g. coulomb) is needed");
+  for (std::size_t i = 0; i < s.terms.size(); ++i) {
+    const auto& info = term_info(s.terms[i].kind);
+    for (std::size_t j = i + 1; j < s.terms.size(); ++j) {
+      if (s.terms[j].kind == s.terms[i].kind)
+        bad("terms." + std::string(info.name), "appears twice");
+    }
+    for (std::size_t k = 0; k < info.params.size(); ++k) {
+      finite("terms." + std::string(info.name) + "." + std::string(info.params[k].name),
+             s.terms[i].p[k]);
+    }
+    if (s.terms[i].kind == TermKind::acceleration_dependence && s.terms[i].p[4] <= 0.0) {
+      bad("terms.acceleration_dependence.kappa4", "must be > 0 (divisor of f2, eq. 9)");
+    }
+  }
+}
+
+TsmFrictionModel::TsmFrictionModel(TsmModelSpec spec) : spec_(std::move(spec)) {
+  validate(spec_);
+  refresh_cache();
+}
+
+void TsmFrictionModel::refresh_cache() {
+  shape_ = {spec_.theta, spec_.n, spec_.sigma};
+  asymmetric_ = spec_.has(TermKind::direction_asymmetry);
+  lambda_ = 0.0;
+  for (const auto& t : spec_.terms) {
+    if (t.kind == TermKind::reversal_offset) lambda_ = t.p[0];
+  }
+}
+
+std::vector<Parameter> TsmFrictionModel::parameters() const {
+  std::vector<Parameter> out;
+  const auto is_fixed = [&](const std::string& name) {
+    return std::find(spec_.fixed.begin(), spec_.fixed.end(), name) != spec_.fixed.end();
+  };
+  const auto core = [&](const char* name, double v, double lo, double hi, const char* unit) {
+    std::string q = std::string("core.") + name;
+    out.push_back({q, v, lo, hi, is_fixed(q), unit});
+  };
+  core("theta", spec_.theta, 0.1, 1000.0, "1/rad");
+  core("gamma", spec_.gamma, 0.1, 100.0, "N");
+  core("n", spec_.n, 1.0, 4.0, "");
+  core("sigma", spec_.sigma, 0.5, 5.0, "");
+  for (const auto& t : spec_.terms) {
+    const auto& info = term_info(t.kind);
+    for (std::size_t k = 0; k < info.params.size(); ++k) {
+      const auto& ps = info.params[k];
+      std::string q = std::string(info.name) + "." + std::string(ps.name);
+      out.push_back(
+          {q, t.p[k], ps.lower, ps.upper, !ps.identified || is_fixed(q), std::string(ps.unit)});
+    }
+  }
+  return out;
+}
+
+void TsmFrictionModel::set_values(std::span<const double> v) {
+  std::size_t expected = 4;
+  for (const auto& t : spec_.terms)
+    expected += term_info(t.kind).params.size();
+  if (v.size() != expected)
+    throw std::invalid_argument("tsm model: wrong number of parameter values");
+  TsmModelSpec next = spec_;
+  std::size_t i = 0;
+  next.theta = v[i++];
+  next.gamma = v[i++];
+  next.n = v[i++];
+  next.sigma = v[i++];
+  for (auto& t : next.terms) {
+    for (std::size_t k = 0; k < term_info(t.kind).params.size(); ++k)
+      t.p[k] = v[i++];
+  }
+  validate(next);
+  spec_ = std::move(next);
+  refresh_cache();
+  reset();
+}
+
+void TsmFrictionModel::reset() noexcept {
+  z_ = 0.0;
+  xd_prev_ = 0.0;
+  started_ = false;
+}
+
+double TsmFrictionModel::sliding_level(const Motion& m) const noexcept {
+  double level = 0.0;
+  for (const auto& t : spec_.terms)
+    level += term_level(t, m, asymmetric_);
+  return std::max(level, kMinSlidingLevel);
+}
+
+double TsmFrictionModel::step(const Motion& m, double dt) noexcept {
+  if (!std::isfinite(m.xd) || !std::isfinite(m.xdd) || !std::isfinite(m.x) ||
+      !std::isfinite(m.load) || !std::isfinite(m.t) || !(dt > 0.0) || !std::isfinite(dt)) {
+    return friction();
+  }
+  // Trapezoidal velocity over the interval: second-order accurate drive for
+  // smooth motion, where holding the end-point velocity would be first order.
+  const double xd_mid = started_ ? 0.5 * (xd_prev_ + m.xd) : m.xd;
+  xd_prev_ = m.xd;
+  started_ = true;
+  const double g = drive(xd_mid, m.acc_sign);
+  z_ = advance_bouc_wen_state(z_, sliding_level(m), g, dt, shape_);
+  return friction();
+}
+
+std::unique_ptr<FrictionModel> TsmFrictionModel::clone() const {
+  return std::make_unique<TsmFrictionModel>(*this);
+}
+
+}  // namespace tsmh::estimator
