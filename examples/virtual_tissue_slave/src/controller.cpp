@@ -1,0 +1,86 @@
+#include "virtual_tissue_slave/controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace tsmh::virtual_tissue_slave {
+
+void validate(const ControllerParams& p) {
+  auto require = [](bool ok, const char* field, const char* why) {
+    if (!ok) throw std::invalid_argument(std::string("controller field '") + field + "' " + why);
+  };
+  auto non_negative = [&](double v, const char* field) {
+    require(std::isfinite(v) && v >= 0, field, "must be >= 0");
+  };
+  auto positive = [&](double v, const char* field) {
+    require(std::isfinite(v) && v > 0, field, "must be > 0");
+  };
+  non_negative(p.kp, "kp");
+  non_negative(p.kd, "kd");
+  positive(p.velocity_filter_hz, "velocity_filter_hz");
+  non_negative(p.backlash_initial_rad, "backlash_initial_rad");
+  non_negative(p.backlash_max_rad, "backlash_max_rad");
+  require(p.backlash_initial_rad <= p.backlash_max_rad, "backlash_initial_rad",
+          "must be <= backlash_max_rad");
+  non_negative(p.adapt_gain, "adapt_gain");
+  positive(p.direction_velocity, "direction_velocity");
+  positive(p.reference_filter_hz, "reference_filter_hz");
+  non_negative(p.output_kp, "output_kp");
+  non_negative(p.output_ki, "output_ki");
+  non_negative(p.integral_limit_rad, "integral_limit_rad");
+}
+
+JointController::JointController(const ControllerParams& params) : params_(params) {
+  validate(params);
+}
+
+void JointController::reset(const Measurement& m, double reference) {
+  started_ = true;
+  last_ref_ = reference;
+  ref_velocity_ = 0.0;
+  last_x_in_ = m.x_in;
+  velocity_ = 0.0;
+  c_hat_ = params_.backlash_initial_rad;
+  integral_ = 0.0;
+  motor_ref_ = reference;
+}
+
+namespace {
+// First-order low-pass gain for one step of dt at cut-off fc.
+double lowpass_gain(double fc_hz, double dt) {
+  return 1.0 - std::exp(-2.0 * std::numbers::pi * fc_hz * dt);
+}
+}  // namespace
+
+double JointController::update(double reference, const Measurement& m, double radius_m, double dt) {
+  if (!started_) reset(m, reference);
+  const double raw_ref_velocity = (reference - last_ref_) / dt;
+  last_ref_ = reference;
+  ref_velocity_ +=
+      lowpass_gain(params_.reference_filter_hz, dt) * (raw_ref_velocity - ref_velocity_);
+  const double raw_velocity = (m.x_in - last_x_in_) / dt;
+  last_x_in_ = m.x_in;
+  velocity_ += lowpass_gain(params_.velocity_filter_hz, dt) * (raw_velocity - velocity_);
+
+  motor_ref_ = reference;
+  if (params_.compensation) {
+    const double direction = std::tanh(ref_velocity_ / params_.direction_velocity);
+    if (std::isfinite(m.x_out)) {
+      const double e = reference - m.x_out;
+      c_hat_ = std::clamp(c_hat_ + dt * params_.adapt_gain * e * direction, 0.0,
+                          params_.backlash_max_rad);
+      integral_ = std::clamp(integral_ + dt * params_.output_ki * e, -params_.integral_limit_rad,
+                             params_.integral_limit_rad);
+      motor_ref_ += params_.output_kp * e + integral_;
+    }
+    motor_ref_ += c_hat_ * direction;
+  }
+  double torque = params_.kp * (motor_ref_ - m.x_in) - params_.kd * velocity_;
+  if (params_.tension_feedforward) torque += radius_m * (m.T1 - m.T3);
+  return torque;
+}
+
+}  // namespace tsmh::virtual_tissue_slave

@@ -1,0 +1,141 @@
+#include "virtual_tissue_slave/tissue.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace tsmh::virtual_tissue_slave {
+namespace {
+
+// Preset stiffnesses, chosen so the joint-space values (lever 3 cm) are
+// 0.2 N m/rad (soft) and 1.5 N m/rad (hard): within what the tendon-sheath
+// transmission (about 0.5 N m/rad torsional stiffness end to end) can render.
+constexpr double kLever = 0.03;
+constexpr double kSoft = 0.2 / (kLever * kLever);  // N/m
+constexpr double kHard = 1.5 / (kLever * kLever);  // N/m
+
+}  // namespace
+
+std::vector<std::string> tissue_preset_names() {
+  return {"none", "soft", "hard", "nodule"};
+}
+
+ContactLaw parse_contact_law(std::string_view name) {
+  if (name == "kelvin-voigt") return ContactLaw::kelvin_voigt;
+  if (name == "hunt-crossley") return ContactLaw::hunt_crossley;
+  throw std::invalid_argument("unknown contact law '" + std::string(name) +
+                              "' (known: kelvin-voigt, hunt-crossley)");
+}
+
+std::string_view contact_law_name(ContactLaw law) {
+  return law == ContactLaw::kelvin_voigt ? "kelvin-voigt" : "hunt-crossley";
+}
+
+TissueParams tissue_preset(std::string_view name, ContactLaw law) {
+  TissueParams t;
+  t.name = std::string(name);
+  t.law = law;
+  t.lever_m = kLever;
+  // Damping: Kelvin-Voigt c gives a damping ratio well below 1 against the
+  // joint; Hunt-Crossley lambda ~ 0.2-1 s/m is typical of soft tissue.
+  if (name == "none") {
+    t.present = false;
+  } else if (name == "soft") {
+    t.present = true;
+    t.outer_stiffness_n_per_m = kSoft;
+    t.damping = law == ContactLaw::kelvin_voigt ? 2.0 : 0.5;
+  } else if (name == "hard") {
+    t.present = true;
+    t.outer_stiffness_n_per_m = kHard;
+    t.damping = law == ContactLaw::kelvin_voigt ? 6.0 : 0.3;
+  } else if (name == "nodule") {
+    t.present = true;
+    t.outer_stiffness_n_per_m = kSoft;
+    t.inclusion_depth_m = 0.15 * kLever;  // 0.15 rad of joint travel past the surface
+    t.inclusion_stiffness_n_per_m = kHard;
+    t.damping = law == ContactLaw::kelvin_voigt ? 2.0 : 0.5;
+  } else {
+    throw std::invalid_argument("unknown tissue preset '" + std::string(name) +
+                                "' (known: none, soft, hard, nodule)");
+  }
+  t.exponent = law == ContactLaw::kelvin_voigt ? 1.0 : 1.5;
+  return t;
+}
+
+void validate(const TissueParams& t) {
+  auto require = [&](bool ok, const char* field, const char* why) {
+    if (!ok) throw std::invalid_argument("tissue '" + t.name + "': field '" + field + "' " + why);
+  };
+  require(std::isfinite(t.surface_rad), "surface_rad", "must be finite");
+  require(std::isfinite(t.lever_m) && t.lever_m > 0, "lever_m", "must be > 0");
+  require(std::isfinite(t.outer_stiffness_n_per_m) && t.outer_stiffness_n_per_m >= 0,
+          "outer_stiffness_n_per_m", "must be >= 0");
+  require(!std::isnan(t.inclusion_depth_m) && t.inclusion_depth_m > 0, "inclusion_depth_m",
+          "must be > 0 (infinity: no inclusion)");
+  require(std::isfinite(t.inclusion_stiffness_n_per_m) && t.inclusion_stiffness_n_per_m >= 0,
+          "inclusion_stiffness_n_per_m", "must be >= 0");
+  require(std::isfinite(t.damping) && t.damping >= 0, "damping", "must be >= 0");
+  require(std::isfinite(t.exponent) && t.exponent >= 1.0 && t.exponent <= 3.0, "exponent",
+          "must be in [1, 3]");
+  require(std::isfinite(t.reference_depth_m) && t.reference_depth_m > 0, "reference_depth_m",
+          "must be > 0");
+}
+
+namespace {
+
+double outer_force(const TissueParams& t, double d) {
+  const double n = t.law == ContactLaw::hunt_crossley ? t.exponent : 1.0;
+  if (n == 1.0) return t.outer_stiffness_n_per_m * d;
+  return t.outer_stiffness_n_per_m * t.reference_depth_m * std::pow(d / t.reference_depth_m, n);
+}
+
+double outer_slope(const TissueParams& t, double d) {
+  const double n = t.law == ContactLaw::hunt_crossley ? t.exponent : 1.0;
+  if (n == 1.0) return t.outer_stiffness_n_per_m;
+  return t.outer_stiffness_n_per_m * n * std::pow(d / t.reference_depth_m, n - 1.0);
+}
+
+}  // namespace
+
+double elastic_force(const TissueParams& t, double d) {
+  if (!t.present || d <= 0.0) return 0.0;
+  if (d <= t.inclusion_depth_m) return outer_force(t, d);
+  // Past the inclusion's top the force keeps growing with the inclusion's slope.
+  return outer_force(t, t.inclusion_depth_m) +
+         t.inclusion_stiffness_n_per_m * (d - t.inclusion_depth_m);
+}
+
+ContactState contact(const TissueParams& t, double q, double qd) {
+  ContactState c;
+  if (!t.present) return c;
+  const double d = t.lever_m * (q - t.surface_rad);
+  if (d <= 0.0) return c;
+  const double dd = t.lever_m * qd;
+  const double fe = elastic_force(t, d);
+  const double f =
+      t.law == ContactLaw::kelvin_voigt ? fe + t.damping * dd : fe * (1.0 + t.damping * dd);
+  c.indentation_m = d;
+  c.force_n = std::max(0.0, f);  // tissue pushes, never pulls the tool
+  c.torque_nm = t.lever_m * c.force_n;
+  c.stiffness_n_per_m =
+      d <= t.inclusion_depth_m ? outer_slope(t, d) : t.inclusion_stiffness_n_per_m;
+  c.stiffness_nm_per_rad = c.stiffness_n_per_m * t.lever_m * t.lever_m;
+  return c;
+}
+
+TissueTruth tissue_truth(const TissueParams& t) {
+  TissueTruth truth;
+  if (!t.present) return truth;
+  const double l2 = t.lever_m * t.lever_m;
+  truth.outer_n_per_m = t.outer_stiffness_n_per_m;
+  truth.outer_nm_per_rad = t.outer_stiffness_n_per_m * l2;
+  if (std::isfinite(t.inclusion_depth_m)) {
+    truth.inclusion_n_per_m = t.inclusion_stiffness_n_per_m;
+    truth.inclusion_nm_per_rad = t.inclusion_stiffness_n_per_m * l2;
+    truth.inclusion_depth_m = t.inclusion_depth_m;
+    truth.inclusion_depth_rad = t.inclusion_depth_m / t.lever_m;
+  }
+  return truth;
+}
+
+}  // namespace tsmh::virtual_tissue_slave
