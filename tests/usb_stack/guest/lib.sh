@@ -1,0 +1,113 @@
+# Shell helpers for the guest's cases (sourced): result lines, waiting, and
+# configfs USB gadgets on dummy_udc.0.
+# shellcheck shell=sh
+
+CONFIGFS=/sys/kernel/config/usb_gadget
+UDC_NAME=dummy_udc.0
+
+# cmdline_opt KEY: the value of KEY=VALUE on the kernel command line.
+cmdline_opt() {
+  for w in $(cat /proc/cmdline); do
+    case "$w" in "$1"=*) echo "${w#*=}"; return ;; esac
+  done
+}
+
+# result NAME PASS|FAIL|SKIP DETAIL...: the line the host harness parses.
+result() {
+  n=$1; s=$2; shift 2
+  echo "RESULT $n $s $*"
+}
+
+# metric NAME VALUE UNIT: a measured number, reported (not judged) by the harness.
+metric() { echo "METRIC $1 $2 $3"; }
+
+# case_limit FILE: the "# limit: N" seconds a case declares (default 60).
+case_limit() {
+  l=$(sed -n 's/^# limit: *\([0-9]*\).*/\1/p' "$1" | head -n1)
+  echo "${l:-60}"
+}
+
+# wait_for COMMAND ARGS... : runs COMMAND every 20 ms until it succeeds, for
+# up to WAIT_S seconds (default 10). Returns 1 on timeout.
+wait_for() {
+  i=0; limit=$(( ${WAIT_S:-10} * 50 ))
+  while ! "$@" >/dev/null 2>&1; do
+    i=$((i + 1)); [ $i -ge $limit ] && return 1
+    usleep 20000
+  done
+}
+
+# uptime_ms: monotonic guest time in ms (for coarse case timing).
+uptime_ms() { awk '{ printf "%d\n", $1 * 1000 }' /proc/uptime; }
+
+# gadget_create NAME VID PID PRODUCT: an empty gadget with one configuration.
+gadget_create() {
+  g=$CONFIGFS/$1
+  mkdir -p "$g" || return 1
+  echo "$2" >"$g/idVendor"
+  echo "$3" >"$g/idProduct"
+  echo 0x0200 >"$g/bcdUSB"
+  echo 0x0100 >"$g/bcdDevice"
+  mkdir -p "$g/strings/0x409" "$g/configs/c.1/strings/0x409"
+  echo "tsm-haptics test" >"$g/strings/0x409/manufacturer"
+  echo "$4" >"$g/strings/0x409/product"
+  echo "usb-stack-0001" >"$g/strings/0x409/serialnumber"
+  echo "config 1" >"$g/configs/c.1/strings/0x409/configuration"
+  echo 100 >"$g/configs/c.1/MaxPower"
+}
+
+# gadget_add_hid NAME REPORT_DESC_FILE REPORT_LENGTH: a usb_f_hid function
+# (device side /dev/hidgN) with the given report descriptor.
+gadget_add_hid() {
+  f=$CONFIGFS/$1/functions/hid.usb0
+  mkdir -p "$f" || return 1
+  echo 0 >"$f/protocol"
+  echo 0 >"$f/subclass"
+  echo "$3" >"$f/report_length"
+  cat "$2" >"$f/report_desc"
+  ln -s "$f" "$CONFIGFS/$1/configs/c.1/"
+}
+
+# gadget_add_ffs NAME INSTANCE: a FunctionFS function whose descriptors and
+# endpoints a userspace program provides through /dev/ffs-INSTANCE (ep0 first;
+# the gadget can be bound only after that program has written descriptors).
+gadget_add_ffs() {
+  f=$CONFIGFS/$1/functions/ffs.$2
+  mkdir -p "$f" || return 1
+  ln -s "$f" "$CONFIGFS/$1/configs/c.1/"
+  mkdir -p "/dev/ffs-$2"
+  mount -t functionfs "$2" "/dev/ffs-$2"
+}
+
+# gadget_bind NAME / gadget_unbind NAME: plug / unplug the virtual cable.
+gadget_bind() { echo "$UDC_NAME" >"$CONFIGFS/$1/UDC"; }
+gadget_unbind() { echo "" >"$CONFIGFS/$1/UDC"; }
+
+# gadget_remove_all: unbinds and removes every gadget (between cases).
+gadget_remove_all() {
+  for g in "$CONFIGFS"/*/; do
+    [ -d "$g" ] || continue
+    [ -n "$(cat "$g/UDC" 2>/dev/null)" ] && echo "" >"$g/UDC"
+    for l in "$g"configs/*/*; do [ -L "$l" ] && rm -f "$l"; done
+    for d in "$g"configs/*/strings/*; do [ -d "$d" ] && rmdir "$d"; done
+    for d in "$g"configs/*; do [ -d "$d" ] && rmdir "$d"; done
+    for d in "$g"functions/*; do
+      [ -d "$d" ] || continue
+      case "$d" in */ffs.*) umount "/dev/ffs-${d##*/ffs.}" 2>/dev/null ;; esac
+      rmdir "$d"
+    done
+    for d in "$g"strings/*; do [ -d "$d" ] && rmdir "$d"; done
+    rmdir "$g"
+  done
+}
+
+# hidraw_for VID PID: the /dev/hidrawN whose HID_ID matches (hex, no 0x).
+hidraw_for() {
+  for u in /sys/class/hidraw/*/device/uevent; do
+    [ -f "$u" ] || continue
+    if grep -qi "^HID_ID=0003:0000$1:0000$2\$" "$u"; then
+      n=${u#/sys/class/hidraw/}; echo "/dev/${n%%/*}"; return 0
+    fi
+  done
+  return 1
+}
