@@ -1,0 +1,37 @@
+#pragma once
+// Counters of one incoming channel, as a plain snapshot.
+
+#include <array>
+#include <cstdint>
+#include <numeric>
+
+#include "bridge/latency_histogram.hpp"
+#include "bridge/rejection.hpp"
+
+namespace tsmh::bridge {
+
+struct ChannelStats {
+  std::uint64_t received = 0;  ///< every message that arrived on the channel
+  std::uint64_t accepted = 0;  ///< handed to the loop
+  /// Rejected messages by RejectReason (index = static_cast<int>(reason)).
+  std::array<std::uint64_t, kRejectReasons> rejected_by{};
+  std::uint64_t duplicates = 0;  ///< seq equal to the last accepted: dropped
+  std::uint64_t reordered = 0;   ///< arrived after a newer one: dropped
+  std::uint64_t seq_gaps =
+      0;  ///< sequence numbers skipped between accepted messages (lost or rejected)
+  std::uint64_t restarts = 0;        ///< sender restarts detected (seq down, utime up)
+  std::uint64_t resyncs = 0;         ///< tracker re-based after a run of out-of-order messages
+  LatencySummary latency;            ///< receive time - utime, accepted messages, shared clock only
+  std::int64_t last_receive_ns = 0;  ///< CLOCK_MONOTONIC of the newest accepted message, 0 if none
+
+  std::uint64_t rejected(RejectReason r) const noexcept {
+    return rejected_by[static_cast<std::size_t>(r)];
+  }
+  std::uint64_t rejected() const noexcept {
+    return std::accumulate(rejected_by.begin(), rejected_by.end(), std::uint64_t{0});
+  }
+  /// Everything that never reached the loop.
+  std::uint64_t dropped() const noexcept { return rejected() + duplicates + reordered; }
+};
+
+}  // namespace tsmh::bridge

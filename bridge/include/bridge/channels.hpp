@@ -1,0 +1,34 @@
+#pragma once
+// The six LCM channels and how their names are formed: an optional per-arm
+// prefix (e.g. "ARM1_") followed by the upper-case base name.
+
+#include <array>
+#include <string>
+#include <string_view>
+
+namespace tsmh::bridge {
+
+enum class Channel {
+  SlaveState,     ///< slave -> master, per slave tick (1 kHz)
+  SlaveTruth,     ///< virtual slave -> evaluation: true distal torque, friction
+  MasterCommand,  ///< haptic server -> slave, per haptic tick
+  HapticStatus,   ///< haptic server -> monitors, 100 Hz
+  MasterState,    ///< external master driver -> haptic server
+  MasterForce,    ///< haptic server -> external master driver
+};
+
+inline constexpr std::array<Channel, 6> kAllChannels = {
+    Channel::SlaveState,   Channel::SlaveTruth,  Channel::MasterCommand,
+    Channel::HapticStatus, Channel::MasterState, Channel::MasterForce};
+
+/// "SLAVE_STATE", "SLAVE_TRUTH", ...
+std::string_view base_name(Channel channel) noexcept;
+
+/// prefix + base name, e.g. channel_name("ARM1_", Channel::SlaveState) == "ARM1_SLAVE_STATE".
+std::string channel_name(std::string_view prefix, Channel channel);
+
+/// LCM 1.3 subscribes with a regular expression; this escapes a literal
+/// channel name so a prefix containing '.', '+', ... matches only itself.
+std::string regex_escape(std::string_view literal);
+
+}  // namespace tsmh::bridge

@@ -1,0 +1,23 @@
+#pragma once
+// The bridge's clock: CLOCK_MONOTONIC, the clock every message's utime is
+// stamped with (docs/lcm-messages.md). clock_gettime goes through the vDSO, so
+// these are safe to call from the real-time loop (no system call, no lock).
+
+#include <cstdint>
+#include <ctime>
+
+namespace tsmh::bridge {
+
+/// CLOCK_MONOTONIC now, nanoseconds.
+inline std::int64_t monotonic_now_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+/// CLOCK_MONOTONIC now, microseconds: the value to put in a message's utime.
+inline std::int64_t monotonic_utime() noexcept {
+  return monotonic_now_ns() / 1000;
+}
+
+}  // namespace tsmh::bridge

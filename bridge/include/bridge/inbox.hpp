@@ -1,0 +1,112 @@
+#pragma once
+// Inbox<Sample>: the newest valid sample of one incoming channel, for the loop.
+//
+// The receive thread (Receiver) feeds every raw message of the channel into
+// ingest(): decode without trusting the bytes, check joint count and content,
+// classify the ordering, count, and store accepted samples in a LatestValue.
+// The loop calls latest(): a lock-free copy of the newest accepted sample
+// (~tens of ns, never blocks, never torn) whose receive_ns gives its age.
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "bridge/channel_stats.hpp"
+#include "bridge/codec.hpp"
+#include "bridge/latency_histogram.hpp"
+#include "bridge/latest_value.hpp"
+#include "bridge/rejection.hpp"
+#include "bridge/sequence_tracker.hpp"
+
+namespace tsmh::bridge {
+
+template <class Sample>
+struct InboxOptions {
+  /// Required num_joints; 0 accepts any count in 1..kMaxJoints.
+  int expected_joints = 0;
+  /// Plausibility ranges; a value outside rejects the message.
+  typename SampleTraits<Sample>::Limits limits{};
+  /// Sender and receiver share CLOCK_MONOTONIC (same host): record one-way
+  /// latency = receive time - utime. Set false across hosts.
+  bool clocks_shared = true;
+  /// Full channel name; empty: the Receiver's prefix + the base name.
+  std::string channel;
+  /// See SequenceTracker.
+  int resync_after = 50;
+};
+
+/// The type-independent part: counters and the receive-thread entry point.
+class InboxBase {
+ public:
+  explicit InboxBase(std::string channel) : channel_(std::move(channel)) {}
+  virtual ~InboxBase() = default;
+  InboxBase(const InboxBase&) = delete;
+  InboxBase& operator=(const InboxBase&) = delete;
+
+  /// Receive thread only (single writer): handles one raw message that
+  /// arrived at `receive_ns` (CLOCK_MONOTONIC). Never throws.
+  virtual void ingest(const void* data, std::size_t size, std::int64_t receive_ns) noexcept = 0;
+
+  const std::string& channel() const noexcept { return channel_; }
+  /// Any thread.
+  ChannelStats stats() const noexcept;
+  /// The most recent rejection, if any (any thread).
+  std::optional<Rejection> last_rejection() const noexcept;
+
+ protected:
+  void count_received() noexcept { received_.fetch_add(1, std::memory_order_relaxed); }
+  void count_rejected(const Rejection& r) noexcept;
+  /// Counts an ordering verdict; returns whether the sample is to be accepted.
+  bool count_order(const OrderVerdict& v, std::int64_t seq, std::int64_t utime,
+                   std::int64_t receive_ns) noexcept;
+  void count_accepted(std::int64_t utime, std::int64_t receive_ns, bool clocks_shared) noexcept;
+
+ private:
+  std::string channel_;
+  std::atomic<std::uint64_t> received_{0};
+  std::atomic<std::uint64_t> accepted_{0};
+  std::array<std::atomic<std::uint64_t>, kRejectReasons> rejected_by_{};
+  std::atomic<std::uint64_t> duplicates_{0};
+  std::atomic<std::uint64_t> reordered_{0};
+  std::atomic<std::uint64_t> seq_gaps_{0};
+  std::atomic<std::uint64_t> restarts_{0};
+  std::atomic<std::uint64_t> resyncs_{0};
+  std::atomic<std::int64_t> last_receive_ns_{0};
+  LatencyHistogram latency_;
+  LatestValue<Rejection> last_rejection_;
+};
+
+template <class Sample>
+class Inbox final : public InboxBase {
+ public:
+  Inbox(std::string channel, InboxOptions<Sample> options);
+
+  /// Loop side. Copies the newest accepted sample into `out` and returns its
+  /// version (+1 per accepted sample); 0 when none has arrived yet (`out`
+  /// untouched). Lock-free, no allocation, no system call.
+  std::uint64_t latest(Sample& out) const noexcept { return cell_.load(out); }
+  /// Version of the newest accepted sample without copying it.
+  std::uint64_t version() const noexcept { return cell_.version(); }
+
+  void ingest(const void* data, std::size_t size, std::int64_t receive_ns) noexcept override;
+
+  const InboxOptions<Sample>& options() const noexcept { return options_; }
+
+ private:
+  InboxOptions<Sample> options_;
+  Decoder<Sample> decoder_;
+  SequenceTracker tracker_;
+  Sample scratch_{};
+  LatestValue<Sample> cell_;
+};
+
+extern template class Inbox<SlaveStateSample>;
+extern template class Inbox<SlaveTruthSample>;
+extern template class Inbox<MasterCommandSample>;
+extern template class Inbox<HapticStatusSample>;
+extern template class Inbox<MasterStateSample>;
+extern template class Inbox<MasterForceSample>;
+
+}  // namespace tsmh::bridge

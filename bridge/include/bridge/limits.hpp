@@ -1,0 +1,47 @@
+#pragma once
+// Configured plausibility ranges for incoming messages. A value outside its
+// range (or NaN/Inf) rejects the whole message: the loop must never act on a
+// sample that a sensor glitch or a hostile sender produced. The defaults are
+// generous bounds for a NOTES-scale robot; a deployment tightens them in its
+// configuration.
+
+#include <limits>
+
+namespace tsmh::bridge {
+
+/// Closed interval [lo, hi]. The default accepts every finite value.
+struct Range {
+  double lo = -std::numeric_limits<double>::max();
+  double hi = std::numeric_limits<double>::max();
+  constexpr bool contains(double v) const noexcept { return v >= lo && v <= hi; }
+};
+
+struct SlaveStateLimits {
+  Range x_in{-1000.0, 1000.0};    ///< rad; the motor pulley turns many times
+  Range x_out{-10.0, 10.0};       ///< rad; NaN allowed (joint without encoder)
+  Range tension{-200.0, 5000.0};  ///< N, both T1 and T3; load cells read slightly negative at rest
+  Range radius_m{1e-4, 0.5};      ///< m
+};
+
+struct SlaveTruthLimits {
+  Range tau_out, friction, tau_in, x_out, contact_force, indentation;  ///< finite only by default
+};
+
+struct MasterCommandLimits {
+  Range position_ref{-10.0, 10.0};  ///< rad
+};
+
+struct MasterStateLimits {
+  Range q{-10.0, 10.0};       ///< rad
+  Range qd{-1000.0, 1000.0};  ///< rad/s
+};
+
+struct MasterForceLimits {
+  Range torque{-100.0, 100.0};  ///< N m
+};
+
+/// HAPTIC_STATUS is informational and may carry NaN (e.g. no estimate yet):
+/// only its structure (decode, joint count) and ordering are checked.
+struct HapticStatusLimits {};
+
+}  // namespace tsmh::bridge

@@ -1,0 +1,59 @@
+#pragma once
+// Reading recorded LCM logs (lcm-logger files): one joint's SLAVE_STATE stream
+// matched with SLAVE_TRUTH by seq, as plain vectors, for `tsm convert`,
+// `tsm fit` and `tsm gap`. Independent of the estimator library on purpose
+// (bridge depends only on lcmtypes); the caller builds its own Recording.
+
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tsmh::bridge {
+
+/// A log that cannot be used; what() names the file and, where it applies,
+/// the event number, channel and field.
+class LogError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// True when the file starts with LCM's log event sync word (0xEDA1DA01).
+bool is_lcm_log(const std::filesystem::path& path);
+
+struct JointSeries {
+  std::string source;  ///< the log file
+  int joint = 0;
+  std::string prefix;
+  double radius_m = 0;           ///< from SLAVE_STATE radius_m[joint] (constant over the log)
+  std::vector<double> t;         ///< s, from utime, relative to the first row; strictly increasing
+  std::vector<double> x_in;      ///< rad
+  std::vector<double> x_out;     ///< rad; empty when any row had NaN (joint without encoder)
+  std::vector<double> T1, T3;    ///< N
+  std::vector<double> tau_out;   ///< N m from SLAVE_TRUTH; empty when the log has none
+  std::int64_t first_utime = 0;  ///< utime of row 0, µs (CLOCK_MONOTONIC of the slave)
+
+  // What was read and what was left out, for the user.
+  std::size_t state_messages = 0;   ///< SLAVE_STATE events on the channel
+  std::size_t truth_messages = 0;   ///< SLAVE_TRUTH events on the channel
+  std::size_t skipped_invalid = 0;  ///< undecodable, wrong joint count, NaN/Inf
+  std::size_t skipped_not_increasing =
+      0;  ///< utime not after the previous row (duplicates, reordering)
+  std::size_t rows_without_truth =
+      0;  ///< dropped because SLAVE_TRUTH was present but not for this seq
+
+  std::size_t rows() const noexcept { return t.size(); }
+};
+
+/// Reads the channel `prefix`SLAVE_STATE (and `prefix`SLAVE_TRUTH) of `path`
+/// and extracts joint `joint`. When the log has SLAVE_TRUTH, only rows with a
+/// matching seq are kept (tau_out is required downstream). Throws LogError
+/// when the file cannot be read, has no usable SLAVE_STATE on that channel
+/// (the message lists the channels it found), the joint does not exist, or
+/// the radius changes.
+JointSeries read_joint_series(const std::filesystem::path& path, int joint,
+                              std::string_view prefix = {});
+
+}  // namespace tsmh::bridge

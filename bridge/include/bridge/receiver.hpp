@@ -1,0 +1,74 @@
+#pragma once
+// Receiver: one LCM instance and one receive thread that keeps every
+// subscribed channel's newest valid sample in its Inbox.
+//
+// The thread sleeps in poll() on LCM's file descriptor and, whenever it is
+// readable, handles messages until none is pending, so LCM's per-subscription
+// queue never fills (LCM drops the *newest* message when it is full). Each
+// raw message goes to Inbox::ingest with the CLOCK_MONOTONIC time it was
+// taken. Typical use (haptic server, one arm):
+//
+//   Receiver rx({.url = resolve_lcm_url(cli_url), .prefix = "ARM1_"});
+//   auto& slave = rx.subscribe<SlaveStateSample>({.expected_joints = 2});
+//   rx.start();
+//   ... in the loop: SlaveStateSample s; if (slave.latest(s)) age = now - s.receive_ns;
+
+#include <atomic>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "bridge/codec.hpp"
+#include "bridge/inbox.hpp"
+#include "bridge/lcm_url.hpp"
+
+namespace tsmh::bridge {
+
+class Receiver {
+ public:
+  /// Opens LCM at config.url (throws BridgeError with a fix when it cannot).
+  explicit Receiver(BridgeConfig config);
+  ~Receiver();
+  Receiver(const Receiver&) = delete;
+  Receiver& operator=(const Receiver&) = delete;
+
+  /// Adds an inbox for Sample's channel (config prefix + base name unless
+  /// options.channel is set). Only before start(). The reference stays valid
+  /// for the Receiver's lifetime.
+  template <class Sample>
+  Inbox<Sample>& subscribe(InboxOptions<Sample> options = {}) {
+    std::string name = options.channel.empty()
+                           ? channel_name(config_.prefix, SampleTraits<Sample>::channel)
+                           : options.channel;
+    auto inbox = std::make_unique<Inbox<Sample>>(std::move(name), std::move(options));
+    Inbox<Sample>& ref = *inbox;
+    add(std::move(inbox));
+    return ref;
+  }
+
+  /// Starts the receive thread. Throws std::logic_error if already started.
+  void start();
+  /// Stops and joins the receive thread (also done by the destructor).
+  void stop() noexcept;
+  bool running() const noexcept { return thread_.joinable(); }
+
+  const BridgeConfig& config() const noexcept { return config_; }
+  /// lcm handle() failures seen by the receive thread (should stay 0).
+  std::uint64_t transport_errors() const noexcept {
+    return transport_errors_.load(std::memory_order_relaxed);
+  }
+
+ private:
+  void add(std::unique_ptr<InboxBase> inbox);
+  void run() noexcept;
+
+  BridgeConfig config_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<std::unique_ptr<InboxBase>> inboxes_;
+  int wake_fd_ = -1;  // eventfd: stop() wakes the thread out of poll()
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<std::uint64_t> transport_errors_{0};
+  std::thread thread_;
+};
+
+}  // namespace tsmh::bridge

@@ -1,0 +1,41 @@
+#pragma once
+// Why an incoming message was dropped before reaching the loop, in a fixed-size
+// form the receive thread can record without allocating.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace tsmh::bridge {
+
+enum class RejectReason : std::uint8_t {
+  Decode,         ///< truncated, oversized, garbage bytes or another message type
+  JointCount,     ///< num_joints outside 1..kMaxJoints or not the configured count
+  NonFinite,      ///< NaN or Inf where a number is required
+  OutOfRange,     ///< outside the configured Range
+  TimeBackwards,  ///< utime not after the last accepted one although seq advanced
+};
+inline constexpr int kRejectReasons = 5;
+
+/// "decode", "joint_count", "non_finite", "out_of_range", "time_backwards".
+std::string_view reason_name(RejectReason reason) noexcept;
+
+struct Rejection {
+  RejectReason reason = RejectReason::Decode;
+  std::int32_t joint = -1;      ///< joint index at fault, -1 when not joint-specific
+  double value = 0;             ///< the offending value (field value, joint count, byte count)
+  std::int64_t seq = -1;        ///< the message's seq when it could be read, else -1
+  std::int64_t receive_ns = 0;  ///< receiver's CLOCK_MONOTONIC when it arrived
+  std::array<char, 64> what{};  ///< field name ("x_in") or decode detail, NUL-terminated
+};
+
+/// Builds a rejection; `what` is truncated to fit.
+Rejection make_rejection(RejectReason reason, std::string_view what, double value = 0,
+                         std::int32_t joint = -1) noexcept;
+
+/// Human-readable, names the channel, field and joint, e.g.
+/// "ARM1_SLAVE_STATE seq 42: x_in[1] = nan is not finite".
+std::string describe(const Rejection& r, std::string_view channel);
+
+}  // namespace tsmh::bridge

@@ -1,0 +1,64 @@
+#pragma once
+// Sender: one LCM instance and one publish thread serving any number of
+// Outboxes. Typical use (virtual slave node):
+//
+//   Sender tx({.url = resolve_lcm_url(cli_url), .prefix = prefix});
+//   auto& state = tx.outbox<SlaveStateSample>();
+//   auto& truth = tx.outbox<SlaveTruthSample>();
+//   tx.start();
+//   ... each tick: s.utime = monotonic_utime(); s.seq = tick; state.publish(s);
+
+#include <atomic>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "bridge/lcm_url.hpp"
+#include "bridge/outbox.hpp"
+
+namespace tsmh::bridge {
+
+class Sender {
+ public:
+  /// Opens LCM at config.url (throws BridgeError with a fix when it cannot).
+  explicit Sender(BridgeConfig config);
+  ~Sender();
+  Sender(const Sender&) = delete;
+  Sender& operator=(const Sender&) = delete;
+
+  /// Adds an outbox for Sample's channel (prefix + base name, or `channel`
+  /// when non-empty). Only before start(); the reference stays valid for the
+  /// Sender's lifetime.
+  template <class Sample>
+  Outbox<Sample>& outbox(std::string channel = {}) {
+    if (channel.empty()) channel = channel_name(config_.prefix, SampleTraits<Sample>::channel);
+    auto box = std::make_unique<Outbox<Sample>>(std::move(channel), signal_);
+    Outbox<Sample>& ref = *box;
+    add(std::move(box));
+    return ref;
+  }
+
+  /// Starts the publish thread. Throws std::logic_error if already started.
+  void start();
+  /// Publishes what is still queued, then stops and joins (also done by the destructor).
+  void stop() noexcept;
+  bool running() const noexcept { return thread_.joinable(); }
+
+  const BridgeConfig& config() const noexcept { return config_; }
+  /// The underlying LCM instance, for synchronous publish_sample() from
+  /// non-real-time code (LCM's publish is thread-safe).
+  lcm::LCM& lcm() noexcept { return *lcm_; }
+
+ private:
+  void add(std::unique_ptr<OutboxBase> box);
+  void run() noexcept;
+
+  BridgeConfig config_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<std::unique_ptr<OutboxBase>> outboxes_;
+  PublishSignal signal_;
+  std::atomic<bool> stop_requested_{false};
+  std::thread thread_;
+};
+
+}  // namespace tsmh::bridge

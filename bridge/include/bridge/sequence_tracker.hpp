@@ -1,0 +1,52 @@
+#pragma once
+// Classifies each (content-valid) message of one channel by its seq and utime
+// against the last accepted one: in order, after a gap, duplicate, late
+// (reordered), sender restart, or time going backwards. Pure logic, no clock.
+
+#include <cstdint>
+
+namespace tsmh::bridge {
+
+enum class Order : std::uint8_t {
+  First,          ///< first message seen: accepted
+  Next,           ///< seq = last + 1: accepted
+  Gap,            ///< seq > last + 1: accepted, `missing` numbers skipped
+  Restart,        ///< seq went down but utime went up: the sender restarted, accepted
+  Resync,         ///< accepted after `resync_after` consecutive late/backwards drops
+  Duplicate,      ///< seq = last: dropped (a stuck sender must not look fresh)
+  Late,           ///< seq < last and utime not newer: reordered, dropped
+  TimeBackwards,  ///< seq > last but utime <= last: dropped (rejected)
+};
+
+struct OrderVerdict {
+  Order order = Order::First;
+  std::int64_t missing = 0;  ///< sequence numbers skipped (Gap only)
+  constexpr bool accepted() const noexcept {
+    return order == Order::First || order == Order::Next || order == Order::Gap ||
+           order == Order::Restart || order == Order::Resync;
+  }
+};
+
+class SequenceTracker {
+ public:
+  /// After `resync_after` consecutive Late/TimeBackwards drops the tracker
+  /// assumes its reference is bad (one bogus seq/utime would otherwise block a
+  /// channel forever) and accepts the next such message as a new start.
+  explicit SequenceTracker(int resync_after = 50) noexcept : resync_after_(resync_after) {}
+
+  /// Classifies the message and, when it is accepted, makes it the reference.
+  OrderVerdict observe(std::int64_t seq, std::int64_t utime) noexcept;
+
+  bool has_reference() const noexcept { return has_last_; }
+  std::int64_t last_seq() const noexcept { return last_seq_; }
+  std::int64_t last_utime() const noexcept { return last_utime_; }
+
+ private:
+  int resync_after_;
+  bool has_last_ = false;
+  std::int64_t last_seq_ = 0;
+  std::int64_t last_utime_ = 0;
+  int consecutive_out_of_order_ = 0;
+};
+
+}  // namespace tsmh::bridge

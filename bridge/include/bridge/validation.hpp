@@ -1,0 +1,25 @@
+#pragma once
+// Content checks of decoded samples against the configured limits. Pure
+// functions: the first problem found is returned, nothing is allocated.
+
+#include <optional>
+
+#include "bridge/limits.hpp"
+#include "bridge/rejection.hpp"
+#include "bridge/samples.hpp"
+
+namespace tsmh::bridge {
+
+/// num_joints must be in 1..kMaxJoints and, when `expected` > 0, equal it.
+std::optional<Rejection> check_joint_count(int num_joints, int expected) noexcept;
+
+std::optional<Rejection> validate(const SlaveStateSample& s, const SlaveStateLimits& l) noexcept;
+std::optional<Rejection> validate(const SlaveTruthSample& s, const SlaveTruthLimits& l) noexcept;
+std::optional<Rejection> validate(const MasterCommandSample& s,
+                                  const MasterCommandLimits& l) noexcept;
+std::optional<Rejection> validate(const MasterStateSample& s, const MasterStateLimits& l) noexcept;
+std::optional<Rejection> validate(const MasterForceSample& s, const MasterForceLimits& l) noexcept;
+std::optional<Rejection> validate(const HapticStatusSample& s,
+                                  const HapticStatusLimits& l) noexcept;
+
+}  // namespace tsmh::bridge

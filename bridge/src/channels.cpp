@@ -1,0 +1,40 @@
+#include "bridge/channels.hpp"
+
+namespace tsmh::bridge {
+
+std::string_view base_name(Channel channel) noexcept {
+  switch (channel) {
+    case Channel::SlaveState:
+      return "SLAVE_STATE";
+    case Channel::SlaveTruth:
+      return "SLAVE_TRUTH";
+    case Channel::MasterCommand:
+      return "MASTER_COMMAND";
+    case Channel::HapticStatus:
+      return "HAPTIC_STATUS";
+    case Channel::MasterState:
+      return "MASTER_STATE";
+    case Channel::MasterForce:
+      return "MASTER_FORCE";
+  }
+  return "UNKNOWN";
+}
+
+std::string channel_name(std::string_view prefix, Channel channel) {
+  std::string name(prefix);
+  name += base_name(channel);
+  return name;
+}
+
+std::string regex_escape(std::string_view literal) {
+  static constexpr std::string_view kSpecial = R"(\^$.|?*+()[]{})";
+  std::string out;
+  out.reserve(literal.size() * 2);
+  for (char c : literal) {
+    if (kSpecial.find(c) != std::string_view::npos) out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+}  // namespace tsmh::bridge

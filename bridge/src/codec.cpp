@@ -1,0 +1,276 @@
+#include "bridge/codec.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <new>
+
+#include "bridge/validation.hpp"
+
+namespace tsmh::bridge {
+namespace {
+
+std::size_t joints(std::int32_t n) noexcept {
+  return static_cast<std::size_t>(std::clamp(n, 0, kMaxJoints));
+}
+
+void put(const JointArray& a, std::int32_t n, std::vector<double>& v) {
+  v.assign(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(joints(n)));
+}
+
+void get(const std::vector<double>& v, std::int32_t n, JointArray& a) noexcept {
+  const std::size_t k = std::min(joints(n), v.size());
+  std::copy_n(v.begin(), k, a.begin());
+  std::fill(a.begin() + static_cast<std::ptrdiff_t>(k), a.end(), 0.0);
+}
+
+std::int64_t read_be64(const unsigned char* p) noexcept {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i)
+    v = (v << 8) | p[i];
+  return static_cast<std::int64_t>(v);
+}
+
+std::int32_t read_be32(const unsigned char* p) noexcept {
+  std::uint32_t v = 0;
+  for (int i = 0; i < 4; ++i)
+    v = (v << 8) | p[i];
+  return static_cast<std::int32_t>(v);
+}
+
+}  // namespace
+
+void to_message(const SlaveStateSample& s, tsmh::slave_state_t& m) {
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.num_joints = s.num_joints;
+  put(s.x_in, s.num_joints, m.x_in);
+  put(s.x_out, s.num_joints, m.x_out);
+  put(s.T1, s.num_joints, m.T1);
+  put(s.T3, s.num_joints, m.T3);
+  put(s.radius_m, s.num_joints, m.radius_m);
+  m.status = s.status;
+}
+
+void to_message(const SlaveTruthSample& s, tsmh::slave_truth_t& m) {
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.num_joints = s.num_joints;
+  put(s.tau_out, s.num_joints, m.tau_out);
+  put(s.friction, s.num_joints, m.friction);
+  put(s.tau_in, s.num_joints, m.tau_in);
+  put(s.x_out, s.num_joints, m.x_out);
+  put(s.contact_force, s.num_joints, m.contact_force);
+  put(s.indentation, s.num_joints, m.indentation);
+}
+
+void to_message(const MasterCommandSample& s, tsmh::master_command_t& m) {
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.num_joints = s.num_joints;
+  put(s.position_ref, s.num_joints, m.position_ref);
+  m.enable = s.enable;
+  m.clutch = s.clutch;
+}
+
+void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m) {
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.num_joints = s.num_joints;
+  m.state = s.state;
+  m.feedback_source = s.feedback_source;
+  m.rate_hz = s.rate_hz;
+  m.lateness_p50_us = s.lateness_p50_us;
+  m.lateness_p99_us = s.lateness_p99_us;
+  m.lateness_max_us = s.lateness_max_us;
+  m.compute_p99_us = s.compute_p99_us;
+  m.overruns = s.overruns;
+  m.slave_age_ms = s.slave_age_ms;
+  m.slave_rejected = s.slave_rejected;
+  m.slave_seq_gaps = s.slave_seq_gaps;
+  m.slave_latency_p99_us = s.slave_latency_p99_us;
+  m.flags = s.flags;
+  put(s.tau_in, s.num_joints, m.tau_in);
+  put(s.tau_out_est, s.num_joints, m.tau_out_est);
+  put(s.friction_est, s.num_joints, m.friction_est);
+  put(s.torque_cmd, s.num_joints, m.torque_cmd);
+  put(s.master_q, s.num_joints, m.master_q);
+}
+
+void to_message(const MasterStateSample& s, tsmh::master_state_t& m) {
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.num_joints = s.num_joints;
+  put(s.q, s.num_joints, m.q);
+  put(s.qd, s.num_joints, m.qd);
+  m.buttons = s.buttons;
+  m.status = s.status;
+}
+
+void to_message(const MasterForceSample& s, tsmh::master_force_t& m) {
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.num_joints = s.num_joints;
+  put(s.torque, s.num_joints, m.torque);
+  m.enable = s.enable;
+}
+
+void from_message(const tsmh::slave_state_t& m, SlaveStateSample& s) noexcept {
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.num_joints = m.num_joints;
+  get(m.x_in, m.num_joints, s.x_in);
+  get(m.x_out, m.num_joints, s.x_out);
+  get(m.T1, m.num_joints, s.T1);
+  get(m.T3, m.num_joints, s.T3);
+  get(m.radius_m, m.num_joints, s.radius_m);
+  s.status = m.status;
+}
+
+void from_message(const tsmh::slave_truth_t& m, SlaveTruthSample& s) noexcept {
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.num_joints = m.num_joints;
+  get(m.tau_out, m.num_joints, s.tau_out);
+  get(m.friction, m.num_joints, s.friction);
+  get(m.tau_in, m.num_joints, s.tau_in);
+  get(m.x_out, m.num_joints, s.x_out);
+  get(m.contact_force, m.num_joints, s.contact_force);
+  get(m.indentation, m.num_joints, s.indentation);
+}
+
+void from_message(const tsmh::master_command_t& m, MasterCommandSample& s) noexcept {
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.num_joints = m.num_joints;
+  get(m.position_ref, m.num_joints, s.position_ref);
+  s.enable = m.enable != 0;
+  s.clutch = m.clutch != 0;
+}
+
+void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcept {
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.num_joints = m.num_joints;
+  s.state = m.state;
+  s.feedback_source = m.feedback_source;
+  s.rate_hz = m.rate_hz;
+  s.lateness_p50_us = m.lateness_p50_us;
+  s.lateness_p99_us = m.lateness_p99_us;
+  s.lateness_max_us = m.lateness_max_us;
+  s.compute_p99_us = m.compute_p99_us;
+  s.overruns = m.overruns;
+  s.slave_age_ms = m.slave_age_ms;
+  s.slave_rejected = m.slave_rejected;
+  s.slave_seq_gaps = m.slave_seq_gaps;
+  s.slave_latency_p99_us = m.slave_latency_p99_us;
+  s.flags = m.flags;
+  get(m.tau_in, m.num_joints, s.tau_in);
+  get(m.tau_out_est, m.num_joints, s.tau_out_est);
+  get(m.friction_est, m.num_joints, s.friction_est);
+  get(m.torque_cmd, m.num_joints, s.torque_cmd);
+  get(m.master_q, m.num_joints, s.master_q);
+}
+
+void from_message(const tsmh::master_state_t& m, MasterStateSample& s) noexcept {
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.num_joints = m.num_joints;
+  get(m.q, m.num_joints, s.q);
+  get(m.qd, m.num_joints, s.qd);
+  s.buttons = m.buttons;
+  s.status = m.status;
+}
+
+void from_message(const tsmh::master_force_t& m, MasterForceSample& s) noexcept {
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.num_joints = m.num_joints;
+  get(m.torque, m.num_joints, s.torque);
+  s.enable = m.enable != 0;
+}
+
+bool peek_header(const void* data, std::size_t size, RawHeader& out) noexcept {
+  if (data == nullptr || size < kRawHeaderBytes) return false;
+  const auto* p = static_cast<const unsigned char*>(data);
+  out.hash = read_be64(p);
+  out.utime = read_be64(p + 8);
+  out.seq = read_be64(p + 16);
+  out.num_joints = read_be32(p + 24);
+  return true;
+}
+
+template <class Sample>
+std::optional<Rejection> Decoder<Sample>::decode(const void* data, std::size_t size,
+                                                 Sample& out) noexcept {
+  char what[128];  // longer than Rejection::what: make_rejection truncates
+  RawHeader h;
+  if (!peek_header(data, size, h)) {
+    std::snprintf(what, sizeof what, "truncated: %zu bytes, header needs %zu", size,
+                  kRawHeaderBytes);
+    return make_rejection(RejectReason::Decode, what, static_cast<double>(size));
+  }
+  if (h.hash != Message::getHash()) {
+    std::snprintf(what, sizeof what, "not a %s (type hash differs)", Message::getTypeName());
+    auto r = make_rejection(RejectReason::Decode, what, static_cast<double>(size));
+    return r;
+  }
+  if (auto r = check_joint_count(h.num_joints, 0)) {
+    r->seq = h.seq;
+    return r;
+  }
+  // num_joints is now small, so sizing a message for it cannot blow up.
+  msg_.num_joints = h.num_joints;
+  const auto expected = static_cast<std::size_t>(msg_.getEncodedSize());
+  if (size != expected) {
+    std::snprintf(what, sizeof what, "%s: %zu bytes, expected %zu for %d joints",
+                  size < expected ? "truncated" : "trailing bytes", size, expected,
+                  static_cast<int>(h.num_joints));
+    auto r = make_rejection(RejectReason::Decode, what, static_cast<double>(size));
+    r.seq = h.seq;
+    return r;
+  }
+  try {
+    if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
+        msg_.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) {
+      auto r = make_rejection(RejectReason::Decode, "lcm decode failed", static_cast<double>(size));
+      r.seq = h.seq;
+      return r;
+    }
+  } catch (const std::bad_alloc&) {  // unreachable after the checks above; never let it escape
+    return make_rejection(RejectReason::Decode, "out of memory while decoding",
+                          static_cast<double>(size));
+  }
+  from_message(msg_, out);
+  return std::nullopt;
+}
+
+template <class Sample>
+void encode_sample(const Sample& s, std::vector<std::uint8_t>& bytes) {
+  typename SampleTraits<Sample>::Message m;
+  to_message(s, m);
+  bytes.resize(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+}
+
+template <class Sample>
+int publish_sample(lcm::LCM& lcm, const std::string& channel, const Sample& s) {
+  typename SampleTraits<Sample>::Message m;
+  to_message(s, m);
+  return lcm.publish(channel, &m);
+}
+
+#define TSMH_BRIDGE_INSTANTIATE(S)                                      \
+  template class Decoder<S>;                                            \
+  template void encode_sample<S>(const S&, std::vector<std::uint8_t>&); \
+  template int publish_sample<S>(lcm::LCM&, const std::string&, const S&);
+TSMH_BRIDGE_INSTANTIATE(SlaveStateSample)
+TSMH_BRIDGE_INSTANTIATE(SlaveTruthSample)
+TSMH_BRIDGE_INSTANTIATE(MasterCommandSample)
+TSMH_BRIDGE_INSTANTIATE(HapticStatusSample)
+TSMH_BRIDGE_INSTANTIATE(MasterStateSample)
+TSMH_BRIDGE_INSTANTIATE(MasterForceSample)
+#undef TSMH_BRIDGE_INSTANTIATE
+
+}  // namespace tsmh::bridge

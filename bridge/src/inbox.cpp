@@ -1,0 +1,110 @@
+#include "bridge/inbox.hpp"
+
+#include "bridge/validation.hpp"
+
+namespace tsmh::bridge {
+
+ChannelStats InboxBase::stats() const noexcept {
+  ChannelStats s;
+  s.received = received_.load(std::memory_order_relaxed);
+  s.accepted = accepted_.load(std::memory_order_relaxed);
+  for (std::size_t i = 0; i < s.rejected_by.size(); ++i)
+    s.rejected_by[i] = rejected_by_[i].load(std::memory_order_relaxed);
+  s.duplicates = duplicates_.load(std::memory_order_relaxed);
+  s.reordered = reordered_.load(std::memory_order_relaxed);
+  s.seq_gaps = seq_gaps_.load(std::memory_order_relaxed);
+  s.restarts = restarts_.load(std::memory_order_relaxed);
+  s.resyncs = resyncs_.load(std::memory_order_relaxed);
+  s.latency = latency_.summary();
+  s.last_receive_ns = last_receive_ns_.load(std::memory_order_relaxed);
+  return s;
+}
+
+std::optional<Rejection> InboxBase::last_rejection() const noexcept {
+  Rejection r;
+  if (last_rejection_.load(r) == 0) return std::nullopt;
+  return r;
+}
+
+void InboxBase::count_rejected(const Rejection& r) noexcept {
+  rejected_by_[static_cast<std::size_t>(r.reason)].fetch_add(1, std::memory_order_relaxed);
+  last_rejection_.store(r);
+}
+
+bool InboxBase::count_order(const OrderVerdict& v, std::int64_t seq, std::int64_t utime,
+                            std::int64_t receive_ns) noexcept {
+  switch (v.order) {
+    case Order::First:
+    case Order::Next:
+      break;
+    case Order::Gap:
+      seq_gaps_.fetch_add(static_cast<std::uint64_t>(v.missing), std::memory_order_relaxed);
+      break;
+    case Order::Restart:
+      restarts_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case Order::Resync:
+      resyncs_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case Order::Duplicate:
+      duplicates_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case Order::Late:
+      reordered_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case Order::TimeBackwards: {
+      auto r =
+          make_rejection(RejectReason::TimeBackwards, "seq advanced", static_cast<double>(utime));
+      r.seq = seq;
+      r.receive_ns = receive_ns;
+      count_rejected(r);
+      break;
+    }
+  }
+  return v.accepted();
+}
+
+void InboxBase::count_accepted(std::int64_t utime, std::int64_t receive_ns,
+                               bool clocks_shared) noexcept {
+  if (clocks_shared) latency_.record(receive_ns - utime * 1000);
+  last_receive_ns_.store(receive_ns, std::memory_order_relaxed);
+  accepted_.fetch_add(1, std::memory_order_relaxed);
+}
+
+template <class Sample>
+Inbox<Sample>::Inbox(std::string channel, InboxOptions<Sample> options)
+    : InboxBase(std::move(channel)),
+      options_(std::move(options)),
+      tracker_(options_.resync_after) {}
+
+template <class Sample>
+void Inbox<Sample>::ingest(const void* data, std::size_t size, std::int64_t receive_ns) noexcept {
+  count_received();
+  auto reject = [&](Rejection r) {
+    r.receive_ns = receive_ns;
+    count_rejected(r);
+  };
+  if (auto r = decoder_.decode(data, size, scratch_)) return reject(*r);
+  if (auto r = check_joint_count(scratch_.num_joints, options_.expected_joints)) {
+    r->seq = scratch_.seq;
+    return reject(*r);
+  }
+  if (auto r = validate(scratch_, options_.limits)) {
+    r->seq = scratch_.seq;
+    return reject(*r);
+  }
+  const OrderVerdict v = tracker_.observe(scratch_.seq, scratch_.utime);
+  if (!count_order(v, scratch_.seq, scratch_.utime, receive_ns)) return;
+  scratch_.receive_ns = receive_ns;
+  cell_.store(scratch_);
+  count_accepted(scratch_.utime, receive_ns, options_.clocks_shared);
+}
+
+template class Inbox<SlaveStateSample>;
+template class Inbox<SlaveTruthSample>;
+template class Inbox<MasterCommandSample>;
+template class Inbox<HapticStatusSample>;
+template class Inbox<MasterStateSample>;
+template class Inbox<MasterForceSample>;
+
+}  // namespace tsmh::bridge

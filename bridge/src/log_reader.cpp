@@ -1,0 +1,176 @@
+#include "bridge/log_reader.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <unordered_map>
+
+#include "bridge/channels.hpp"
+#include "bridge/codec.hpp"
+
+namespace tsmh::bridge {
+namespace {
+
+constexpr unsigned char kSyncWord[4] = {0xED, 0xA1, 0xDA, 0x01};
+
+struct StateRow {
+  std::int64_t event = 0;
+  std::int64_t seq = 0;
+  std::int64_t utime = 0;
+  double x_in = 0, x_out = 0, T1 = 0, T3 = 0, radius = 0;
+};
+
+struct TruthRow {
+  std::int64_t event = 0;
+  double tau_out = 0;
+};
+
+std::string channel_summary(const std::map<std::string, std::size_t>& seen) {
+  if (seen.empty()) return "the log has no events";
+  std::string s = "channels in the log:";
+  for (const auto& [name, count] : seen)
+    s += " " + name + " (" + std::to_string(count) + ")";
+  return s;
+}
+
+}  // namespace
+
+bool is_lcm_log(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[4] = {};
+  if (!in.read(reinterpret_cast<char*>(head), sizeof head)) return false;
+  return std::equal(std::begin(head), std::end(head), std::begin(kSyncWord));
+}
+
+JointSeries read_joint_series(const std::filesystem::path& path, int joint,
+                              std::string_view prefix) {
+  const std::string file = path.string();
+  if (joint < 0 || joint >= kMaxJoints)
+    throw LogError(file + ": --joint " + std::to_string(joint) + " is outside 0.." +
+                   std::to_string(kMaxJoints - 1));
+  if (!std::filesystem::is_regular_file(path)) throw LogError(file + ": no such file");
+  if (!is_lcm_log(path))
+    throw LogError(file + ": not an LCM log (it does not start with LCM's event sync word)");
+  lcm::LogFile log(file, "r");
+  if (!log.good()) throw LogError(file + ": cannot open as an LCM log");
+
+  const std::string state_channel = channel_name(prefix, Channel::SlaveState);
+  const std::string truth_channel = channel_name(prefix, Channel::SlaveTruth);
+  const auto j = static_cast<std::size_t>(joint);
+
+  JointSeries out;
+  out.source = file;
+  out.joint = joint;
+  out.prefix = std::string(prefix);
+
+  Decoder<SlaveStateSample> state_decoder;
+  Decoder<SlaveTruthSample> truth_decoder;
+  SlaveStateSample state;
+  SlaveTruthSample truth;
+  std::map<std::string, std::size_t> seen;
+  std::vector<StateRow> states;
+  std::unordered_map<std::int64_t, std::vector<TruthRow>> truths;  // by seq
+  int max_joints_seen = 0;
+  std::size_t lacking_joint = 0;
+
+  for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
+    ++seen[ev->channel];
+    const auto size = static_cast<std::size_t>(ev->datalen < 0 ? 0 : ev->datalen);
+    if (ev->channel == state_channel) {
+      ++out.state_messages;
+      if (state_decoder.decode(ev->data, size, state)) {
+        ++out.skipped_invalid;
+        continue;
+      }
+      max_joints_seen = std::max(max_joints_seen, state.num_joints);
+      if (joint >= state.num_joints) {
+        ++lacking_joint;
+        continue;
+      }
+      StateRow r{ev->eventnum,   state.seq,   state.utime, state.x_in[j],
+                 state.x_out[j], state.T1[j], state.T3[j], state.radius_m[j]};
+      const bool x_out_ok = std::isfinite(r.x_out) || std::isnan(r.x_out);
+      if (!std::isfinite(r.x_in) || !std::isfinite(r.T1) || !std::isfinite(r.T3) ||
+          !std::isfinite(r.radius) || !x_out_ok) {
+        ++out.skipped_invalid;
+        continue;
+      }
+      states.push_back(r);
+    } else if (ev->channel == truth_channel) {
+      ++out.truth_messages;
+      if (truth_decoder.decode(ev->data, size, truth) || joint >= truth.num_joints ||
+          !std::isfinite(truth.tau_out[j])) {
+        continue;  // unusable truth: its state row is dropped below for lack of a match
+      }
+      truths[truth.seq].push_back({ev->eventnum, truth.tau_out[j]});
+    }
+  }
+
+  if (states.empty()) {
+    if (lacking_joint > 0)
+      throw LogError(file + ": joint " + std::to_string(joint) + " does not exist: " +
+                     state_channel + " has " + std::to_string(max_joints_seen) + " joint(s)");
+    if (out.state_messages > 0)
+      throw LogError(file + ": none of the " + std::to_string(out.state_messages) + " " +
+                     state_channel + " messages is usable (undecodable or NaN/Inf for joint " +
+                     std::to_string(joint) + ")");
+    throw LogError(file + ": no " + state_channel + " messages (prefix '" + out.prefix + "'); " +
+                   channel_summary(seen));
+  }
+
+  const bool have_truth = !truths.empty();
+  bool x_out_has_nan = false;
+  std::int64_t last_utime = 0;
+  for (const StateRow& r : states) {
+    if (!out.t.empty() && r.utime <= last_utime) {
+      ++out.skipped_not_increasing;
+      continue;
+    }
+    double tau_out = 0;
+    if (have_truth) {
+      // Match by seq; after a slave restart a seq can repeat, so take the
+      // truth event closest in the log to this state event.
+      auto it = truths.find(r.seq);
+      if (it == truths.end()) {
+        ++out.rows_without_truth;
+        continue;
+      }
+      const TruthRow* best = &it->second.front();
+      for (const TruthRow& t : it->second)
+        if (std::llabs(t.event - r.event) < std::llabs(best->event - r.event)) best = &t;
+      tau_out = best->tau_out;
+    }
+    if (out.t.empty()) {
+      out.first_utime = r.utime;
+      out.radius_m = r.radius;
+      if (!(r.radius > 0))
+        throw LogError(file + ": event " + std::to_string(r.event) + " " + state_channel +
+                       " radius_m[" + std::to_string(joint) + "] = " + std::to_string(r.radius) +
+                       " is not positive");
+    } else if (std::abs(r.radius - out.radius_m) > 1e-12 * std::abs(out.radius_m)) {
+      throw LogError(file + ": event " + std::to_string(r.event) + " " + state_channel +
+                     " radius_m[" + std::to_string(joint) + "] changes from " +
+                     std::to_string(out.radius_m) + " to " + std::to_string(r.radius) +
+                     "; one CSV holds one radius");
+    }
+    last_utime = r.utime;
+    out.t.push_back(static_cast<double>(r.utime - out.first_utime) * 1e-6);
+    out.x_in.push_back(r.x_in);
+    out.x_out.push_back(r.x_out);
+    out.T1.push_back(r.T1);
+    out.T3.push_back(r.T3);
+    if (have_truth) out.tau_out.push_back(tau_out);
+    x_out_has_nan = x_out_has_nan || std::isnan(r.x_out);
+  }
+  if (out.t.empty())
+    throw LogError(file + ": no " + state_channel + " message of joint " + std::to_string(joint) +
+                   " has a matching " + truth_channel + " (matched by seq)");
+  // The CSV contract has no NaN: a joint without an encoder has no x_out column.
+  if (x_out_has_nan) out.x_out.clear();
+  return out;
+}
+
+}  // namespace tsmh::bridge

@@ -1,0 +1,85 @@
+#include "bridge/receiver.hpp"
+
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <lcm/lcm-cpp.hpp>
+#include <stdexcept>
+
+#include "bridge/clock.hpp"
+
+namespace tsmh::bridge {
+namespace {
+
+// LCM's raw-subscription callback: hand the bytes to the inbox with the time
+// they were taken off LCM's queue.
+void on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/,
+                    InboxBase* inbox) {
+  inbox->ingest(rbuf->data, rbuf->data_size, monotonic_now_ns());
+}
+
+}  // namespace
+
+Receiver::Receiver(BridgeConfig config) : config_(std::move(config)), lcm_(open_lcm(config_.url)) {
+  wake_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  if (wake_fd_ < 0)
+    throw BridgeError(std::string("Receiver: eventfd failed: ") + std::strerror(errno));
+}
+
+Receiver::~Receiver() {
+  stop();
+  if (wake_fd_ >= 0) close(wake_fd_);
+}
+
+void Receiver::add(std::unique_ptr<InboxBase> inbox) {
+  if (running()) throw std::logic_error("Receiver::subscribe after start(): " + inbox->channel());
+  lcm::Subscription* sub = lcm_->subscribeFunction<InboxBase*>(regex_escape(inbox->channel()),
+                                                               &on_raw_message, inbox.get());
+  if (sub == nullptr) throw BridgeError("Receiver: cannot subscribe to " + inbox->channel());
+  // We drain continuously, so the queue only has to absorb a scheduling
+  // hiccup of the receive thread; it is not what keeps the newest sample.
+  sub->setQueueCapacity(256);
+  inboxes_.push_back(std::move(inbox));
+}
+
+void Receiver::start() {
+  if (running()) throw std::logic_error("Receiver::start: already running");
+  stop_requested_.store(false, std::memory_order_relaxed);
+  thread_ = std::thread([this] { run(); });
+}
+
+void Receiver::stop() noexcept {
+  if (!running()) return;
+  stop_requested_.store(true, std::memory_order_relaxed);
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);
+  thread_.join();
+  std::uint64_t drained = 0;
+  [[maybe_unused]] const ssize_t m = read(wake_fd_, &drained, sizeof drained);
+}
+
+void Receiver::run() noexcept {
+  const int lcm_fd = lcm_->getFileno();
+  while (!stop_requested_.load(std::memory_order_relaxed)) {
+    pollfd fds[2] = {{lcm_fd, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    const int ready = poll(fds, 2, -1);
+    if (ready < 0) {
+      if (errno != EINTR) transport_errors_.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    if ((fds[0].revents & POLLIN) == 0) continue;
+    // Handle everything pending before sleeping again: LCM's queue must stay
+    // empty so no newer message is ever dropped in favour of an older one.
+    for (;;) {
+      const int handled = lcm_->handleTimeout(0);
+      if (handled > 0) continue;
+      if (handled < 0) transport_errors_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    }
+  }
+}
+
+}  // namespace tsmh::bridge

@@ -1,0 +1,89 @@
+#include "bridge/rejection.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace tsmh::bridge {
+
+std::string_view reason_name(RejectReason reason) noexcept {
+  switch (reason) {
+    case RejectReason::Decode:
+      return "decode";
+    case RejectReason::JointCount:
+      return "joint_count";
+    case RejectReason::NonFinite:
+      return "non_finite";
+    case RejectReason::OutOfRange:
+      return "out_of_range";
+    case RejectReason::TimeBackwards:
+      return "time_backwards";
+  }
+  return "unknown";
+}
+
+Rejection make_rejection(RejectReason reason, std::string_view what, double value,
+                         std::int32_t joint) noexcept {
+  Rejection r;
+  r.reason = reason;
+  r.value = value;
+  r.joint = joint;
+  const std::size_t n = std::min(what.size(), r.what.size() - 1);
+  std::copy_n(what.data(), n, r.what.data());
+  r.what[n] = '\0';
+  return r;
+}
+
+std::string describe(const Rejection& r, std::string_view channel) {
+  // Built with += only: GCC 12's -Wrestrict misfires on chains of operator+.
+  std::string field(r.what.data());
+  if (r.joint >= 0) {
+    field += '[';
+    field += std::to_string(r.joint);
+    field += ']';
+  }
+  char value[64];
+  std::snprintf(value, sizeof value, "%.17g", r.value);
+
+  std::string out(channel);
+  if (r.seq >= 0) {
+    out += " seq ";
+    out += std::to_string(r.seq);
+  }
+  out += ": ";
+  switch (r.reason) {
+    case RejectReason::Decode:
+      out += "cannot decode: ";
+      out += field;
+      break;
+    case RejectReason::JointCount:
+      out += "joint count ";
+      out += value;
+      out += " rejected (";
+      out += field;
+      out += ')';
+      break;
+    case RejectReason::NonFinite:
+      out += field;
+      out += " = ";
+      out += value;
+      out += " is not finite";
+      break;
+    case RejectReason::OutOfRange:
+      out += field;
+      out += " = ";
+      out += value;
+      out += " is outside its configured range";
+      break;
+    case RejectReason::TimeBackwards:
+      out += "utime ";
+      out += value;
+      out += " us is not after the previous message's (";
+      out += field;
+      out += ')';
+      break;
+  }
+  return out;
+}
+
+}  // namespace tsmh::bridge

@@ -1,0 +1,39 @@
+#include "bridge/sequence_tracker.hpp"
+
+namespace tsmh::bridge {
+
+OrderVerdict SequenceTracker::observe(std::int64_t seq, std::int64_t utime) noexcept {
+  OrderVerdict v;
+  if (!has_last_) {
+    v.order = Order::First;
+  } else if (seq == last_seq_) {
+    // Not counted towards a resync: a sender repeating itself must not be
+    // taken for a fresh one.
+    v.order = Order::Duplicate;
+    return v;
+  } else if (seq > last_seq_) {
+    if (utime <= last_utime_) {
+      v.order = Order::TimeBackwards;
+    } else if (seq == last_seq_ + 1) {
+      v.order = Order::Next;
+    } else {
+      v.order = Order::Gap;
+      v.missing = seq - last_seq_ - 1;
+    }
+  } else {
+    v.order = utime > last_utime_ ? Order::Restart : Order::Late;
+  }
+
+  if (!v.accepted()) {
+    if (++consecutive_out_of_order_ < resync_after_) return v;
+    v.order = Order::Resync;
+    v.missing = 0;
+  }
+  consecutive_out_of_order_ = 0;
+  has_last_ = true;
+  last_seq_ = seq;
+  last_utime_ = utime;
+  return v;
+}
+
+}  // namespace tsmh::bridge

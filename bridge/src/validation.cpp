@@ -1,0 +1,76 @@
+#include "bridge/validation.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace tsmh::bridge {
+namespace {
+
+// Checks the first n entries of one joint array. `allow_nan`: NaN means
+// "not measured" for this field (x_out of a joint without encoder).
+std::optional<Rejection> check(const char* name, const JointArray& a, int n, const Range& range,
+                               bool allow_nan = false) noexcept {
+  for (int j = 0; j < n; ++j) {
+    const double v = a[static_cast<std::size_t>(j)];
+    if (std::isnan(v) && allow_nan) continue;
+    if (!std::isfinite(v)) return make_rejection(RejectReason::NonFinite, name, v, j);
+    if (!range.contains(v)) return make_rejection(RejectReason::OutOfRange, name, v, j);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<Rejection> check_joint_count(int num_joints, int expected) noexcept {
+  if (num_joints < 1 || num_joints > kMaxJoints) {
+    char what[96];
+    std::snprintf(what, sizeof what, "num_joints must be 1..%d", kMaxJoints);
+    return make_rejection(RejectReason::JointCount, what, num_joints);
+  }
+  if (expected > 0 && num_joints != expected) {
+    char what[96];
+    std::snprintf(what, sizeof what, "configured for %d joints", expected);
+    return make_rejection(RejectReason::JointCount, what, num_joints);
+  }
+  return std::nullopt;
+}
+
+std::optional<Rejection> validate(const SlaveStateSample& s, const SlaveStateLimits& l) noexcept {
+  const int n = s.num_joints;
+  if (auto r = check("x_in", s.x_in, n, l.x_in)) return r;
+  if (auto r = check("x_out", s.x_out, n, l.x_out, /*allow_nan=*/true)) return r;
+  if (auto r = check("T1", s.T1, n, l.tension)) return r;
+  if (auto r = check("T3", s.T3, n, l.tension)) return r;
+  return check("radius_m", s.radius_m, n, l.radius_m);
+}
+
+std::optional<Rejection> validate(const SlaveTruthSample& s, const SlaveTruthLimits& l) noexcept {
+  const int n = s.num_joints;
+  if (auto r = check("tau_out", s.tau_out, n, l.tau_out)) return r;
+  if (auto r = check("friction", s.friction, n, l.friction)) return r;
+  if (auto r = check("tau_in", s.tau_in, n, l.tau_in)) return r;
+  if (auto r = check("x_out", s.x_out, n, l.x_out)) return r;
+  if (auto r = check("contact_force", s.contact_force, n, l.contact_force)) return r;
+  return check("indentation", s.indentation, n, l.indentation);
+}
+
+std::optional<Rejection> validate(const MasterCommandSample& s,
+                                  const MasterCommandLimits& l) noexcept {
+  return check("position_ref", s.position_ref, s.num_joints, l.position_ref);
+}
+
+std::optional<Rejection> validate(const MasterStateSample& s, const MasterStateLimits& l) noexcept {
+  if (auto r = check("q", s.q, s.num_joints, l.q)) return r;
+  return check("qd", s.qd, s.num_joints, l.qd);
+}
+
+std::optional<Rejection> validate(const MasterForceSample& s, const MasterForceLimits& l) noexcept {
+  return check("torque", s.torque, s.num_joints, l.torque);
+}
+
+std::optional<Rejection> validate(const HapticStatusSample& /*s*/,
+                                  const HapticStatusLimits& /*l*/) noexcept {
+  return std::nullopt;
+}
+
+}  // namespace tsmh::bridge
