@@ -19,13 +19,16 @@ double h(double u, const BoucWenShape& s) noexcept {
   return u >= 0.0 ? 1.0 - p : 1.0 + (2.0 * s.sigma - 1.0) * p;
 }
 
-// Largest RK4 step keeping the local stiffness |dh/du| * step <= 0.5: accurate
-// to well below a percent per step and far inside RK4's stability region.
+// Largest RK4 step: 0.1 in normalised travel (error about 1e-7 per step), and
+// less where the state is far beyond Ff so that the local stiffness
+// |dh/du| * step stays <= 0.5, far inside RK4's stability region.
 double max_step(double u, const BoucWenShape& s) noexcept {
+  if (s.n == 2.0 && s.sigma == 1.0 && std::fabs(u) <= 1.0)
+    return 0.1;  // the paper's shape, fast path
   const double a = std::max(1.0, std::fabs(u));
   const double stiffness = s.n * std::max(1.0, std::fabs(2.0 * s.sigma - 1.0)) *
                            (s.n == 1.0 ? 1.0 : abs_pow(a, s.n - 1.0));
-  return std::min(0.25, 0.5 / stiffness);
+  return std::min(0.1, 0.5 / stiffness);
 }
 
 constexpr int kMaxSubsteps = 256;

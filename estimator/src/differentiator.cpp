@@ -8,26 +8,24 @@ namespace {
 using Mat3 = std::array<std::array<double, 3>, 3>;
 
 // Covariance after the prediction over dt for the white-jerk model:
-// P <- F P F^T + Q, F = [[1 dt dt^2/2] [0 1 dt] [0 0 1]].
+// P <- F P F^T + Q, F = [[1 dt dt^2/2] [0 1 dt] [0 0 1]], written out for the
+// upper triangle (P is symmetric): a third of the work of the matrix products.
 void predict_covariance(Mat3& p, double dt, double q) noexcept {
   const double h = 0.5 * dt * dt;
-  const double f[3][3] = {{1.0, dt, h}, {0.0, 1.0, dt}, {0.0, 0.0, 1.0}};
-  Mat3 fp{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = i; k < 3; ++k)
-        fp[i][j] += f[i][k] * p[k][j];
-  Mat3 out{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = j; k < 3; ++k)
-        out[i][j] += fp[i][k] * f[j][k];
+  // Rows of F P.
+  const double r00 = p[0][0] + dt * p[1][0] + h * p[2][0];
+  const double r01 = p[0][1] + dt * p[1][1] + h * p[2][1];
+  const double r02 = p[0][2] + dt * p[1][2] + h * p[2][2];
+  const double r11 = p[1][1] + dt * p[2][1];
+  const double r12 = p[1][2] + dt * p[2][2];
   const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt;
-  const double qm[3][3] = {
-      {d5 / 20.0, d4 / 8.0, d3 / 6.0}, {d4 / 8.0, d3 / 3.0, d2 / 2.0}, {d3 / 6.0, d2 / 2.0, dt}};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      p[i][j] = out[i][j] + q * qm[i][j];
+  const double p00 = r00 + dt * r01 + h * r02 + q * d5 / 20.0;
+  const double p01 = r01 + dt * r02 + q * d4 / 8.0;
+  const double p02 = r02 + q * d3 / 6.0;
+  const double p11 = r11 + dt * r12 + q * d3 / 3.0;
+  const double p12 = r12 + q * d2 / 2.0;
+  const double p22 = p[2][2] + q * dt;
+  p = {{{p00, p01, p02}, {p01, p11, p12}, {p02, p12, p22}}};
 }
 
 // Measurement update with the angle; returns the gain-weighted innovation.

@@ -1,0 +1,89 @@
+// One estimator step for one joint, differentiation included: the work the
+// haptic loop does per joint per tick. Target: median <= 100 ns.
+// Run: build/bin/bench_estimator (or scripts/bench estimator).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "estimator/distal_estimator.hpp"
+#include "estimator/simulate.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace {
+
+using namespace tsmh::estimator;
+
+struct Samples {
+  std::vector<double> t, x, tau;
+};
+
+Samples encoder_samples(std::size_t n) {
+  Samples s;
+  const double q = 2.0 * std::numbers::pi / 40960.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) * 1e-3;
+    s.t.push_back(t);
+    // Multi-sine: reversals, both directions, varying acceleration.
+    const double x = 0.6 * std::sin(2 * std::numbers::pi * 0.4 * t) +
+                     0.2 * std::sin(2 * std::numbers::pi * 1.3 * t);
+    s.x.push_back(std::round(x / q) * q);
+    s.tau.push_back(0.15 * std::sin(2 * std::numbers::pi * 0.7 * t));
+  }
+  return s;
+}
+
+void BM_EstimatorStep(benchmark::State& state) {
+  const Samples s = encoder_samples(1 << 16);
+  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
+  std::size_t i = 0;
+  double t_offset = 0.0;
+  for (auto _ : state) {
+    const auto e = est.update(s.t[i] + t_offset, s.x[i], s.tau[i]);
+    benchmark::DoNotOptimize(e);
+    if (++i == s.t.size()) i = 0, t_offset += 100.0;
+  }
+}
+BENCHMARK(BM_EstimatorStep)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
+void BM_ModelStepOnly(benchmark::State& state) {
+  TsmFrictionModel model(paper_spec());
+  std::vector<Motion> m;
+  for (int i = 0; i < 4096; ++i) {
+    const double t = i * 1e-3, w = 2 * std::numbers::pi * 0.5;
+    const double xdd = -0.8 * w * w * std::sin(w * t);
+    m.push_back({t, 0.8 * std::sin(w * t), 0.8 * w * std::cos(w * t), xdd, sign_of(xdd), 10.0});
+  }
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(model.step(m[i], 1e-3));
+    i = (i + 1) & 4095;
+  }
+}
+BENCHMARK(BM_ModelStepOnly)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
+void BM_DifferentiatorOnly(benchmark::State& state) {
+  const Samples s = encoder_samples(1 << 16);
+  Differentiator d;
+  std::size_t i = 0;
+  double t_offset = 0.0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(d.update(s.t[i] + t_offset, s.x[i]));
+    if (++i == s.t.size()) i = 0, t_offset += 100.0;
+  }
+}
+BENCHMARK(BM_DifferentiatorOnly)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
+}  // namespace
+
+BENCHMARK_MAIN();

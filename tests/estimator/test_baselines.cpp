@@ -1,0 +1,102 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "estimator/baselines.hpp"
+#include "estimator/simulate.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+std::vector<Motion> sine(double amplitude, double hz, double seconds, double load = 0.0) {
+  std::vector<Motion> m;
+  const double w = 2.0 * std::numbers::pi * hz;
+  for (int i = 0; i * 1e-3 <= seconds; ++i) {
+    const double t = i * 1e-3;
+    const double xdd = -amplitude * w * w * std::sin(w * t);
+    m.push_back(
+        {t, amplitude * std::sin(w * t), amplitude * w * std::cos(w * t), xdd, sign_of(xdd), load});
+  }
+  return m;
+}
+
+TEST(Baselines, DahlPresetOfTheComposableModelIsDahl) {
+  // n = 1, sigma = 1, one Coulomb level: eq. (4) becomes Dahl's model with
+  // sigma0 = gamma theta and Fc = gamma rho1 (docs/friction-model.md).
+  const TsmModelSpec spec = dahl_spec();
+  TsmFrictionModel composable(spec);
+  DahlModel dahl({spec.gamma * spec.theta, spec.gamma * spec.terms[0].p[0]});
+  const auto motion = sine(0.8, 0.5, 6.0);
+  const auto a = simulate_friction(composable, motion);
+  const auto b = simulate_friction(dahl, motion);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    worst = std::max(worst, std::fabs(a[i] - b[i]));
+  // Both integrate the same ODE; they differ only in the held velocity
+  // (trapezoid vs end point) over each 1 ms interval: under 1 % of Fc.
+  EXPECT_LT(worst, 0.09);
+
+  // At constant velocity the two discretisations coincide: exact agreement.
+  std::vector<Motion> ramp;
+  for (int i = 0; i < 500; ++i)
+    ramp.push_back({i * 1e-3, 0.7 * i * 1e-3, 0.7, 0.0, 0, 0.0});
+  const auto ra = simulate_friction(composable, ramp);
+  const auto rb = simulate_friction(dahl, ramp);
+  for (std::size_t i = 0; i < ra.size(); ++i)
+    EXPECT_NEAR(ra[i], rb[i], 1e-6) << i;
+}
+
+TEST(Baselines, DahlSaturatesAtCoulombLevel) {
+  DahlModel dahl({150.0, 9.0});
+  const auto f = simulate_friction(dahl, sine(0.8, 0.5, 4.0));
+  EXPECT_NEAR(*std::max_element(f.begin() + 2000, f.end()), 9.0, 0.01);
+  EXPECT_NEAR(*std::min_element(f.begin() + 2000, f.end()), -9.0, 0.01);
+}
+
+TEST(Baselines, LuGreShowsStribeckAndViscous) {
+  LuGreModel lugre({300.0, 0.0, 0.5, 8.0, 12.0, 0.1});
+  std::vector<Motion> slow, fast;
+  for (int i = 0; i < 20000; ++i) {
+    slow.push_back({i * 1e-3, 0.0, 0.05, 0.0, 0, 0.0});
+    fast.push_back({i * 1e-3, 0.0, 2.0, 0.0, 0, 0.0});
+  }
+  const double f_slow = simulate_friction(lugre, slow).back();
+  const double f_fast = simulate_friction(lugre, fast).back();
+  EXPECT_NEAR(f_slow, 8.0 + 4.0 * std::exp(-0.25) + 0.5 * 0.05, 0.01);  // near Fs at low speed
+  EXPECT_NEAR(f_fast, 8.0 + 0.5 * 2.0, 0.01);                           // Fc + sigma2 v
+}
+
+TEST(Baselines, CoulombCapstanGrowsWithLoadAndJumpsAtReversal) {
+  CoulombCapstanModel kaneko({5.0, 0.2, 0.01});
+  EXPECT_NEAR(kaneko.step({0.0, 0.0, 1.0, 0.0, 0, 0.0}, 1e-3), 5.0, 1e-9);
+  EXPECT_NEAR(kaneko.step({0.0, 0.0, 1.0, 0.0, 0, 50.0}, 1e-3), 15.0, 1e-9);
+  EXPECT_NEAR(kaneko.step({0.0, 0.0, -1.0, 0.0, 0, 50.0}, 1e-3), -15.0, 1e-9);
+  EXPECT_NEAR(kaneko.step({0.0, 0.0, 0.0, 0.0, 0, 50.0}, 1e-3), 0.0, 1e-9);  // no force at rest
+}
+
+TEST(Baselines, BadParametersAreRefusedNamingTheField) {
+  try {
+    LuGreModel({300.0, 0.0, 0.5, 8.0, 12.0, -1.0});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("params.vs"), std::string::npos);
+  }
+  EXPECT_THROW(DahlModel({0.0, 1.0}), std::invalid_argument);
+  EXPECT_THROW(CoulombCapstanModel({1.0, 1.5, 0.01}), std::invalid_argument);
+}
+
+TEST(Baselines, SetValuesRoundTripsParameters) {
+  LuGreModel lugre;
+  std::vector<double> v;
+  for (const auto& p : lugre.parameters())
+    v.push_back(p.value * 1.1);
+  lugre.set_values(v);
+  const auto after = lugre.parameters();
+  for (std::size_t i = 0; i < v.size(); ++i)
+    EXPECT_DOUBLE_EQ(after[i].value, v[i]);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator

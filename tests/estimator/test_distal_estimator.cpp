@@ -1,0 +1,70 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "estimator/distal_estimator.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+DistalTorqueEstimator paper_estimator(double radius = 0.01) {
+  return DistalTorqueEstimator(std::make_unique<TsmFrictionModel>(paper_spec()), radius);
+}
+
+TEST(DistalEstimator, EstimateIsProximalTorqueMinusRadiusTimesFriction) {
+  auto est = paper_estimator();
+  const double w = 2.0 * std::numbers::pi * 0.5;
+  for (int i = 0; i < 3000; ++i) {
+    const double t = i * 1e-3;
+    const double tau_in = 0.2 * std::sin(w * t);
+    const auto e = est.update(t, 0.8 * std::sin(w * t), tau_in);
+    ASSERT_TRUE(e.valid);
+    EXPECT_DOUBLE_EQ(e.tau_in, tau_in);
+    EXPECT_DOUBLE_EQ(e.tau_out_est, tau_in - 0.01 * e.friction);
+  }
+}
+
+TEST(DistalEstimator, TensionsGiveProximalTorqueByEquationOne) {
+  auto est = paper_estimator(0.012);
+  const auto e = est.update_tensions(0.0, 0.0, 30.0, 12.0);
+  EXPECT_DOUBLE_EQ(e.tau_in, 0.012 * (30.0 - 12.0));
+}
+
+TEST(DistalEstimator, RejectsBadSamplesWithoutLosingState) {
+  auto est = paper_estimator();
+  for (int i = 0; i < 500; ++i)
+    est.update(i * 1e-3, 0.5 * i * 1e-3, 0.1);
+  const auto good = est.update(0.5, 0.25, 0.1);
+  ASSERT_TRUE(good.valid);
+  const auto nan_tau = est.update(0.501, 0.2505, std::nan(""));
+  EXPECT_FALSE(nan_tau.valid);
+  EXPECT_TRUE(std::isnan(nan_tau.tau_out_est));
+  EXPECT_FALSE(est.update(0.501, std::numeric_limits<double>::infinity(), 0.1).valid);
+  EXPECT_FALSE(est.update(0.4, 0.2, 0.1).valid);  // time went backwards
+  const auto next = est.update(0.501, 0.2505, 0.1);
+  ASSERT_TRUE(next.valid);
+  EXPECT_NEAR(next.friction, good.friction, 0.05);
+}
+
+TEST(DistalEstimator, ExactDerivativesPath) {
+  auto est = paper_estimator();
+  Estimate e;
+  for (int i = 0; i < 1000; ++i)
+    e = est.update_exact(i * 1e-3, 1.0 * i * 1e-3, 1.0, 0.0, 0.0);
+  // Sliding forward at 1 rad/s: F -> gamma (rho1 + mu1 e^-kappa1) (lambda term off, xdd = 0).
+  EXPECT_NEAR(e.friction, 9.5651 * (1.038 + 1.0978 * std::exp(-6.1264)), 0.05);
+}
+
+TEST(DistalEstimator, RefusesBadConfiguration) {
+  EXPECT_THROW(DistalTorqueEstimator(nullptr, 0.01), std::invalid_argument);
+  EXPECT_THROW(DistalTorqueEstimator(std::make_unique<TsmFrictionModel>(paper_spec()), 0.0),
+               std::invalid_argument);
+  EXPECT_THROW(
+      DistalTorqueEstimator(std::make_unique<TsmFrictionModel>(paper_spec()), std::nan("")),
+      std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator

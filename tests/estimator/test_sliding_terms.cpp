@@ -1,0 +1,102 @@
+// Eqs. (5)-(11) against values computed by hand (python, from the printed
+// equations) in every branch, including the boundaries xd = 0 and xdd = 0.
+#include <gtest/gtest.h>
+
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+double level(double xd, double xdd) {
+  const TsmFrictionModel model(paper_spec());
+  return model.sliding_level(Motion{.xd = xd, .xdd = xdd, .acc_sign = sign_of(xdd)});
+}
+
+TEST(SlidingLevel, PositiveVelocityAccelerating_Eq6) {
+  EXPECT_NEAR(level(0.5, 2.0), 1.091707790653388, 1e-12);
+}
+
+TEST(SlidingLevel, PositiveVelocityDecelerating_Eq7) {
+  EXPECT_NEAR(level(0.5, -2.0), 1.0869099303009553, 1e-12);
+}
+
+TEST(SlidingLevel, PositiveVelocityZeroAcceleration_Eq6EqualsEq7) {
+  // xdd = 0 belongs to both (6) and (7); the mu2 term vanishes there.
+  EXPECT_NEAR(level(0.5, 0.0), 1.0893088604771717, 1e-12);
+  EXPECT_NEAR(level(0.5, 1e-12), level(0.5, -1e-12), 1e-12);
+}
+
+TEST(SlidingLevel, ZeroVelocityTakesPositiveBranch) {
+  // Boundary rule: xd = 0 uses S+v (rho1), not S-v (rho2).
+  EXPECT_NEAR(level(0.0, 3.0), 2.1393508560896852, 1e-12);
+  EXPECT_NEAR(level(0.0, 0.0), 1.038 + 1.0978, 1e-12);
+  EXPECT_GT(level(0.0, 0.0) - level(-1e-9, 0.0), 0.14);  // rho1 - rho2 = 0.1476
+}
+
+TEST(SlidingLevel, NegativeVelocityDecelerating_Eq9) {
+  // xd < 0, xdd < 0: S-v1 with +mu3 (eq. 9), not the "+ sgn(xdd)" of eq. (8).
+  EXPECT_NEAR(level(-0.5, -2.0), 1.0052569111080385, 1e-12);
+}
+
+TEST(SlidingLevel, NegativeVelocityAccelerating_Eq10) {
+  EXPECT_NEAR(level(-0.5, 2.0), 0.8781608098463048, 1e-12);
+}
+
+TEST(SlidingLevel, NegativeVelocityZeroAcceleration_Eq11) {
+  EXPECT_NEAR(level(-0.5, 0.0), 0.9417088604771716, 1e-12);
+}
+
+TEST(SlidingLevel, FastNegativeMotion) {
+  EXPECT_NEAR(level(-2.0, 5.0), 0.8772805834324865, 1e-12);
+}
+
+TEST(SlidingLevel, UsesDebouncedSignNotRawAcceleration) {
+  // The branch follows acc_sign (the differentiator's debounced sgn(xdd));
+  // the magnitude |xdd| still scales the term.
+  const TsmFrictionModel model(paper_spec());
+  const double with_plus = model.sliding_level(Motion{.xd = 0.5, .xdd = -2.0, .acc_sign = +1});
+  EXPECT_NEAR(with_plus, 1.091707790653388, 1e-12);
+}
+
+TEST(SlidingLevel, FlooredAtMinimum) {
+  TsmModelSpec spec = dahl_spec();
+  spec.add(TermKind::load_dependent).p = {-1.0};
+  const TsmFrictionModel model(spec);
+  EXPECT_DOUBLE_EQ(model.sliding_level(Motion{.xd = 1.0, .load = 100.0}), kMinSlidingLevel);
+}
+
+TEST(SlidingTerms, CatalogNamesAreStableAndUnique) {
+  const char* expected[] = {"coulomb",         "direction_asymmetry",
+                            "stribeck",        "acceleration_dependence",
+                            "reversal_offset", "viscous",
+                            "load_dependent",  "position_dependent",
+                            "time_varying"};
+  ASSERT_EQ(term_catalog().size(), std::size(expected));
+  for (std::size_t i = 0; i < std::size(expected); ++i) {
+    EXPECT_EQ(term_catalog()[i].name, expected[i]);
+    EXPECT_EQ(term_kind_from_name(expected[i]), term_catalog()[i].kind);
+  }
+  EXPECT_FALSE(term_kind_from_name("nonsense").has_value());
+}
+
+TEST(SlidingTerms, AddedEffectsContribute) {
+  Term viscous{TermKind::viscous, {0.3}};
+  EXPECT_DOUBLE_EQ(term_level(viscous, Motion{.xd = -2.0}, false), 0.6);
+  Term load{TermKind::load_dependent, {0.01}};
+  EXPECT_DOUBLE_EQ(term_level(load, Motion{.load = 50.0}, false), 0.5);
+  Term pos{TermKind::position_dependent, {0.1, 0.2}};
+  EXPECT_DOUBLE_EQ(term_level(pos, Motion{.x = 2.0}, false), 0.1 * 2.0 + 0.2 * 4.0);
+  Term time{TermKind::time_varying, {0.01, 0.5, 10.0, 2.0}};
+  EXPECT_DOUBLE_EQ(term_level(time, Motion{.t = 5.0}, false), 0.01 * 3.0);
+  EXPECT_DOUBLE_EQ(term_level(time, Motion{.t = 10.0}, false), 0.01 * 8.0 + 0.5);
+}
+
+TEST(SlidingTerms, DriveIncludesReversalOffset) {
+  const TsmFrictionModel model(paper_spec());
+  EXPECT_DOUBLE_EQ(model.drive(1.0, -1), 0.8);
+  EXPECT_DOUBLE_EQ(model.drive(0.0, +1), 0.2);
+  EXPECT_DOUBLE_EQ(model.drive(0.0, 0), 0.0);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
