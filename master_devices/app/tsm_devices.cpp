@@ -1,0 +1,90 @@
+// tsm-devices: what master devices this machine can drive.
+//   tsm-devices --list                 connected devices matching known profiles, with paths
+//   tsm-devices --drivers              registered drivers
+//   tsm-devices --monitor DRIVER [--config FILE] [--seconds S]
+//                                      open a device, print its readings (no torque)
+// haptic-server --list-devices prints the same listing (same library call).
+
+#include <yaml-cpp/yaml.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <thread>
+
+#include "master_devices/builtin_drivers.hpp"
+#include "master_devices/clock.hpp"
+#include "master_devices/lcm_device.hpp"
+#include "master_devices/profile.hpp"
+#include "master_devices/registry.hpp"
+
+namespace md = tsmh::master_devices;
+
+int main(int argc, char** argv) {
+  CLI::App app{"tsm-devices: list and probe tsm-haptics master devices"};
+  bool list = false;
+  bool drivers = false;
+  std::string monitor;
+  std::string config;
+  std::string profile_dir = TSMH_PROFILE_DIR;
+  double seconds = 3.0;
+  app.add_flag("--list", list, "list connected devices that match known profiles");
+  app.add_flag("--drivers", drivers, "list registered drivers");
+  app.add_option("--monitor", monitor, "open a device with this driver and print readings");
+  app.add_option("--config", config, "YAML file with the driver's settings map (for --monitor)");
+  app.add_option("--seconds", seconds, "how long to monitor")->check(CLI::PositiveNumber);
+  app.add_option("--profiles", profile_dir, "directory of device profiles (*.yaml)");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    md::BuiltinDriverOptions options;
+    if (std::filesystem::is_directory(profile_dir))
+      options.profiles = md::load_profiles(profile_dir);
+    md::DriverRegistry registry;
+    md::register_builtin_drivers(registry, options);
+    md::register_lcm_driver(registry);
+
+    if (drivers) {
+      for (const auto& [name, description] : registry.drivers()) {
+        std::printf("%-10s %s\n", name.c_str(), description.c_str());
+      }
+    }
+    if (list) std::fputs(md::format_connected(registry.list_connected()).c_str(), stdout);
+    if (!monitor.empty()) {
+      YAML::Node settings;
+      md::DriverContext ctx;
+      if (!config.empty()) {
+        settings = YAML::LoadFile(config);
+        ctx.source = config;
+        ctx.path = "";
+        ctx.base_dir = std::filesystem::path(config).parent_path();
+      }
+      auto device = registry.create(monitor, settings, ctx);
+      device->open();
+      const md::DeviceSpec& spec = device->spec();
+      std::printf("%s (%s): %u DOF, %.0f Hz\n", spec.model.c_str(), spec.driver.c_str(), spec.dof,
+                  spec.nominal_rate_hz);
+      const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+      std::int64_t t = md::monotonic_ns();
+      while (std::chrono::steady_clock::now() < end) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        t = device->simulated_time() ? t + 100'000'000 : md::monotonic_ns();
+        const md::DeviceReading r = device->read(t);
+        std::printf("%-12s seq %8llu  q", std::string(md::to_string(r.status)).c_str(),
+                    static_cast<unsigned long long>(r.sequence));
+        for (std::uint32_t j = 0; j < r.dof; ++j)
+          std::printf(" %+8.4f", r.q[j]);
+        std::printf("  dead-man %d e-stop %d clutch %d  %s\n", r.buttons.dead_man, r.buttons.e_stop,
+                    r.buttons.clutch, device->last_error().c_str());
+      }
+      device->close();
+    }
+    if (!list && !drivers && monitor.empty()) std::cout << app.help();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tsm-devices: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

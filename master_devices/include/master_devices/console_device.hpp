@@ -1,0 +1,151 @@
+#pragma once
+// The host driver for our console protocol (docs/hid-protocol.md) over any
+// Transport: registered as `hid` (hidapi), `usb` (libusb) and `emulator`
+// (in-process firmware). Everything protocol- and safety-related lives here,
+// so all three run the same code:
+//
+// - open(): find the device (path / serial / first with the profile's
+//   VID/PID), read DEVICE_INFO and check it against the profile, program
+//   CALIBRATION (watchdog, current limits) and read it back.
+// - I/O context (per input report): decode, calibrate to rad, estimate
+//   velocity on the device clock, check workspace and device faults, publish
+//   the reading; then answer with one output report carrying the newest
+//   torque command (clamped, I^2 t limited, zero when disabled, faulted or
+//   when the loop stopped writing for command_timeout_ms).
+// - Supervisor thread: on link loss, tears the transport down and reconnects
+//   every reconnect_interval_ms (or at once on a hotplug arrival). The device
+//   comes back disabled.
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "master_devices/device.hpp"
+#include "master_devices/joint_calibration.hpp"
+#include "master_devices/latest_value.hpp"
+#include "master_devices/profile.hpp"
+#include "master_devices/protocol.hpp"
+#include "master_devices/settings.hpp"
+#include "master_devices/transport.hpp"
+
+namespace tsmh::master_devices {
+
+struct ConsoleSettings {
+  std::string path;    ///< open this device path; "" = any with the profile's VID/PID
+  std::string serial;  ///< only a device with this serial; "" = any
+  std::int64_t reconnect_interval_ms = 200;
+  std::int64_t command_timeout_ms = 20;  ///< zero torque when write_torque() calls stop this long
+  std::int64_t stale_timeout_ms = 20;    ///< read(): kDisconnected when the newest sample is older
+  double velocity_cutoff_hz = 150.0;
+  double workspace_margin_rad = 0.2;  ///< kFault when a joint is this far outside its workspace
+  int max_bad_reports = 10;           ///< consecutive malformed reports before kFault
+  bool wait_for_device = false;       ///< open() succeeds with no device and waits for it
+};
+
+/// Reads ConsoleSettings keys from a driver settings map (all optional).
+/// `profile` is returned separately by the caller; this ignores it.
+ConsoleSettings parse_console_settings(FieldReader& r);
+
+struct ConsoleStats {
+  std::uint64_t reports = 0;       ///< valid input reports
+  std::uint64_t bad_reports = 0;   ///< malformed input reports (dropped)
+  std::uint64_t lost_reports = 0;  ///< gaps in the input sequence
+  std::uint64_t outputs_sent = 0;
+  std::uint64_t outputs_failed = 0;
+  std::uint64_t disconnects = 0;
+  std::uint64_t reconnects = 0;
+};
+
+class ConsoleDevice final : public Device, private TransportListener {
+ public:
+  ConsoleDevice(std::string driver, DeviceProfile profile, ConsoleSettings settings,
+                std::shared_ptr<TransportProvider> provider);
+  ~ConsoleDevice() override;
+
+  const DeviceSpec& spec() const override { return spec_; }
+  void open() override;
+  void close() noexcept override;
+  std::string last_error() const override;
+  bool clear_fault() override;
+
+  DeviceReading read(std::int64_t now_ns) noexcept override;
+  void write_torque(const JointArray& tau_nm) noexcept override;
+  void set_enabled(bool on) noexcept override;
+  void raise_fault(FaultCode code) noexcept override;
+  DeviceStatus status() const noexcept override;
+
+  ConsoleStats stats() const;
+  const DeviceProfile& profile() const { return profile_; }
+  /// Path of the connected device ("" when disconnected).
+  std::string connected_path() const;
+
+ private:
+  struct Command {
+    JointArray tau{};
+    std::int64_t t_ns = 0;
+    bool valid = false;
+  };
+
+  // TransportListener (I/O context)
+  void on_input_report(std::span<const std::uint8_t> report, std::int64_t t_ns) noexcept override;
+  void on_link_lost(const char* why) noexcept override;
+
+  void connect();  // setup: find, handshake, start. Throws DeviceError.
+  void supervise();
+  void send_output(std::int64_t t_ns, double dt_s, bool allow_torque) noexcept;
+  void latch_fault(FaultCode code, const char* text) noexcept;
+  void set_error(const std::string& text);
+  void set_error_fixed(const char* text) noexcept;
+
+  std::string driver_;
+  DeviceProfile profile_;
+  ConsoleSettings settings_;
+  std::shared_ptr<TransportProvider> provider_;
+  DeviceSpec spec_;
+
+  // Loop <-> I/O thread.
+  LatestValue<DeviceReading> readings_;
+  LatestValue<Command> commands_;
+  std::atomic<bool> enable_requested_{false};
+  std::atomic<bool> link_up_{false};
+  std::atomic<bool> opened_{false};
+  std::atomic<FaultCode> fault_{FaultCode::kNone};
+  std::atomic<bool> clear_device_fault_{false};
+
+  // I/O context state (one session at a time; reset in connect()).
+  Transport* active_ = nullptr;
+  bool have_previous_ = false;
+  std::uint16_t previous_sequence_ = 0;
+  std::uint32_t previous_device_us_ = 0;
+  int bad_in_a_row_ = 0;
+  std::uint64_t reading_count_ = 0;
+  std::array<VelocityEstimator, kMaxDof> velocity_{};
+  std::array<CurrentLimiter, kMaxDof> limiters_{};
+  std::uint16_t output_sequence_ = 0;
+  JointArray last_sent_{};
+
+  // Counters (I/O context writes, anyone reads).
+  std::atomic<std::uint64_t> n_reports_{0}, n_bad_{0}, n_lost_{0}, n_sent_{0}, n_failed_{0},
+      n_disconnects_{0}, n_reconnects_{0};
+
+  // Supervisor.
+  mutable std::mutex mutex_;  // guards the fields below and error_
+  std::condition_variable wake_;
+  bool link_lost_ = false;
+  bool arrival_ = false;
+  bool stopping_ = false;
+  std::unique_ptr<Transport> transport_;
+  std::string connected_path_;
+  std::thread supervisor_;
+
+  // The I/O context may lock this (it is not the real-time loop); error_ has
+  // reserved capacity so recording an error there does not allocate.
+  mutable std::mutex error_mutex_;
+  std::string error_;
+};
+
+}  // namespace tsmh::master_devices

@@ -1,0 +1,104 @@
+#pragma once
+// The `lcm` driver: a master whose vendor driver runs in another process
+// (see examples/external_master_adapter/) and talks to us over LCM:
+//
+//   adapter -> server   MASTER_STATE  (tsmh::master_state_t)  q, qd, buttons, status
+//   server  -> adapter  MASTER_FORCE  (tsmh::master_force_t)  torque, enable
+//
+// One MASTER_FORCE answers every MASTER_STATE (newest torque, zero when
+// disabled, faulted, or when the loop stopped writing), so the adapter's
+// own watchdog sees forces stop when either side dies. An LCM thread does
+// all the I/O; the loop exchanges values with it through lock-free cells.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "master_devices/device.hpp"
+#include "master_devices/latest_value.hpp"
+#include "master_devices/registry.hpp"
+#include "master_devices/settings.hpp"
+
+namespace lcm {
+class LCM;
+}
+
+namespace tsmh::master_devices {
+
+struct LcmSettings {
+  std::string url;             ///< "" = $LCM_DEFAULT_URL, else LCM's default
+  std::string channel_prefix;  ///< per-arm prefix, e.g. "LEFT_" -> LEFT_MASTER_STATE
+  std::size_t dof = 2;         ///< num_joints the adapter must send
+  double nominal_rate_hz = 1000.0;
+  JointArray peak_torque_nm{};
+  JointArray continuous_torque_nm{};
+  JointArray position_min_rad{};
+  JointArray position_max_rad{};
+  JointArray max_stiffness_nm_per_rad{};
+  std::int64_t stale_timeout_ms = 50;    ///< kDisconnected when MASTER_STATE stops this long
+  std::int64_t command_timeout_ms = 20;  ///< zero torque when write_torque() calls stop this long
+
+  std::string state_channel() const { return channel_prefix + "MASTER_STATE"; }
+  std::string force_channel() const { return channel_prefix + "MASTER_FORCE"; }
+};
+
+LcmSettings parse_lcm_settings(FieldReader& r);
+
+class LcmDevice final : public Device {
+ public:
+  /// Uses its own LCM instance from settings.url.
+  explicit LcmDevice(LcmSettings settings);
+  /// Uses a given LCM instance (e.g. "memq://" shared with a test); this
+  /// device's thread is then the one that handles it.
+  LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm);
+  ~LcmDevice() override;
+
+  const DeviceSpec& spec() const override { return spec_; }
+  void open() override;
+  void close() noexcept override;
+  std::string last_error() const override;
+  bool clear_fault() override;
+
+  DeviceReading read(std::int64_t now_ns) noexcept override;
+  void write_torque(const JointArray& tau_nm) noexcept override;
+  void set_enabled(bool on) noexcept override;
+  void raise_fault(FaultCode code) noexcept override;
+  DeviceStatus status() const noexcept override;
+
+  std::uint64_t rejected_messages() const { return rejected_.load(); }
+
+  struct Impl;  // the LCM side (internal)
+
+ private:
+  friend struct Impl;
+  struct Command {
+    JointArray tau{};
+    std::int64_t t_ns = 0;
+    bool valid = false;
+  };
+  void set_error(const std::string& text);
+
+  LcmSettings settings_;
+  DeviceSpec spec_;
+  std::shared_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<Impl> impl_;
+
+  LatestValue<DeviceReading> readings_;
+  LatestValue<Command> commands_;
+  std::atomic<bool> enable_requested_{false};
+  std::atomic<bool> opened_{false};
+  std::atomic<FaultCode> fault_{FaultCode::kNone};
+  std::atomic<std::uint64_t> rejected_{0};
+  std::atomic<bool> stopping_{false};
+  std::thread thread_;
+  mutable std::mutex error_mutex_;
+  std::string error_;
+};
+
+/// Registers the `lcm` driver.
+void register_lcm_driver(DriverRegistry& registry);
+
+}  // namespace tsmh::master_devices

@@ -1,0 +1,96 @@
+#pragma once
+// The `sim` driver: a master console with a simulated operator's hand on it
+// (simulated_operator.hpp). This is what the demo uses, and what makes the
+// server loop testable without hardware.
+//
+// time: real       a thread integrates the hand at rate_hz on absolute
+//                  deadlines, like a hardware device; read()/write_torque()
+//                  exchange values with it through lock-free cells.
+// time: simulated  no thread: read(now_ns) integrates the hand up to now_ns
+//                  with the newest torque, so a loop that runs faster than
+//                  real time (or single-steps in a test) stays
+//                  deterministic. read() and write_torque() must then be
+//                  called from the same thread.
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <thread>
+
+#include "master_devices/device.hpp"
+#include "master_devices/latest_value.hpp"
+#include "master_devices/settings.hpp"
+#include "master_devices/simulated_operator.hpp"
+
+namespace tsmh::master_devices {
+
+struct SimSettings {
+  bool simulated_time = false;
+  double rate_hz = 1000.0;
+  std::size_t dof = 2;
+  Scenario scenario = PalpateScenario{};
+  HandParams hand;
+  HandleParams handle;
+  JointArray peak_torque_nm{0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3, 0.3};
+  JointArray continuous_torque_nm{0.15, 0.15, 0.15, 0.15, 0.15, 0.15, 0.15, 0.15};
+  JointArray position_min_rad{-1, -1, -1, -1, -1, -1, -1, -1};
+  JointArray position_max_rad{1, 1, 1, 1, 1, 1, 1, 1};
+  JointArray max_stiffness_nm_per_rad{5, 5, 5, 5, 5, 5, 5, 5};
+  double encoder_resolution_rad = 0.0;   ///< quantize q like an encoder (0: exact)
+  std::int64_t command_timeout_ms = 20;  ///< real time: zero torque when commands stop
+  std::int64_t stale_timeout_ms = 20;    ///< real time: kDisconnected when readings stop
+  Buttons buttons{true, false, false};   ///< held throughout (dead-man pressed by default)
+};
+
+/// Parses a `sim` settings map; every error names source and field.
+SimSettings parse_sim_settings(FieldReader& r);
+
+class SimDevice final : public Device {
+ public:
+  explicit SimDevice(SimSettings settings);
+  ~SimDevice() override;
+
+  const DeviceSpec& spec() const override { return spec_; }
+  void open() override;
+  void close() noexcept override;
+  std::string last_error() const override;
+  bool clear_fault() override;
+
+  DeviceReading read(std::int64_t now_ns) noexcept override;
+  void write_torque(const JointArray& tau_nm) noexcept override;
+  void set_enabled(bool on) noexcept override { enabled_ = on; }
+  void raise_fault(FaultCode code) noexcept override;
+  DeviceStatus status() const noexcept override;
+  bool simulated_time() const noexcept override { return settings_.simulated_time; }
+
+  const SimSettings& settings() const { return settings_; }
+  /// Scenario time, s (simulated-time mode: of the last read()).
+  double scenario_time_s() const { return scenario_t_.load(); }
+
+ private:
+  struct Command {
+    JointArray tau{};
+    std::int64_t t_ns = 0;
+    bool valid = false;
+  };
+
+  void advance(double dt_s, std::int64_t t_ns) noexcept;  // integrate + publish
+  void run_real_time();
+
+  SimSettings settings_;
+  DeviceSpec spec_;
+  SimulatedOperator operator_;
+  LatestValue<DeviceReading> readings_;
+  LatestValue<Command> commands_;
+  std::atomic<bool> enabled_{false};
+  std::atomic<bool> opened_{false};
+  std::atomic<FaultCode> fault_{FaultCode::kNone};
+  std::atomic<double> scenario_t_{0.0};
+  std::uint64_t count_ = 0;
+  std::int64_t last_t_ns_ = 0;  // simulated time: time the hand has been integrated to
+  bool started_ = false;
+  std::atomic<bool> stopping_{false};
+  std::thread thread_;
+};
+
+}  // namespace tsmh::master_devices

@@ -1,0 +1,468 @@
+#include "master_devices/console_device.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "master_devices/clock.hpp"
+
+namespace tsmh::master_devices {
+
+namespace {
+constexpr std::size_t kErrorCapacity = 512;
+
+const char* firmware_fault_text(protocol::FirmwareFault f) {
+  switch (f) {
+    case protocol::FirmwareFault::kNone:
+      return "none";
+    case protocol::FirmwareFault::kOverCurrent:
+      return "over-current";
+    case protocol::FirmwareFault::kOverTemperature:
+      return "over-temperature";
+    case protocol::FirmwareFault::kEncoder:
+      return "encoder error";
+    case protocol::FirmwareFault::kSupply:
+      return "supply out of range";
+  }
+  return "unknown";
+}
+}  // namespace
+
+ConsoleSettings parse_console_settings(FieldReader& r) {
+  ConsoleSettings s;
+  s.path = r.get_string("path", "");
+  s.serial = r.get_string("serial", "");
+  s.reconnect_interval_ms = r.get_int("reconnect_interval_ms", s.reconnect_interval_ms);
+  if (s.reconnect_interval_ms < 1) r.fail("reconnect_interval_ms", "must be >= 1");
+  s.command_timeout_ms = r.get_int("command_timeout_ms", s.command_timeout_ms);
+  if (s.command_timeout_ms < 1) r.fail("command_timeout_ms", "must be >= 1");
+  s.stale_timeout_ms = r.get_int("stale_timeout_ms", s.stale_timeout_ms);
+  if (s.stale_timeout_ms < 1) r.fail("stale_timeout_ms", "must be >= 1");
+  s.velocity_cutoff_hz = r.get_double("velocity_cutoff_hz", s.velocity_cutoff_hz);
+  if (!(s.velocity_cutoff_hz > 0.0)) r.fail("velocity_cutoff_hz", "must be > 0");
+  s.workspace_margin_rad = r.get_double("workspace_margin_rad", s.workspace_margin_rad);
+  if (!(s.workspace_margin_rad >= 0.0)) r.fail("workspace_margin_rad", "must be >= 0");
+  s.max_bad_reports = static_cast<int>(r.get_int("max_bad_reports", s.max_bad_reports));
+  if (s.max_bad_reports < 1) r.fail("max_bad_reports", "must be >= 1");
+  s.wait_for_device = r.get_bool("wait_for_device", s.wait_for_device);
+  return s;
+}
+
+ConsoleDevice::ConsoleDevice(std::string driver, DeviceProfile profile, ConsoleSettings settings,
+                             std::shared_ptr<TransportProvider> provider)
+    : driver_(std::move(driver)),
+      profile_(std::move(profile)),
+      settings_(std::move(settings)),
+      provider_(std::move(provider)),
+      spec_(spec_from_profile(profile_, driver_)) {
+  if (profile_.joints.size() > protocol::kJoints) {
+    throw DeviceError(profile_.source + ": profile '" + profile_.name + "' has " +
+                      std::to_string(profile_.joints.size()) +
+                      " joints; the console protocol carries " + std::to_string(protocol::kJoints));
+  }
+  error_.reserve(kErrorCapacity);
+  for (std::size_t j = 0; j < profile_.joints.size(); ++j) {
+    const JointProfile& jp = profile_.joints[j];
+    velocity_[j] = VelocityEstimator(settings_.velocity_cutoff_hz);
+    limiters_[j] = CurrentLimiter(jp.current_limit_continuous_a, jp.current_limit_peak_a,
+                                  profile_.thermal_time_constant_s);
+  }
+}
+
+ConsoleDevice::~ConsoleDevice() {
+  close();
+}
+
+// ---- setup ----
+
+void ConsoleDevice::connect() {
+  const std::string id = usb_id_string(profile_.vendor_id, profile_.product_id);
+  std::vector<TransportDeviceInfo> found =
+      provider_->enumerate(profile_.vendor_id, profile_.product_id);
+  auto chosen = std::find_if(found.begin(), found.end(), [&](const TransportDeviceInfo& d) {
+    return (settings_.path.empty() || d.path == settings_.path) &&
+           (settings_.serial.empty() || d.serial == settings_.serial);
+  });
+  if (chosen == found.end()) {
+    std::string msg = driver_ + ": no " + profile_.name + " (" + id + ")";
+    if (!settings_.path.empty()) msg += " at " + settings_.path;
+    if (!settings_.serial.empty()) msg += " with serial " + settings_.serial;
+    msg += " found via " + std::string(provider_->name());
+    if (!found.empty()) {
+      msg += "; present:";
+      for (const auto& d : found)
+        msg += " " + d.path + (d.serial.empty() ? "" : " (serial " + d.serial + ")");
+    }
+    throw DeviceError(msg);
+  }
+
+  std::unique_ptr<Transport> t;
+  try {
+    t = provider_->open(*chosen);
+  } catch (const TransportError& e) {
+    throw DeviceError(driver_ + ": cannot open " + chosen->path + ": " + e.what());
+  }
+  const std::string where = driver_ + ": " + chosen->path + ": ";
+
+  // DEVICE_INFO must match the profile: a wrong profile means wrong angles and torques.
+  std::array<std::uint8_t, protocol::kMaxReportSize> buf{};
+  protocol::DeviceInfo info;
+  try {
+    const std::size_t n = t->get_feature(protocol::kDeviceInfoReportId, buf);
+    const auto decoded = protocol::decode_device_info(std::span<const std::uint8_t>(buf.data(), n));
+    if (!decoded.ok()) throw DeviceError(where + protocol::describe(decoded.error));
+    info = decoded.value;
+  } catch (const TransportError& e) {
+    throw DeviceError(where + "reading DEVICE_INFO: " + e.what());
+  }
+  if (info.dof != profile_.joints.size()) {
+    throw DeviceError(where + "device has " + std::to_string(info.dof) + " joints but profile " +
+                      profile_.source + " describes " + std::to_string(profile_.joints.size()));
+  }
+  for (std::size_t j = 0; j < info.dof; ++j) {
+    const JointProfile& jp = profile_.joints[j];
+    const double device_cpr = info.counts_per_rev[j] / (2.0 * 3.14159265358979323846);
+    if (std::abs(device_cpr - jp.counts_per_rad) > 0.005 * device_cpr) {
+      throw DeviceError(where + profile_.source + ": joints[" + std::to_string(j) +
+                        "].counts_per_rad " + std::to_string(jp.counts_per_rad) +
+                        " disagrees with the device's " + std::to_string(info.counts_per_rev[j]) +
+                        " counts/rev (" + std::to_string(device_cpr) + " counts/rad)");
+    }
+    if (jp.current_limit_peak_a * 1000.0 > info.max_current_ma[j] + 0.5) {
+      throw DeviceError(where + profile_.source + ": joints[" + std::to_string(j) +
+                        "].current_limit_peak_a " + std::to_string(jp.current_limit_peak_a) +
+                        " A exceeds the device's " + std::to_string(info.max_current_ma[j]) +
+                        " mA");
+    }
+  }
+  spec_.nominal_rate_hz = info.nominal_rate_hz;
+
+  // CALIBRATION: the firmware enforces our current limits and watchdog too.
+  protocol::Calibration cal;
+  cal.watchdog_ms = profile_.watchdog_ms;
+  for (std::size_t j = 0; j < protocol::kJoints; ++j) {
+    const bool used = j < profile_.joints.size();
+    cal.direction[j] = static_cast<std::int8_t>(used ? profile_.joints[j].direction : 1);
+    cal.zero_offset_counts[j] = used ? std::clamp(profile_.joints[j].zero_offset_counts,
+                                                  protocol::kCountsMin, protocol::kCountsMax)
+                                     : 0;
+    cal.current_limit_ma[j] = used ? static_cast<std::uint16_t>(std::lround(
+                                         profile_.joints[j].current_limit_peak_a * 1000.0))
+                                   : 0;
+  }
+  try {
+    const auto encoded = protocol::encode(cal, buf);
+    if (!encoded.ok()) throw DeviceError(where + protocol::describe(encoded.error));
+    t->set_feature(std::span<const std::uint8_t>(buf.data(), encoded.value));
+    const std::size_t n = t->get_feature(protocol::kCalibrationReportId, buf);
+    const auto back = protocol::decode_calibration(std::span<const std::uint8_t>(buf.data(), n));
+    if (!back.ok())
+      throw DeviceError(where + "reading back CALIBRATION: " + protocol::describe(back.error));
+    if (!(back.value == cal))
+      throw DeviceError(where + "the device did not keep the CALIBRATION we sent");
+  } catch (const TransportError& e) {
+    throw DeviceError(where + "writing CALIBRATION: " + e.what());
+  }
+
+  // A new session: the device comes back disabled, the I/O state starts over.
+  enable_requested_ = false;
+  have_previous_ = false;
+  bad_in_a_row_ = 0;
+  for (auto& v : velocity_)
+    v.reset();
+  last_sent_ = {};
+  active_ = t.get();
+  link_up_ = true;
+  try {
+    t->start(*this);
+  } catch (const TransportError& e) {
+    link_up_ = false;
+    active_ = nullptr;
+    throw DeviceError(where + "starting the input stream: " + e.what());
+  }
+
+  // A link loss during start() has already set link_lost_; the supervisor
+  // (the caller, or started after open()) tears this transport down then.
+  std::lock_guard lock(mutex_);
+  transport_ = std::move(t);
+  connected_path_ = chosen->path;
+}
+
+void ConsoleDevice::open() {
+  if (opened_) return;
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = false;
+    arrival_ = false;
+  }
+  try {
+    connect();
+  } catch (const DeviceError& e) {
+    if (!settings_.wait_for_device) throw;
+    set_error(std::string(e.what()) + " (waiting for it)");
+  }
+  provider_->set_arrival_callback([this] {
+    std::lock_guard lock(mutex_);
+    arrival_ = true;
+    wake_.notify_all();
+  });
+  opened_ = true;
+  supervisor_ = std::thread([this] { supervise(); });
+}
+
+void ConsoleDevice::close() noexcept {
+  if (!opened_.exchange(false)) return;
+  // Ask for one last zero-torque, disabled output report before stopping.
+  enable_requested_ = false;
+  const std::uint64_t sent = n_sent_.load();
+  for (int i = 0; i < 50 && link_up_ && n_sent_.load() < sent + 2; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  provider_->set_arrival_callback({});
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+    wake_.notify_all();
+  }
+  if (supervisor_.joinable()) supervisor_.join();
+  std::unique_ptr<Transport> t;
+  {
+    std::lock_guard lock(mutex_);
+    t = std::move(transport_);
+    connected_path_.clear();
+  }
+  if (t) t->stop();
+  link_up_ = false;
+  active_ = nullptr;
+}
+
+void ConsoleDevice::supervise() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    wake_.wait_for(lock, std::chrono::milliseconds(settings_.reconnect_interval_ms),
+                   [this] { return stopping_ || link_lost_ || arrival_; });
+    if (stopping_) break;
+    if (link_lost_) {
+      // Tear down outside the lock: stop() waits for a running callback,
+      // and callbacks (on_link_lost) take this lock.
+      std::unique_ptr<Transport> t = std::move(transport_);
+      connected_path_.clear();
+      link_lost_ = false;
+      lock.unlock();
+      if (t) t->stop();
+      t.reset();
+      lock.lock();
+    }
+    arrival_ = false;
+    if (!transport_) {
+      lock.unlock();
+      try {
+        connect();
+        n_reconnects_++;
+      } catch (const std::exception& e) {
+        set_error(e.what());
+      }
+      lock.lock();
+    }
+  }
+}
+
+// ---- I/O context ----
+
+void ConsoleDevice::on_input_report(std::span<const std::uint8_t> report,
+                                    std::int64_t t_ns) noexcept {
+  const auto decoded = protocol::decode_input(report);
+  if (!decoded.ok()) {
+    n_bad_++;
+    std::array<char, 160> text{};
+    set_error_fixed(protocol::describe(decoded.error, text));
+    if (++bad_in_a_row_ >= settings_.max_bad_reports) {
+      latch_fault(FaultCode::kBadReports, "too many malformed input reports in a row");
+    }
+    send_output(t_ns, 0.0, false);  // keep the firmware informed, but never drive on garbage
+    return;
+  }
+  bad_in_a_row_ = 0;
+  const protocol::InputReport& in = decoded.value;
+  n_reports_++;
+
+  double dt_s = 0.0;
+  if (have_previous_) {
+    const std::uint16_t step = protocol::sequence_delta(previous_sequence_, in.sequence);
+    if (step > 1) n_lost_ += step - 1u;
+    dt_s = static_cast<std::uint32_t>(in.device_time_us - previous_device_us_) * 1e-6;
+  }
+  have_previous_ = true;
+  previous_sequence_ = in.sequence;
+  previous_device_us_ = in.device_time_us;
+
+  DeviceReading r;
+  r.t_ns = t_ns;
+  r.sequence = ++reading_count_;
+  r.dof = static_cast<std::uint32_t>(profile_.joints.size());
+  for (std::size_t j = 0; j < profile_.joints.size(); ++j) {
+    const JointProfile& jp = profile_.joints[j];
+    r.q[j] = counts_to_rad(jp, in.counts[j]);
+    r.qd[j] = velocity_[j].update(r.q[j], dt_s);
+    const double m = settings_.workspace_margin_rad;
+    if (r.q[j] < jp.position_min_rad - m || r.q[j] > jp.position_max_rad + m) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "joint %zu at %.3f rad is outside its workspace [%.3f, %.3f] by more than %.3f "
+                    "rad (wrong zero_offset_counts?)",
+                    j, r.q[j], jp.position_min_rad, jp.position_max_rad, m);
+      latch_fault(FaultCode::kWorkspace, text);
+    }
+  }
+  if (in.status.fault) {
+    char text[96];
+    std::snprintf(text, sizeof text, "device reports a fault: %s", firmware_fault_text(in.fault));
+    latch_fault(FaultCode::kDeviceReported, text);
+  }
+  r.buttons = in.buttons;
+  r.enabled = in.status.torque_enabled;
+  r.status = DeviceStatus::kOk;  // read() overrides with link and fault state
+
+  send_output(t_ns, dt_s, true);
+  r.tau_commanded = last_sent_;
+  readings_.publish(r);
+}
+
+void ConsoleDevice::send_output(std::int64_t t_ns, double dt_s, bool allow_torque) noexcept {
+  Command cmd;
+  commands_.fetch(cmd);
+  const bool fresh_command =
+      cmd.valid && t_ns - cmd.t_ns <= settings_.command_timeout_ms * 1'000'000LL;
+  const bool drive =
+      allow_torque && enable_requested_ && fault_ == FaultCode::kNone && fresh_command;
+
+  protocol::OutputReport out;
+  out.sequence = output_sequence_++;
+  out.enable = drive;
+  out.clear_fault = clear_device_fault_.exchange(false);
+  last_sent_ = {};
+  for (std::size_t j = 0; j < profile_.joints.size(); ++j) {
+    const JointProfile& jp = profile_.joints[j];
+    const double tau =
+        drive && std::isfinite(cmd.tau[j])
+            ? std::clamp(cmd.tau[j], -spec_.peak_torque_nm[j], spec_.peak_torque_nm[j])
+            : 0.0;
+    const double amps = limiters_[j].limit(torque_to_current_a(jp, tau), dt_s);
+    out.current_ma[j] = to_milliamps(amps);
+    last_sent_[j] = current_to_torque_nm(jp, out.current_ma[j] * 1e-3);
+  }
+  std::array<std::uint8_t, protocol::kOutputReportSize> bytes{};
+  const auto encoded = protocol::encode(out, bytes);
+  if (encoded.ok() && active_ != nullptr && active_->write_output(bytes)) {
+    n_sent_++;
+  } else {
+    n_failed_++;
+  }
+}
+
+void ConsoleDevice::on_link_lost(const char* why) noexcept {
+  link_up_ = false;
+  n_disconnects_++;
+  char text[192];
+  std::snprintf(text, sizeof text, "link lost: %s", why);
+  set_error_fixed(text);
+  std::lock_guard lock(mutex_);
+  link_lost_ = true;
+  wake_.notify_all();
+}
+
+// ---- real-time path ----
+
+DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
+  DeviceReading r;
+  r.fresh = readings_.fetch(r);
+  const DeviceStatus s = status();
+  r.status = s;
+  r.fault = fault_.load();
+  const bool stale = r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL;
+  if (s == DeviceStatus::kOk && stale) r.status = DeviceStatus::kDisconnected;
+  if (r.status != DeviceStatus::kOk) {
+    r.enabled = false;
+    r.tau_commanded = {};
+  } else {
+    r.enabled = r.enabled && enable_requested_;
+  }
+  return r;
+}
+
+void ConsoleDevice::write_torque(const JointArray& tau_nm) noexcept {
+  commands_.publish(Command{tau_nm, monotonic_ns(), true});
+}
+
+void ConsoleDevice::set_enabled(bool on) noexcept {
+  enable_requested_ = on;
+}
+
+void ConsoleDevice::raise_fault(FaultCode code) noexcept {
+  FaultCode expected = FaultCode::kNone;
+  fault_.compare_exchange_strong(expected, code);
+  enable_requested_ = false;
+}
+
+DeviceStatus ConsoleDevice::status() const noexcept {
+  if (!opened_) return DeviceStatus::kClosed;
+  if (fault_ != FaultCode::kNone) return DeviceStatus::kFault;
+  if (!link_up_) return DeviceStatus::kDisconnected;
+  return DeviceStatus::kOk;
+}
+
+// ---- faults and errors ----
+
+void ConsoleDevice::latch_fault(FaultCode code, const char* text) noexcept {
+  FaultCode expected = FaultCode::kNone;
+  if (fault_.compare_exchange_strong(expected, code)) {
+    enable_requested_ = false;
+    set_error_fixed(text);
+  }
+}
+
+bool ConsoleDevice::clear_fault() {
+  const FaultCode f = fault_.load();
+  if (f == FaultCode::kNone) return true;
+  if (f == FaultCode::kDeviceReported) {
+    // Ask the firmware to clear, then see whether it stays clear.
+    clear_device_fault_ = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  enable_requested_ = false;
+  fault_ = FaultCode::kNone;
+  // A cause that persists re-latches on the next reports.
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  if (fault_ != FaultCode::kNone) return false;
+  set_error("");
+  return true;
+}
+
+void ConsoleDevice::set_error(const std::string& text) {
+  std::lock_guard lock(error_mutex_);
+  error_ = text;
+}
+
+void ConsoleDevice::set_error_fixed(const char* text) noexcept {
+  std::lock_guard lock(error_mutex_);
+  error_.assign(text, std::min(std::char_traits<char>::length(text), kErrorCapacity - 1));
+}
+
+std::string ConsoleDevice::last_error() const {
+  std::lock_guard lock(error_mutex_);
+  if (error_.empty() && fault_ == FaultCode::kHostRequested) return "fault raised by the host";
+  return error_;
+}
+
+ConsoleStats ConsoleDevice::stats() const {
+  return ConsoleStats{n_reports_, n_bad_,         n_lost_,      n_sent_,
+                      n_failed_,  n_disconnects_, n_reconnects_};
+}
+
+std::string ConsoleDevice::connected_path() const {
+  std::lock_guard lock(mutex_);
+  return connected_path_;
+}
+
+}  // namespace tsmh::master_devices

@@ -1,0 +1,269 @@
+#include "master_devices/lcm_device.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <lcm/lcm-cpp.hpp>
+#include <tsmh/master_force_t.hpp>
+#include <tsmh/master_state_t.hpp>
+
+#include "master_devices/clock.hpp"
+
+namespace tsmh::master_devices {
+
+namespace {
+
+void joint_values(FieldReader& r, std::string_view key, JointArray& out, std::size_t dof,
+                  double fallback) {
+  for (std::size_t j = 0; j < dof; ++j)
+    out[j] = fallback;
+  YAML::Node n = r.node(key);
+  if (!n.IsDefined()) return;
+  if (n.IsScalar()) {
+    const double v = r.get_double(key);
+    for (std::size_t j = 0; j < dof; ++j)
+      out[j] = v;
+    return;
+  }
+  if (!n.IsSequence() || n.size() != dof) {
+    r.fail(key,
+           "must be a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
+  }
+  for (std::size_t j = 0; j < dof; ++j) {
+    double v = 0.0;
+    if (!n[j].IsScalar() || !YAML::convert<double>::decode(n[j], v) || !std::isfinite(v)) {
+      config_fail(r.source(), r.element(key, j), "must be a number", n[j]);
+    }
+    out[j] = v;
+  }
+}
+
+}  // namespace
+
+LcmSettings parse_lcm_settings(FieldReader& r) {
+  LcmSettings s;
+  s.url = r.get_string("url", "");
+  s.channel_prefix = r.get_string("channel_prefix", "");
+  const long long dof = r.get_int("dof", 2);
+  if (dof < 1 || dof > static_cast<long long>(kMaxDof))
+    r.fail("dof", "must be 1 .. " + std::to_string(kMaxDof));
+  s.dof = static_cast<std::size_t>(dof);
+  s.nominal_rate_hz = r.get_double("nominal_rate_hz", s.nominal_rate_hz);
+  if (!(s.nominal_rate_hz > 0)) r.fail("nominal_rate_hz", "must be > 0");
+  joint_values(r, "peak_torque_nm", s.peak_torque_nm, s.dof, 0.3);
+  joint_values(r, "continuous_torque_nm", s.continuous_torque_nm, s.dof, 0.15);
+  joint_values(r, "position_min_rad", s.position_min_rad, s.dof, -1.0);
+  joint_values(r, "position_max_rad", s.position_max_rad, s.dof, 1.0);
+  joint_values(r, "max_stiffness_nm_per_rad", s.max_stiffness_nm_per_rad, s.dof, 0.0);
+  for (std::size_t j = 0; j < s.dof; ++j) {
+    if (!(s.peak_torque_nm[j] > 0)) r.fail("peak_torque_nm", "must be > 0");
+    if (!(s.continuous_torque_nm[j] > 0 && s.continuous_torque_nm[j] <= s.peak_torque_nm[j])) {
+      r.fail("continuous_torque_nm", "must be > 0 and <= peak_torque_nm");
+    }
+    if (!(s.position_min_rad[j] < s.position_max_rad[j]))
+      r.fail("position_max_rad", "must be > position_min_rad");
+  }
+  s.stale_timeout_ms = r.get_int("stale_timeout_ms", s.stale_timeout_ms);
+  if (s.stale_timeout_ms < 1) r.fail("stale_timeout_ms", "must be >= 1");
+  s.command_timeout_ms = r.get_int("command_timeout_ms", s.command_timeout_ms);
+  if (s.command_timeout_ms < 1) r.fail("command_timeout_ms", "must be >= 1");
+  return s;
+}
+
+/// The LCM thread's side: subscription handler and reply.
+struct LcmDevice::Impl {
+  LcmDevice& device;
+  lcm::Subscription* subscription = nullptr;
+  tsmh::master_force_t force;  // preallocated: its vector keeps its capacity
+  std::uint64_t count = 0;
+  std::int64_t force_seq = 0;
+
+  explicit Impl(LcmDevice& d) : device(d) {
+    force.num_joints = static_cast<int32_t>(d.settings_.dof);
+    force.torque.assign(d.settings_.dof, 0.0);
+  }
+
+  void reject(const std::string& why) {
+    device.rejected_++;
+    device.set_error(device.settings_.state_channel() + ": " + why);
+  }
+
+  void on_state(const lcm::ReceiveBuffer*, const std::string&, const tsmh::master_state_t* msg) {
+    const std::int64_t now = monotonic_ns();
+    const std::size_t dof = device.settings_.dof;
+    if (msg->num_joints != static_cast<int32_t>(dof)) {
+      reject("num_joints " + std::to_string(msg->num_joints) + ", expected " + std::to_string(dof));
+      return;
+    }
+    for (std::size_t j = 0; j < dof; ++j) {
+      if (!std::isfinite(msg->q[j]) || !std::isfinite(msg->qd[j])) {
+        reject("q[" + std::to_string(j) + "] or qd[" + std::to_string(j) + "] is not finite");
+        return;
+      }
+    }
+    if (msg->buttons & ~0x7) {
+      reject("buttons " + std::to_string(msg->buttons) + " has undefined bits (0..2 defined)");
+      return;
+    }
+    if (msg->status & 0x1) {
+      FaultCode expected = FaultCode::kNone;
+      if (device.fault_.compare_exchange_strong(expected, FaultCode::kDeviceReported)) {
+        device.enable_requested_ = false;
+        device.set_error(device.settings_.state_channel() +
+                         ": the external driver reports a fault");
+      }
+    }
+
+    // Answer with the newest torque (zero unless everything is well).
+    Command cmd;
+    device.commands_.fetch(cmd);
+    const bool drive = device.enable_requested_ && device.fault_ == FaultCode::kNone && cmd.valid &&
+                       now - cmd.t_ns <= device.settings_.command_timeout_ms * 1'000'000LL;
+    DeviceReading r;
+    r.t_ns = now;
+    r.sequence = ++count;
+    r.dof = static_cast<std::uint32_t>(dof);
+    for (std::size_t j = 0; j < dof; ++j) {
+      r.q[j] = msg->q[j];
+      r.qd[j] = msg->qd[j];
+      const double peak = device.spec_.peak_torque_nm[j];
+      const double tau =
+          drive && std::isfinite(cmd.tau[j]) ? std::clamp(cmd.tau[j], -peak, peak) : 0.0;
+      r.tau_commanded[j] = tau;
+      force.torque[j] = tau;
+    }
+    r.buttons = Buttons{(msg->buttons & 1) != 0, (msg->buttons & 2) != 0, (msg->buttons & 4) != 0};
+    r.enabled = drive;
+    r.status = DeviceStatus::kOk;
+    device.readings_.publish(r);
+
+    force.utime = now / 1000;
+    force.seq = force_seq++;
+    force.enable = drive;
+    device.lcm_->publish(device.settings_.force_channel(), &force);
+  }
+};
+
+LcmDevice::LcmDevice(LcmSettings settings) : LcmDevice(std::move(settings), nullptr) {}
+
+LcmDevice::LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm)
+    : settings_(std::move(settings)), lcm_(std::move(lcm)) {
+  spec_.model = "lcm:" + settings_.state_channel();
+  spec_.driver = "lcm";
+  spec_.dof = static_cast<std::uint32_t>(settings_.dof);
+  spec_.nominal_rate_hz = settings_.nominal_rate_hz;
+  for (std::size_t j = 0; j < settings_.dof; ++j) {
+    spec_.joint_names[j] = "joint" + std::to_string(j);
+    spec_.peak_torque_nm[j] = settings_.peak_torque_nm[j];
+    spec_.max_continuous_torque_nm[j] = settings_.continuous_torque_nm[j];
+    spec_.position_min_rad[j] = settings_.position_min_rad[j];
+    spec_.position_max_rad[j] = settings_.position_max_rad[j];
+    spec_.max_stiffness_nm_per_rad[j] = settings_.max_stiffness_nm_per_rad[j];
+  }
+}
+
+LcmDevice::~LcmDevice() {
+  close();
+}
+
+void LcmDevice::open() {
+  if (opened_) return;
+  if (!lcm_) {
+    // An empty URL lets LCM honour $LCM_DEFAULT_URL, as its own tools do.
+    lcm_ = std::make_shared<lcm::LCM>(settings_.url);
+  }
+  if (!lcm_->good()) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    const std::string url = !settings_.url.empty() ? settings_.url : (env ? env : "LCM default");
+    lcm_.reset();
+    throw DeviceError(
+        "lcm: cannot start LCM at " + url +
+        " (for udpm on a host without a multicast route: ip link set lo multicast on; "
+        "ip route add 224.0.0.0/4 dev lo)");
+  }
+  impl_ = std::make_unique<Impl>(*this);
+  impl_->subscription = lcm_->subscribe(settings_.state_channel(), &Impl::on_state, impl_.get());
+  enable_requested_ = false;
+  stopping_ = false;
+  opened_ = true;
+  thread_ = std::thread([this] {
+    while (!stopping_)
+      lcm_->handleTimeout(10);
+  });
+}
+
+void LcmDevice::close() noexcept {
+  if (!opened_.exchange(false)) return;
+  stopping_ = true;
+  if (thread_.joinable()) thread_.join();
+  if (impl_ && impl_->subscription) lcm_->unsubscribe(impl_->subscription);
+  impl_.reset();
+}
+
+std::string LcmDevice::last_error() const {
+  std::lock_guard lock(error_mutex_);
+  if (error_.empty() && fault_ == FaultCode::kHostRequested) return "fault raised by the host";
+  return error_;
+}
+
+void LcmDevice::set_error(const std::string& text) {
+  std::lock_guard lock(error_mutex_);
+  error_ = text;
+}
+
+bool LcmDevice::clear_fault() {
+  fault_ = FaultCode::kNone;
+  enable_requested_ = false;
+  set_error("");
+  return true;
+}
+
+DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
+  DeviceReading r;
+  r.fresh = readings_.fetch(r);
+  r.status = status();
+  r.fault = fault_.load();
+  if (r.status == DeviceStatus::kOk &&
+      (r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL)) {
+    r.status = DeviceStatus::kDisconnected;
+  }
+  if (r.status != DeviceStatus::kOk) {
+    r.enabled = false;
+    r.tau_commanded = {};
+  } else {
+    r.enabled = r.enabled && enable_requested_;
+  }
+  return r;
+}
+
+void LcmDevice::write_torque(const JointArray& tau_nm) noexcept {
+  commands_.publish(Command{tau_nm, monotonic_ns(), true});
+}
+
+void LcmDevice::set_enabled(bool on) noexcept {
+  enable_requested_ = on;
+}
+
+void LcmDevice::raise_fault(FaultCode code) noexcept {
+  FaultCode expected = FaultCode::kNone;
+  fault_.compare_exchange_strong(expected, code);
+  enable_requested_ = false;
+}
+
+DeviceStatus LcmDevice::status() const noexcept {
+  if (!opened_) return DeviceStatus::kClosed;
+  if (fault_ != FaultCode::kNone) return DeviceStatus::kFault;
+  return DeviceStatus::kOk;
+}
+
+void register_lcm_driver(DriverRegistry& registry) {
+  registry.add("lcm", "external master driver over LCM (MASTER_STATE in, MASTER_FORCE out)",
+               [](const YAML::Node& settings, const DriverContext& ctx) {
+                 FieldReader r(settings, ctx.source, ctx.path);
+                 LcmSettings s = parse_lcm_settings(r);
+                 r.reject_unknown();
+                 return std::unique_ptr<Device>(std::make_unique<LcmDevice>(std::move(s)));
+               });
+}
+
+}  // namespace tsmh::master_devices

@@ -1,0 +1,226 @@
+#include "master_devices/scenarios.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace tsmh::master_devices {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Smooth 0 -> 1 over [0, T] (raised cosine) and its time derivative.
+double ramp(double t, double T) {
+  if (t <= 0.0) return 0.0;
+  if (t >= T) return 1.0;
+  return 0.5 - 0.5 * std::cos(kPi * t / T);
+}
+double ramp_rate(double t, double T) {
+  if (t <= 0.0 || t >= T) return 0.0;
+  return 0.5 * kPi / T * std::sin(kPi * t / T);
+}
+
+double press_period(const PalpateScenario& p) {
+  return p.press_s + p.hold_s + p.release_s + p.rest_s;
+}
+
+Intention palpate(const PalpateScenario& p, double t, std::size_t dof) {
+  Intention in;
+  const int presses = p.soft_presses + p.hard_presses;
+  const double u = t - p.start_s;
+  if (u >= 0.0 && presses > 0) {
+    const int index = std::min(static_cast<int>(u / press_period(p)), presses - 1);
+    const double local = u - index * press_period(p);
+    const double depth = index < p.soft_presses ? p.soft_depth_rad : p.hard_depth_rad;
+    double x = 0.0;
+    double xd = 0.0;
+    if (local < p.press_s) {
+      x = ramp(local, p.press_s);
+      xd = ramp_rate(local, p.press_s);
+    } else if (local < p.press_s + p.hold_s) {
+      x = 1.0;
+    } else {
+      const double r = local - p.press_s - p.hold_s;
+      x = 1.0 - ramp(r, p.release_s);
+      xd = -ramp_rate(r, p.release_s);
+    }
+    in.q[p.press_joint] = p.press_sign * depth * x;
+    in.qd[p.press_joint] = p.press_sign * depth * xd;
+  }
+  const double w = 2.0 * kPi * p.other_frequency_hz;
+  const double end = scenario_duration_s(p);
+  // Fade the sweep in and out so the hand starts and ends at rest.
+  const double fade = ramp(t, 1.0) * (1.0 - ramp(t - (end - 1.0), 1.0));
+  for (std::size_t j = 0; j < dof && j < kMaxDof; ++j) {
+    if (j == p.press_joint) continue;
+    in.q[j] = fade * p.other_amplitude_rad * std::sin(w * t);
+    in.qd[j] = fade * p.other_amplitude_rad * w * std::cos(w * t);
+  }
+  return in;
+}
+
+Intention sine(const SineScenario& s, double t, std::size_t dof) {
+  Intention in;
+  for (std::size_t j = 0; j < dof && j < kMaxDof; ++j) {
+    const double w = 2.0 * kPi * s.frequency_hz[j];
+    in.q[j] = s.offset_rad[j] + s.amplitude_rad[j] * std::sin(w * t + s.phase_rad[j]);
+    in.qd[j] = s.amplitude_rad[j] * w * std::cos(w * t + s.phase_rad[j]);
+  }
+  return in;
+}
+
+Intention step(const StepScenario& s, double t, std::size_t dof) {
+  Intention in;
+  const double u = t - s.start_s;
+  const double period = s.high_s + s.low_s;
+  const bool high = u >= 0.0 && u < period * s.repeats && std::fmod(u, period) < s.high_s;
+  for (std::size_t j = 0; j < dof && j < kMaxDof; ++j)
+    in.q[j] = high ? s.amplitude_rad[j] : 0.0;
+  return in;  // a true step: qd stays 0, the hand's own dynamics smooth it
+}
+
+void read_joint_array(FieldReader& r, std::string_view key, JointArray& out, std::size_t dof) {
+  YAML::Node n = r.node(key);
+  if (!n.IsDefined()) return;
+  if (n.IsScalar()) {
+    const double v = r.get_double(key);
+    for (std::size_t j = 0; j < dof; ++j)
+      out[j] = v;
+    return;
+  }
+  if (!n.IsSequence() || n.size() != dof) {
+    r.fail(key,
+           "must be a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
+  }
+  for (std::size_t j = 0; j < dof; ++j) {
+    double v = 0.0;
+    if (!n[j].IsScalar() || !YAML::convert<double>::decode(n[j], v) || !std::isfinite(v)) {
+      config_fail(r.source(), r.element(key, j), "must be a number", n[j]);
+    }
+    out[j] = v;
+  }
+}
+
+double positive(FieldReader& r, std::string_view key, double fallback) {
+  const double v = r.get_double(key, fallback);
+  if (!(v > 0.0)) r.fail(key, "must be > 0");
+  return v;
+}
+double non_negative(FieldReader& r, std::string_view key, double fallback) {
+  const double v = r.get_double(key, fallback);
+  if (!(v >= 0.0)) r.fail(key, "must be >= 0");
+  return v;
+}
+int count(FieldReader& r, std::string_view key, int fallback) {
+  const long long v = r.get_int(key, fallback);
+  if (v < 0 || v > 1000) r.fail(key, "must be 0 .. 1000");
+  return static_cast<int>(v);
+}
+
+}  // namespace
+
+PressWindow palpate_press(const PalpateScenario& p, int index) {
+  const double begin = p.start_s + index * press_period(p);
+  return PressWindow{begin, begin + p.press_s + p.hold_s + p.release_s, index >= p.soft_presses};
+}
+
+Intention intention_at(const Scenario& s, double t_s, std::size_t dof) {
+  const double t = std::max(0.0, t_s);
+  return std::visit(
+      [&](const auto& sc) -> Intention {
+        using T = std::decay_t<decltype(sc)>;
+        if constexpr (std::is_same_v<T, PalpateScenario>) return palpate(sc, t, dof);
+        if constexpr (std::is_same_v<T, SineScenario>) return sine(sc, t, dof);
+        if constexpr (std::is_same_v<T, StepScenario>) return step(sc, t, dof);
+      },
+      s);
+}
+
+double scenario_duration_s(const Scenario& s) {
+  return std::visit(
+      [](const auto& sc) -> double {
+        using T = std::decay_t<decltype(sc)>;
+        if constexpr (std::is_same_v<T, PalpateScenario>) {
+          return sc.start_s + (sc.soft_presses + sc.hard_presses) * press_period(sc) + sc.end_s;
+        }
+        if constexpr (std::is_same_v<T, SineScenario>) return sc.duration_s;
+        if constexpr (std::is_same_v<T, StepScenario>) {
+          return sc.start_s + sc.repeats * (sc.high_s + sc.low_s);
+        }
+      },
+      s);
+}
+
+std::string_view scenario_name(const Scenario& s) {
+  switch (s.index()) {
+    case 0:
+      return "palpate";
+    case 1:
+      return "sine";
+    default:
+      return "step";
+  }
+}
+
+Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
+  const std::string name = settings.get_string("scenario", "palpate");
+  // Read every scenario's map key so that e.g. a `sine:` block next to
+  // `scenario: palpate` is not reported as unknown, but only parse the chosen one.
+  const YAML::Node palpate_node = settings.node("palpate");
+  const YAML::Node sine_node = settings.node("sine");
+  const YAML::Node step_node = settings.node("step");
+  if (name == "palpate") {
+    FieldReader r(palpate_node, settings.source(), settings.field("palpate"));
+    PalpateScenario p;
+    const long long joint = r.get_int("press_joint", 0);
+    if (joint < 0 || static_cast<std::size_t>(joint) >= dof) {
+      r.fail("press_joint", "must be a joint index 0 .. " + std::to_string(dof - 1));
+    }
+    p.press_joint = static_cast<std::size_t>(joint);
+    p.press_sign = r.get_double("press_sign", 1.0);
+    if (p.press_sign != 1.0 && p.press_sign != -1.0) r.fail("press_sign", "must be 1 or -1");
+    p.soft_presses = count(r, "soft_presses", p.soft_presses);
+    p.soft_depth_rad = positive(r, "soft_depth_rad", p.soft_depth_rad);
+    p.hard_presses = count(r, "hard_presses", p.hard_presses);
+    p.hard_depth_rad = positive(r, "hard_depth_rad", p.hard_depth_rad);
+    if (p.hard_presses > 0 && p.soft_presses > 0 && !(p.hard_depth_rad > p.soft_depth_rad)) {
+      r.fail("hard_depth_rad", "must be > soft_depth_rad (the nodule lies below the soft layer)");
+    }
+    p.start_s = non_negative(r, "start_s", p.start_s);
+    p.press_s = positive(r, "press_s", p.press_s);
+    p.hold_s = non_negative(r, "hold_s", p.hold_s);
+    p.release_s = positive(r, "release_s", p.release_s);
+    p.rest_s = non_negative(r, "rest_s", p.rest_s);
+    p.end_s = non_negative(r, "end_s", p.end_s);
+    p.other_amplitude_rad = non_negative(r, "other_amplitude_rad", p.other_amplitude_rad);
+    p.other_frequency_hz = non_negative(r, "other_frequency_hz", p.other_frequency_hz);
+    r.reject_unknown();
+    return p;
+  }
+  if (name == "sine") {
+    FieldReader r(sine_node, settings.source(), settings.field("sine"));
+    SineScenario s;
+    read_joint_array(r, "amplitude_rad", s.amplitude_rad, dof);
+    read_joint_array(r, "frequency_hz", s.frequency_hz, dof);
+    read_joint_array(r, "phase_rad", s.phase_rad, dof);
+    read_joint_array(r, "offset_rad", s.offset_rad, dof);
+    s.duration_s = positive(r, "duration_s", s.duration_s);
+    r.reject_unknown();
+    return s;
+  }
+  if (name == "step") {
+    FieldReader r(step_node, settings.source(), settings.field("step"));
+    StepScenario s;
+    read_joint_array(r, "amplitude_rad", s.amplitude_rad, dof);
+    s.start_s = non_negative(r, "start_s", s.start_s);
+    s.high_s = positive(r, "high_s", s.high_s);
+    s.low_s = positive(r, "low_s", s.low_s);
+    s.repeats = count(r, "repeats", s.repeats);
+    r.reject_unknown();
+    return s;
+  }
+  settings.fail("scenario", "unknown scenario '" + name + "' (expected palpate, sine or step)");
+}
+
+}  // namespace tsmh::master_devices

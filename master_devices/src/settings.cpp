@@ -1,0 +1,122 @@
+#include "master_devices/settings.hpp"
+
+#include <cmath>
+
+namespace tsmh::master_devices {
+
+namespace {
+std::string line_of(const YAML::Node& n) {
+  if (!n.IsDefined()) return "";
+  const YAML::Mark m = n.Mark();
+  if (m.line < 0) return "";
+  return " (line " + std::to_string(m.line + 1) + ")";
+}
+}  // namespace
+
+void config_fail(const std::string& source, const std::string& field, std::string_view message,
+                 const YAML::Node& at) {
+  std::string text = source + ": ";
+  if (!field.empty()) text += field + ": ";
+  text += message;
+  text += line_of(at);
+  throw ConfigError(text);
+}
+
+FieldReader::FieldReader(const YAML::Node& map, std::string source, std::string path)
+    : map_(map), source_(std::move(source)), path_(std::move(path)) {
+  if (map_.IsDefined() && !map_.IsNull() && !map_.IsMap()) {
+    config_fail(source_, path_.empty() ? "(root)" : path_, "must be a map of key: value", map_);
+  }
+}
+
+std::string FieldReader::field(std::string_view key) const {
+  return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+}
+
+std::string FieldReader::element(std::string_view key, std::size_t index) const {
+  return field(key) + "[" + std::to_string(index) + "]";
+}
+
+bool FieldReader::has(std::string_view key) const {
+  return map_.IsMap() && map_[std::string(key)].IsDefined() && !map_[std::string(key)].IsNull();
+}
+
+void FieldReader::fail(std::string_view key, std::string_view message) const {
+  YAML::Node at = map_.IsMap() ? map_[std::string(key)] : YAML::Node();
+  if (!at.IsDefined()) at = map_;
+  config_fail(source_, field(key), message, at);
+}
+
+YAML::Node FieldReader::value(std::string_view key, bool required) {
+  known_.emplace(key);
+  if (!has(key)) {
+    if (required) {
+      config_fail(source_, field(key), "missing (required)", map_);
+    }
+    return YAML::Node(YAML::NodeType::Undefined);
+  }
+  return map_[std::string(key)];
+}
+
+YAML::Node FieldReader::node(std::string_view key) {
+  return value(key, false);
+}
+
+double FieldReader::get_double(std::string_view key) {
+  const YAML::Node n = value(key, true);
+  double v = 0.0;
+  if (!n.IsScalar() || !YAML::convert<double>::decode(n, v)) fail(key, "must be a number");
+  if (!std::isfinite(v)) fail(key, "must be finite");
+  return v;
+}
+
+double FieldReader::get_double(std::string_view key, double fallback) {
+  return has(key) ? get_double(key) : (known_.emplace(key), fallback);
+}
+
+long long FieldReader::get_int(std::string_view key) {
+  const YAML::Node n = value(key, true);
+  long long v = 0;
+  if (!n.IsScalar() || !YAML::convert<long long>::decode(n, v)) fail(key, "must be an integer");
+  return v;
+}
+
+long long FieldReader::get_int(std::string_view key, long long fallback) {
+  return has(key) ? get_int(key) : (known_.emplace(key), fallback);
+}
+
+bool FieldReader::get_bool(std::string_view key, bool fallback) {
+  if (!has(key)) {
+    known_.emplace(key);
+    return fallback;
+  }
+  const YAML::Node n = value(key, true);
+  bool v = false;
+  if (!n.IsScalar() || !YAML::convert<bool>::decode(n, v)) fail(key, "must be true or false");
+  return v;
+}
+
+std::string FieldReader::get_string(std::string_view key) {
+  const YAML::Node n = value(key, true);
+  if (!n.IsScalar()) fail(key, "must be a string");
+  return n.Scalar();
+}
+
+std::string FieldReader::get_string(std::string_view key, std::string fallback) {
+  return has(key) ? get_string(key) : (known_.emplace(key), std::move(fallback));
+}
+
+void FieldReader::reject_unknown() const {
+  if (!map_.IsMap()) return;
+  for (const auto& kv : map_) {
+    const std::string key = kv.first.Scalar();
+    if (known_.find(key) == known_.end()) {
+      std::string expected;
+      for (const auto& k : known_)
+        expected += (expected.empty() ? "" : ", ") + k;
+      config_fail(source_, field(key), "unknown key (expected one of: " + expected + ")", kv.first);
+    }
+  }
+}
+
+}  // namespace tsmh::master_devices

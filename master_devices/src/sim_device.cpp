@@ -1,0 +1,240 @@
+#include "master_devices/sim_device.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "master_devices/clock.hpp"
+
+namespace tsmh::master_devices {
+namespace {
+
+void joint_values(FieldReader& r, std::string_view key, JointArray& out, std::size_t dof) {
+  YAML::Node n = r.node(key);
+  if (!n.IsDefined()) return;
+  if (n.IsScalar()) {
+    const double v = r.get_double(key);
+    out.fill(v);
+    return;
+  }
+  if (!n.IsSequence() || n.size() != dof) {
+    r.fail(key,
+           "must be a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
+  }
+  for (std::size_t j = 0; j < dof; ++j) {
+    double v = 0.0;
+    if (!n[j].IsScalar() || !YAML::convert<double>::decode(n[j], v) || !std::isfinite(v)) {
+      config_fail(r.source(), r.element(key, j), "must be a number", n[j]);
+    }
+    out[j] = v;
+  }
+}
+
+double positive(FieldReader& r, std::string_view key, double fallback) {
+  const double v = r.get_double(key, fallback);
+  if (!(v > 0.0)) r.fail(key, "must be > 0");
+  return v;
+}
+
+}  // namespace
+
+SimSettings parse_sim_settings(FieldReader& r) {
+  SimSettings s;
+  const std::string time = r.get_string("time", "real");
+  if (time != "real" && time != "simulated") r.fail("time", "must be 'real' or 'simulated'");
+  s.simulated_time = time == "simulated";
+  s.rate_hz = positive(r, "rate_hz", s.rate_hz);
+  const long long dof = r.get_int("dof", 2);
+  if (dof < 1 || dof > static_cast<long long>(kMaxDof)) {
+    r.fail("dof", "must be 1 .. " + std::to_string(kMaxDof));
+  }
+  s.dof = static_cast<std::size_t>(dof);
+  s.scenario = parse_scenario(r, s.dof);
+
+  FieldReader hand(r.node("hand"), r.source(), r.field("hand"));
+  s.hand.inertia_kgm2 = positive(hand, "inertia_kgm2", s.hand.inertia_kgm2);
+  s.hand.stiffness_nm_per_rad = positive(hand, "stiffness_nm_per_rad", s.hand.stiffness_nm_per_rad);
+  s.hand.damping_nms_per_rad = hand.get_double("damping_nms_per_rad", s.hand.damping_nms_per_rad);
+  if (s.hand.damping_nms_per_rad < 0) hand.fail("damping_nms_per_rad", "must be >= 0");
+  hand.reject_unknown();
+  FieldReader handle(r.node("handle"), r.source(), r.field("handle"));
+  s.handle.inertia_kgm2 = positive(handle, "inertia_kgm2", s.handle.inertia_kgm2);
+  s.handle.damping_nms_per_rad =
+      handle.get_double("damping_nms_per_rad", s.handle.damping_nms_per_rad);
+  if (s.handle.damping_nms_per_rad < 0) handle.fail("damping_nms_per_rad", "must be >= 0");
+  handle.reject_unknown();
+
+  joint_values(r, "peak_torque_nm", s.peak_torque_nm, s.dof);
+  joint_values(r, "continuous_torque_nm", s.continuous_torque_nm, s.dof);
+  joint_values(r, "position_min_rad", s.position_min_rad, s.dof);
+  joint_values(r, "position_max_rad", s.position_max_rad, s.dof);
+  joint_values(r, "max_stiffness_nm_per_rad", s.max_stiffness_nm_per_rad, s.dof);
+  for (std::size_t j = 0; j < s.dof; ++j) {
+    if (!(s.peak_torque_nm[j] > 0.0)) r.fail("peak_torque_nm", "must be > 0");
+    if (!(s.continuous_torque_nm[j] > 0.0 && s.continuous_torque_nm[j] <= s.peak_torque_nm[j])) {
+      r.fail("continuous_torque_nm", "must be > 0 and <= peak_torque_nm");
+    }
+    if (!(s.position_min_rad[j] < s.position_max_rad[j])) {
+      r.fail("position_max_rad", "must be > position_min_rad");
+    }
+  }
+  s.encoder_resolution_rad = r.get_double("encoder_resolution_rad", 0.0);
+  if (s.encoder_resolution_rad < 0) r.fail("encoder_resolution_rad", "must be >= 0");
+  s.command_timeout_ms = r.get_int("command_timeout_ms", s.command_timeout_ms);
+  if (s.command_timeout_ms < 1) r.fail("command_timeout_ms", "must be >= 1");
+  s.stale_timeout_ms = r.get_int("stale_timeout_ms", s.stale_timeout_ms);
+  if (s.stale_timeout_ms < 1) r.fail("stale_timeout_ms", "must be >= 1");
+  s.buttons.dead_man = r.get_bool("dead_man", true);
+  s.buttons.clutch = r.get_bool("clutch", false);
+  s.buttons.e_stop = r.get_bool("e_stop", false);
+  return s;
+}
+
+SimDevice::SimDevice(SimSettings settings)
+    : settings_(std::move(settings)),
+      operator_(settings_.scenario, settings_.dof, settings_.hand, settings_.handle) {
+  spec_.model = "sim-" + std::string(scenario_name(settings_.scenario));
+  spec_.driver = "sim";
+  spec_.dof = static_cast<std::uint32_t>(settings_.dof);
+  spec_.nominal_rate_hz = settings_.rate_hz;
+  for (std::size_t j = 0; j < settings_.dof; ++j) {
+    spec_.joint_names[j] = "joint" + std::to_string(j);
+    spec_.peak_torque_nm[j] = settings_.peak_torque_nm[j];
+    spec_.max_continuous_torque_nm[j] = settings_.continuous_torque_nm[j];
+    spec_.encoder_resolution_rad[j] = settings_.encoder_resolution_rad;
+    spec_.position_min_rad[j] = settings_.position_min_rad[j];
+    spec_.position_max_rad[j] = settings_.position_max_rad[j];
+    spec_.max_stiffness_nm_per_rad[j] = settings_.max_stiffness_nm_per_rad[j];
+  }
+}
+
+SimDevice::~SimDevice() {
+  close();
+}
+
+void SimDevice::open() {
+  if (opened_) return;
+  operator_.reset();
+  count_ = 0;
+  started_ = false;
+  enabled_ = false;
+  opened_ = true;
+  if (!settings_.simulated_time) {
+    stopping_ = false;
+    advance(0.0, monotonic_ns());  // a first reading at once
+    thread_ = std::thread([this] { run_real_time(); });
+  }
+}
+
+void SimDevice::close() noexcept {
+  if (!opened_.exchange(false)) return;
+  stopping_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+std::string SimDevice::last_error() const {
+  switch (fault_.load()) {
+    case FaultCode::kNone:
+      return "";
+    case FaultCode::kHostRequested:
+      return "fault raised by the host";
+    default:
+      return std::string("fault: ") + std::string(to_string(fault_.load()));
+  }
+}
+
+bool SimDevice::clear_fault() {
+  fault_ = FaultCode::kNone;
+  enabled_ = false;
+  return true;
+}
+
+void SimDevice::raise_fault(FaultCode code) noexcept {
+  FaultCode expected = FaultCode::kNone;
+  fault_.compare_exchange_strong(expected, code);
+  enabled_ = false;
+}
+
+DeviceStatus SimDevice::status() const noexcept {
+  if (!opened_) return DeviceStatus::kClosed;
+  if (fault_ != FaultCode::kNone) return DeviceStatus::kFault;
+  return DeviceStatus::kOk;
+}
+
+void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
+  Command cmd;
+  commands_.fetch(cmd);
+  const bool fresh = cmd.valid && (settings_.simulated_time ||
+                                   t_ns - cmd.t_ns <= settings_.command_timeout_ms * 1'000'000LL);
+  const bool drive = enabled_ && fault_ == FaultCode::kNone && fresh;
+  JointArray tau{};
+  for (std::size_t j = 0; j < settings_.dof; ++j) {
+    const double peak = settings_.peak_torque_nm[j];
+    tau[j] = drive && std::isfinite(cmd.tau[j]) ? std::clamp(cmd.tau[j], -peak, peak) : 0.0;
+  }
+  operator_.step(dt_s, tau);
+  scenario_t_ = operator_.time_s();
+
+  DeviceReading r;
+  r.t_ns = t_ns;
+  r.sequence = ++count_;
+  r.dof = static_cast<std::uint32_t>(settings_.dof);
+  for (std::size_t j = 0; j < settings_.dof; ++j) {
+    const double q = operator_.q()[j];
+    const double res = settings_.encoder_resolution_rad;
+    r.q[j] = res > 0.0 ? res * std::floor(q / res + 0.5) : q;
+    r.qd[j] = operator_.qd()[j];
+  }
+  r.tau_commanded = tau;
+  r.buttons = settings_.buttons;
+  r.enabled = drive;
+  r.status = DeviceStatus::kOk;
+  readings_.publish(r);
+}
+
+void SimDevice::run_real_time() {
+  const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / settings_.rate_hz);
+  std::int64_t next = monotonic_ns();
+  while (!stopping_) {
+    next += period_ns;
+    timespec ts{static_cast<time_t>(next / 1'000'000'000LL),
+                static_cast<long>(next % 1'000'000'000LL)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    advance(static_cast<double>(period_ns) * 1e-9, monotonic_ns());
+  }
+}
+
+DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
+  if (settings_.simulated_time && opened_) {
+    if (!started_) {
+      started_ = true;
+      last_t_ns_ = now_ns;
+      advance(0.0, now_ns);
+    } else if (now_ns > last_t_ns_) {
+      advance(static_cast<double>(now_ns - last_t_ns_) * 1e-9, now_ns);
+      last_t_ns_ = now_ns;
+    }
+  }
+  DeviceReading r;
+  r.fresh = readings_.fetch(r);
+  r.status = status();
+  r.fault = fault_.load();
+  if (r.status == DeviceStatus::kOk && !settings_.simulated_time &&
+      (r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL)) {
+    r.status = DeviceStatus::kDisconnected;
+  }
+  if (r.status != DeviceStatus::kOk) {
+    r.enabled = false;
+    r.tau_commanded = {};
+  } else {
+    r.enabled = enabled_;
+  }
+  return r;
+}
+
+void SimDevice::write_torque(const JointArray& tau_nm) noexcept {
+  commands_.publish(Command{tau_nm, settings_.simulated_time ? 0 : monotonic_ns(), true});
+}
+
+}  // namespace tsmh::master_devices
