@@ -1,5 +1,11 @@
 #include "bridge/channels.hpp"
 
+#include <lcm/lcm.h>
+
+#include <stdexcept>
+
+static_assert(tsmh::bridge::kMaxChannelLength == LCM_MAX_CHANNEL_NAME_LENGTH);
+
 namespace tsmh::bridge {
 
 std::string_view base_name(Channel channel) noexcept {
@@ -24,6 +30,20 @@ std::string channel_name(std::string_view prefix, Channel channel) {
   std::string name(prefix);
   name += base_name(channel);
   return name;
+}
+
+void check_channel_name(std::string_view name) {
+  if (name.empty()) throw std::invalid_argument("LCM channel name is empty");
+  if (name.size() > kMaxChannelLength) {
+    std::string msg = "LCM channel name '";
+    msg += name;
+    msg += "' has ";
+    msg += std::to_string(name.size());
+    msg += " characters; LCM allows at most ";
+    msg += std::to_string(kMaxChannelLength);
+    msg += " (shorten the prefix)";
+    throw std::invalid_argument(msg);
+  }
 }
 
 std::string regex_escape(std::string_view literal) {

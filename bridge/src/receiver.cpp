@@ -36,6 +36,7 @@ Receiver::~Receiver() {
 
 void Receiver::add(std::unique_ptr<InboxBase> inbox) {
   if (running()) throw std::logic_error("Receiver::subscribe after start(): " + inbox->channel());
+  check_channel_name(inbox->channel());
   lcm::Subscription* sub = lcm_->subscribeFunction<InboxBase*>(regex_escape(inbox->channel()),
                                                                &on_raw_message, inbox.get());
   if (sub == nullptr) throw BridgeError("Receiver: cannot subscribe to " + inbox->channel());
@@ -47,6 +48,10 @@ void Receiver::add(std::unique_ptr<InboxBase> inbox) {
 
 void Receiver::start() {
   if (running()) throw std::logic_error("Receiver::start: already running");
+  // LCM's udpm provider joins the multicast group lazily; asking for the
+  // descriptor here makes sure that messages sent after start() returns are heard.
+  lcm_fd_ = lcm_->getFileno();
+  if (lcm_fd_ < 0) throw BridgeError("Receiver: LCM has no file descriptor for " + config_.url);
   stop_requested_.store(false, std::memory_order_relaxed);
   thread_ = std::thread([this] { run(); });
 }
@@ -62,7 +67,7 @@ void Receiver::stop() noexcept {
 }
 
 void Receiver::run() noexcept {
-  const int lcm_fd = lcm_->getFileno();
+  const int lcm_fd = lcm_fd_;
   while (!stop_requested_.load(std::memory_order_relaxed)) {
     pollfd fds[2] = {{lcm_fd, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
     const int ready = poll(fds, 2, -1);

@@ -13,6 +13,7 @@ Sender::~Sender() {
 
 void Sender::add(std::unique_ptr<OutboxBase> box) {
   if (running()) throw std::logic_error("Sender::outbox after start(): " + box->channel());
+  check_channel_name(box->channel());
   outboxes_.push_back(std::move(box));
 }
 

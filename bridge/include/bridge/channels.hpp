@@ -3,6 +3,7 @@
 // prefix (e.g. "ARM1_") followed by the upper-case base name.
 
 #include <array>
+#include <cstddef>
 #include <string>
 #include <string_view>
 
@@ -26,6 +27,13 @@ std::string_view base_name(Channel channel) noexcept;
 
 /// prefix + base name, e.g. channel_name("ARM1_", Channel::SlaveState) == "ARM1_SLAVE_STATE".
 std::string channel_name(std::string_view prefix, Channel channel);
+
+/// LCM refuses longer channel names (LCM_MAX_CHANNEL_NAME_LENGTH).
+inline constexpr std::size_t kMaxChannelLength = 63;
+
+/// Throws std::invalid_argument naming the channel when LCM would refuse it
+/// (empty or longer than kMaxChannelLength): LCM itself only prints to stderr.
+void check_channel_name(std::string_view name);
 
 /// LCM 1.3 subscribes with a regular expression; this escapes a literal
 /// channel name so a prefix containing '.', '+', ... matches only itself.

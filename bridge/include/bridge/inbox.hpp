@@ -32,7 +32,7 @@ struct InboxOptions {
   /// latency = receive time - utime. Set false across hosts.
   bool clocks_shared = true;
   /// Full channel name; empty: the Receiver's prefix + the base name.
-  std::string channel;
+  std::string channel{};
   /// See SequenceTracker.
   int resync_after = 50;
 };

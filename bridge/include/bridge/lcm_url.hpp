@@ -2,14 +2,11 @@
 // Which LCM network to join, and opening it with an error that says how to fix
 // the usual failure (no multicast route).
 
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
-
-namespace lcm {
-class LCM;
-}
 
 namespace tsmh::bridge {
 
@@ -39,7 +36,7 @@ std::unique_ptr<lcm::LCM> open_lcm(const std::string& url);
 /// Where to talk: LCM URL and the per-arm channel prefix.
 struct BridgeConfig {
   std::string url = std::string(kDefaultLcmUrl);
-  std::string prefix;  ///< e.g. "ARM1_"; empty for a single arm
+  std::string prefix{};  ///< e.g. "ARM1_"; empty for a single arm
 };
 
 }  // namespace tsmh::bridge

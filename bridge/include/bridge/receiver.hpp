@@ -65,6 +65,7 @@ class Receiver {
   BridgeConfig config_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<InboxBase>> inboxes_;
+  int lcm_fd_ = -1;
   int wake_fd_ = -1;  // eventfd: stop() wakes the thread out of poll()
   std::atomic<bool> stop_requested_{false};
   std::atomic<std::uint64_t> transport_errors_{0};

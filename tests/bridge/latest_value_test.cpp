@@ -1,0 +1,131 @@
+#include "bridge/latest_value.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <thread>
+#include <utility>
+
+#include "bridge/samples.hpp"
+
+namespace tsmh::bridge {
+namespace {
+
+TEST(LatestValue, EmptyUntilFirstStore) {
+  LatestValue<SlaveStateSample> cell;
+  SlaveStateSample s;
+  s.seq = -7;
+  EXPECT_EQ(cell.load(s), 0U);
+  EXPECT_EQ(s.seq, -7) << "an empty cell leaves the output untouched";
+  EXPECT_FALSE(cell.try_load(s));
+  EXPECT_EQ(cell.version(), 0U);
+}
+
+TEST(LatestValue, ReturnsNewestAndCountsVersions) {
+  LatestValue<SlaveStateSample> cell;
+  SlaveStateSample in;
+  in.num_joints = 2;
+  in.x_in[1] = 1.5;
+  in.seq = 1;
+  cell.store(in);
+  in.seq = 2;
+  in.x_in[1] = 2.5;
+  cell.store(in);
+  SlaveStateSample out;
+  EXPECT_EQ(cell.load(out), 2U);
+  EXPECT_EQ(out.seq, 2);
+  EXPECT_EQ(out.x_in[1], 2.5);
+  EXPECT_TRUE(cell.try_load(out));
+  EXPECT_EQ(cell.version(), 2U);
+}
+
+// A size that is not a multiple of the 8-byte word: the tail must round-trip.
+struct Odd {
+  std::array<unsigned char, 13> bytes;
+};
+
+TEST(LatestValue, CopiesSizesThatAreNotWordMultiples) {
+  LatestValue<Odd> cell;
+  Odd in{};
+  for (std::size_t i = 0; i < in.bytes.size(); ++i)
+    in.bytes[i] = static_cast<unsigned char>(i * 17 + 3);
+  cell.store(in);
+  Odd out{};
+  ASSERT_EQ(cell.load(out), 1U);
+  EXPECT_EQ(out.bytes, in.bytes);
+}
+
+// Every word of a value carries the same counter; a torn read would mix two
+// counters. The writer stores about once per microsecond (1000x the 1 kHz it
+// sees in operation) while two readers check every copy. The test runs until
+// the readers have seen plenty of stores overlap their copies (try_load
+// failures), so it proves something even on a busy 2-core machine.
+struct Stripe {
+  std::array<std::uint64_t, 96> w;  // 768 bytes, larger than a SlaveStateSample
+};
+
+TEST(LatestValue, HammeredFromTwoThreadsNeverTears) {
+  LatestValue<Stripe> cell;
+  std::atomic<bool> done{false};
+  std::atomic<std::uint64_t> reads{0}, overlaps{0}, torn{0}, backwards{0};
+
+  auto reader = [&] {
+    std::uint64_t last = 0, n = 0, o = 0, t = 0, b = 0;
+    Stripe s{};
+    while (!done.load(std::memory_order_acquire)) {
+      if (!cell.try_load(s)) {
+        ++o;
+        continue;
+      }
+      ++n;
+      for (std::uint64_t v : s.w) {
+        if (v != s.w[0]) {
+          ++t;
+          break;
+        }
+      }
+      if (s.w[0] < last) ++b;
+      last = s.w[0];
+      if ((n & 1023U) == 0) {
+        reads.fetch_add(1024, std::memory_order_relaxed);
+        overlaps.fetch_add(std::exchange(o, 0), std::memory_order_relaxed);
+      }
+    }
+    overlaps.fetch_add(o, std::memory_order_relaxed);
+    torn.fetch_add(t, std::memory_order_relaxed);
+    backwards.fetch_add(b, std::memory_order_relaxed);
+  };
+  std::uint64_t stores = 0;
+  std::thread writer([&] {
+    Stripe s{};
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (std::chrono::steady_clock::now() < give_up &&
+           (reads.load(std::memory_order_relaxed) < 200'000 ||
+            overlaps.load(std::memory_order_relaxed) < 1000)) {
+      s.w.fill(++stores);
+      cell.store(s);
+      const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(1);
+      while (std::chrono::steady_clock::now() < until) {
+      }
+    }
+    done.store(true, std::memory_order_release);
+  });
+  std::thread r1(reader), r2(reader);
+  writer.join();
+  r1.join();
+  r2.join();
+
+  EXPECT_GE(reads.load(), 200'000U) << "readers completed too few reads";
+  EXPECT_GE(overlaps.load(), 1000U) << "stores rarely overlapped reads: the test proved little";
+  EXPECT_EQ(torn.load(), 0U) << "a read mixed two stores";
+  EXPECT_EQ(backwards.load(), 0U) << "a reader saw an older value after a newer one";
+  Stripe last{};
+  EXPECT_EQ(cell.load(last), stores);
+  EXPECT_EQ(last.w[95], stores);
+}
+
+}  // namespace
+}  // namespace tsmh::bridge

@@ -1,0 +1,193 @@
+// LCM logs with the real tools: lcm-logger records what we publish, our
+// reader (and `tsm convert`, when built) turns it into rows; lcm-logplayer
+// replays a log into our Receiver.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <sstream>
+#include <thread>
+
+#include "bridge/clock.hpp"
+#include "bridge/log_reader.hpp"
+#include "bridge/receiver.hpp"
+#include "process.hpp"
+#include "test_support.hpp"
+
+namespace tsmh::bridge {
+namespace {
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+fs::path temp_dir() {
+  const fs::path dir = fs::temp_directory_path() / test::cat("tsmh_bridge_", test::unique_prefix());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Records `count` SLAVE_STATE + SLAVE_TRUTH messages published by the peer
+// process with lcm-logger, returns the log path.
+fs::path record_with_logger(const fs::path& dir, const std::string& prefix, int count) {
+  const fs::path log = dir / "slave.lcmlog";
+  const std::string url = test::test_url();
+  test::Background logger({TSMH_LCM_LOGGER, "-q", "-f", "--flush-interval=10",
+                           test::cat("--lcm-url=", url),
+                           test::cat("--channel=", regex_escape(prefix), ".*"), log.string()});
+  EXPECT_TRUE(logger.started());
+  // Wait until the logger is listening: publish a probe until it lands in the file.
+  auto probe = open_lcm(url);
+  const bool listening = test::wait_until(
+      [&] {
+        const char byte = 0;
+        probe->publish(prefix + "PROBE", &byte, 1);
+        std::this_thread::sleep_for(20ms);
+        return fs::exists(log) && fs::file_size(log) > 0;
+      },
+      10s);
+  EXPECT_TRUE(listening) << "lcm-logger never recorded the probe";
+  const auto peer =
+      test::run({TSMH_BRIDGE_PEER, "publish", url, prefix, std::to_string(count), "1000", "truth"});
+  EXPECT_EQ(peer.exit_code, 0) << peer.output;
+  std::this_thread::sleep_for(200ms);  // > flush interval: everything is on disk
+  logger.stop();
+  return log;
+}
+
+TEST(LcmLog, LoggerRoundTripThroughOurReader) {
+  const fs::path dir = temp_dir();
+  const std::string prefix = test::unique_prefix();
+  const fs::path log = record_with_logger(dir, prefix, 250);
+  ASSERT_TRUE(is_lcm_log(log));
+
+  const JointSeries js = read_joint_series(log, 1, prefix);
+  EXPECT_EQ(js.state_messages, 250U);
+  EXPECT_EQ(js.truth_messages, 250U);
+  ASSERT_EQ(js.rows(), 250U);
+  EXPECT_EQ(js.radius_m, 0.01);
+  EXPECT_EQ(js.t.front(), 0.0);
+  for (std::size_t i = 1; i < js.rows(); ++i)
+    ASSERT_GT(js.t[i], js.t[i - 1]) << "row " << i;
+  // Row i carries seq i (values built by make_state/make_truth).
+  for (std::size_t i = 0; i < js.rows(); ++i) {
+    const auto seq = static_cast<std::int64_t>(i);
+    ASSERT_EQ(js.x_in[i], test::make_state(seq, 0).x_in[1]) << "row " << i;
+    ASSERT_EQ(js.T1[i], test::make_state(seq, 0).T1[1]);
+    ASSERT_EQ(js.tau_out[i], test::make_truth(seq, 0).tau_out[1]) << "matched by seq";
+  }
+  EXPECT_EQ(js.x_out.size(), 250U);
+
+  try {
+    read_joint_series(log, 5, prefix);
+    FAIL() << "joint 5 does not exist";
+  } catch (const LogError& e) {
+    EXPECT_NE(std::string(e.what()).find("has 2 joint(s)"), std::string::npos) << e.what();
+  }
+  try {
+    read_joint_series(log, 0, "NOPE_");
+    FAIL() << "no such prefix";
+  } catch (const LogError& e) {
+    EXPECT_NE(std::string(e.what()).find(prefix + "SLAVE_STATE (250)"), std::string::npos)
+        << "lists the channels present: " << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+#ifdef TSMH_TSM_BIN
+TEST(LcmLog, LoggerRoundTripThroughTsmConvert) {
+  const fs::path dir = temp_dir();
+  const std::string prefix = test::unique_prefix();
+  const fs::path log = record_with_logger(dir, prefix, 200);
+  const fs::path csv = dir / "out.csv";
+  const auto r = test::run({TSMH_TSM_BIN, "convert", log.string(), "--output", csv.string(),
+                            "--joint", "0", "--prefix", prefix});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(csv);
+  std::string line, header;
+  int rows = 0;
+  bool radius = false;
+  while (std::getline(in, line)) {
+    if (line.rfind('#', 0) == 0) {
+      radius = radius || line.find("radius_m: 0.01") != std::string::npos;
+      continue;
+    }
+    if (header.empty()) {
+      header = line;
+      continue;
+    }
+    ++rows;
+  }
+  EXPECT_TRUE(radius) << "'# radius_m:' comment";
+  for (const char* col : {"t", "x_in", "tau_in", "tau_out", "x_out", "T1", "T3"})
+    EXPECT_NE(test::cat(",", header, ",").find(test::cat(",", col, ",")), std::string::npos)
+        << col << " in " << header;
+  EXPECT_EQ(rows, 200);
+  fs::remove_all(dir);
+}
+#endif
+
+TEST(LcmLog, LogplayerReplaysIntoOurReceiver) {
+  const fs::path dir = temp_dir();
+  const std::string prefix = test::unique_prefix();
+  const std::string channel = channel_name(prefix, Channel::SlaveState);
+  const fs::path log = dir / "replay.lcmlog";
+  {
+    lcm::LogFile out(log.string(), "w");
+    ASSERT_TRUE(out.good());
+    const std::int64_t t0 = monotonic_utime();
+    std::vector<std::uint8_t> bytes;
+    for (int i = 0; i < 100; ++i) {
+      encode_sample(test::make_state(i, t0 + i * 1000), bytes);
+      lcm::LogEvent ev{};
+      ev.timestamp = 1'700'000'000'000'000 + i * 1000;  // 1 kHz, as recorded
+      ev.channel = channel;
+      ev.datalen = static_cast<std::int32_t>(bytes.size());
+      ev.data = bytes.data();
+      ASSERT_EQ(out.writeEvent(&ev), 0);
+    }
+    std::uint8_t junk[7] = {9, 9, 9, 9, 9, 9, 9};  // a corrupt message in the log
+    lcm::LogEvent ev{};
+    ev.timestamp = 1'700'000'000'100'000;
+    ev.channel = channel;
+    ev.datalen = sizeof junk;
+    ev.data = junk;
+    ASSERT_EQ(out.writeEvent(&ev), 0);
+  }
+
+  Receiver rx({.url = test::test_url(), .prefix = prefix});
+  // Logged utimes are from the past: no latency, but ordering still applies.
+  auto& inbox = rx.subscribe<SlaveStateSample>({.expected_joints = 2, .clocks_shared = false});
+  rx.start();
+  const auto player =
+      test::run({TSMH_LCM_LOGPLAYER, test::cat("--lcm-url=", test::test_url()), log.string()});
+  ASSERT_EQ(player.exit_code, 0) << player.output;
+  ASSERT_TRUE(test::wait_until([&] { return inbox.stats().received == 101; }))
+      << "received " << inbox.stats().received;
+  const ChannelStats st = inbox.stats();
+  EXPECT_EQ(st.accepted, 100U);
+  EXPECT_EQ(st.rejected(RejectReason::Decode), 1U);
+  SlaveStateSample s;
+  ASSERT_EQ(inbox.latest(s), 100U);
+  EXPECT_EQ(s.seq, 99);
+  fs::remove_all(dir);
+}
+
+TEST(LcmLog, NotALogIsAClearError) {
+  const fs::path dir = temp_dir();
+  const fs::path bogus = dir / "data.csv";
+  std::ofstream(bogus) << "t,x_in\n0,1\n";
+  EXPECT_FALSE(is_lcm_log(bogus));
+  try {
+    read_joint_series(bogus, 0);
+    FAIL();
+  } catch (const LogError& e) {
+    EXPECT_NE(std::string(e.what()).find("not an LCM log"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace tsmh::bridge
