@@ -26,8 +26,8 @@ void validate(const ControllerParams& p) {
   require(p.backlash_initial_rad <= p.backlash_max_rad, "backlash_initial_rad",
           "must be <= backlash_max_rad");
   non_negative(p.adapt_gain, "adapt_gain");
-  positive(p.direction_velocity, "direction_velocity");
-  positive(p.reference_filter_hz, "reference_filter_hz");
+  positive(p.switch_width_rad, "switch_width_rad");
+  positive(p.adapt_velocity, "adapt_velocity");
   non_negative(p.output_kp, "output_kp");
   non_negative(p.output_ki, "output_ki");
   non_negative(p.integral_limit_rad, "integral_limit_rad");
@@ -40,7 +40,7 @@ JointController::JointController(const ControllerParams& params) : params_(param
 void JointController::reset(const Measurement& m, double reference) {
   started_ = true;
   last_ref_ = reference;
-  ref_velocity_ = 0.0;
+  side_ = 0.0;
   last_x_in_ = m.x_in;
   velocity_ = 0.0;
   c_hat_ = params_.backlash_initial_rad;
@@ -57,20 +57,23 @@ double lowpass_gain(double fc_hz, double dt) {
 
 double JointController::update(double reference, const Measurement& m, double radius_m, double dt) {
   if (!started_) reset(m, reference);
-  const double raw_ref_velocity = (reference - last_ref_) / dt;
+  const double step = reference - last_ref_;
   last_ref_ = reference;
-  ref_velocity_ +=
-      lowpass_gain(params_.reference_filter_hz, dt) * (raw_ref_velocity - ref_velocity_);
+  if (step != 0.0) {
+    const double target = step > 0 ? 1.0 : -1.0;
+    side_ += std::min(1.0, std::abs(step) / params_.switch_width_rad) * (target - side_);
+  }
   const double raw_velocity = (m.x_in - last_x_in_) / dt;
   last_x_in_ = m.x_in;
   velocity_ += lowpass_gain(params_.velocity_filter_hz, dt) * (raw_velocity - velocity_);
 
   motor_ref_ = reference;
   if (params_.compensation) {
-    const double direction = std::tanh(ref_velocity_ / params_.direction_velocity);
+    const double direction = side_;
     if (std::isfinite(m.x_out)) {
       const double e = reference - m.x_out;
-      c_hat_ = std::clamp(c_hat_ + dt * params_.adapt_gain * e * direction, 0.0,
+      const double moving = std::min(1.0, std::abs(step) / dt / params_.adapt_velocity);
+      c_hat_ = std::clamp(c_hat_ + dt * params_.adapt_gain * moving * e * direction, 0.0,
                           params_.backlash_max_rad);
       integral_ = std::clamp(integral_ + dt * params_.output_ki * e, -params_.integral_limit_rad,
                              params_.integral_limit_rad);

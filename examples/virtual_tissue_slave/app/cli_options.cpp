@@ -1,0 +1,156 @@
+#include "cli_options.hpp"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <stdexcept>
+
+#include "virtual_tissue_slave/effects.hpp"
+
+namespace tsmh::virtual_tissue_slave::app {
+
+void add_options(CLI::App& app, CliOptions& o) {
+  app.add_flag("--offline", o.offline,
+               "run faster than real time on --scenario and write --output (no LCM)");
+  app.add_option("--duration", o.duration_s,
+                 "seconds to run (offline: default per scenario; real time: 0 = until SIGINT)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--scenario", o.scenario, "offline scenario: sine, multisine, palpate, chirp");
+  app.add_option("--output", o.output, "offline: CSV file to write (data contract, design.md §4)");
+  app.add_option(
+         "--joint", o.joint,
+         "joint written to --output, and whose sheaths --wrap/--pretension set: 1 (gripper) or 2")
+      ->check(CLI::Range(1, 2));
+  app.add_flag(
+      "--exact-derivatives", o.exact_derivatives,
+      "offline: add xd_in, xdd_in columns (the simulator's true motor velocity, acceleration)");
+  app.add_flag("--truth-columns", o.truth_columns,
+               "offline: add evaluation columns (reference, x_out_true, T2, T4, friction_true, "
+               "contact_force, indentation)");
+  app.add_option("--seed", o.seed, "seed of the sensor noise");
+  app.add_flag("--print-tissue", o.print_tissue,
+               "print the tissue and its true stiffness values as JSON and exit");
+  app.add_flag("--list-scenarios", o.list_scenarios, "list the offline scenarios and exit");
+
+  app.add_option("--tissue", o.tissue,
+                 "tissue at the tool for both joints: none, soft, hard, nodule "
+                 "(default: the scenario's offline, nodule in real time)");
+  app.add_option("--contact", o.contact, "contact law: kelvin-voigt or hunt-crossley");
+  app.add_option("--surface", o.surface_rad, "joint angle where the tool meets the tissue, rad");
+  app.add_option("--wrap", o.wrap, "total wrap of sheath 01[,02] of --joint, rad");
+  app.add_option("--pretension", o.pretension, "pretension of tendon 1[,2] of --joint, N");
+  app.add_option("--mu", o.mu, "tendon-sheath friction coefficient, all tendons");
+  app.add_option(
+      "--effect", o.effects,
+      "hidden effect NAME=VALUE, repeatable: viscous=C (N per rad/s of extra sheath "
+      "drag), capstan=0 (friction independent of load), position=G (wrap x (1 + G x_in))");
+  app.add_option("--reroute-at", o.reroute_at_s, "time at which the sheaths are re-routed, s");
+  app.add_option("--reroute-wrap", o.reroute_wrap,
+                 "new wrap of sheath 01[,02] of --joint at --reroute-at, rad (one value: every "
+                 "sheath bends by the same factor)");
+
+  app.add_option("--load-cell-noise", o.load_cell_noise_n,
+                 "load cell noise, standard deviation, N");
+  app.add_option("--motor-encoder-counts", o.motor_encoder_counts,
+                 "motor encoder counts per revolution (default 40960; 0 = ideal)");
+  app.add_flag("--no-joint-encoder", o.no_joint_encoder,
+               "no joint encoder: x_out reads NaN, compensation is feedforward only");
+  app.add_flag("--no-compensation", o.no_compensation,
+               "slave controller without the backlash compensation (PD only)");
+
+  app.add_option("--lcm-url", o.lcm_url,
+                 "LCM URL (default: $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0)");
+  app.add_option("--prefix", o.prefix, "channel prefix, e.g. ARM1_");
+  app.add_option("--command-timeout", o.command_timeout_s,
+                 "hold position when no MASTER_COMMAND arrived for this long, s")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--rt-priority", o.rt_priority,
+                 "SCHED_FIFO priority of the 1 kHz loop (0: normal scheduling)")
+      ->check(CLI::Range(0, 99));
+}
+
+Setup make_setup(const CliOptions& o, const Scenario* scenario) {
+  Setup s;
+  s.params = paper_slave();
+  s.joint_index = o.joint - 1;
+  JointParams& jp = s.params.joints[static_cast<std::size_t>(s.joint_index)];
+
+  if (!o.wrap.empty()) {
+    const auto [w1, w2] = parse_pair(o.wrap, "--wrap");
+    if (w1 < 0 || (!std::isnan(w2) && w2 < 0))
+      throw std::invalid_argument("--wrap: wraps must be >= 0 rad");
+    jp.tendon1.wrap_rad = w1;
+    if (!std::isnan(w2)) jp.tendon2.wrap_rad = w2;
+  }
+  if (!o.pretension.empty()) {
+    const auto [p1, p2] = parse_pair(o.pretension, "--pretension");
+    if (p1 < 0 || (!std::isnan(p2) && p2 < 0))
+      throw std::invalid_argument("--pretension: tensions must be >= 0 N");
+    jp.tendon1.pretension_n = p1;
+    if (!std::isnan(p2)) jp.tendon2.pretension_n = p2;
+  }
+  if (o.mu) {
+    if (!(std::isfinite(*o.mu) && *o.mu >= 0)) throw std::invalid_argument("--mu must be >= 0");
+    for (auto& j : s.params.joints)
+      j.tendon1.mu = j.tendon2.mu = *o.mu;
+  }
+  if (o.load_cell_noise_n) {
+    if (!(std::isfinite(*o.load_cell_noise_n) && *o.load_cell_noise_n >= 0))
+      throw std::invalid_argument("--load-cell-noise must be >= 0 N");
+    s.params.sensors.load_cell_noise_n = *o.load_cell_noise_n;
+  }
+  if (o.motor_encoder_counts) {
+    if (*o.motor_encoder_counts < 0)
+      throw std::invalid_argument("--motor-encoder-counts must be >= 0");
+    s.params.sensors.motor_encoder_quantum_rad =
+        *o.motor_encoder_counts == 0 ? 0.0 : 2.0 * std::numbers::pi / *o.motor_encoder_counts;
+  }
+  s.params.sensors.joint_encoder = !o.no_joint_encoder;
+  for (auto& c : s.params.controllers)
+    c.compensation = !o.no_compensation;
+
+  const ContactLaw law = parse_contact_law(o.contact);
+  const std::string preset =
+      !o.tissue.empty() ? o.tissue : (scenario ? scenario->tissue : "nodule");
+  s.tissue = tissue_preset(preset, law);
+  s.tissue.surface_rad = o.surface_rad ? *o.surface_rad : (scenario ? scenario->surface_rad : 0.2);
+  validate(s.tissue);
+  for (auto& j : s.params.joints)
+    j.tissue = s.tissue;
+
+  s.effects = parse_effects(o.effects);
+  if (o.reroute_at_s || !o.reroute_wrap.empty()) {
+    if (!o.reroute_at_s || o.reroute_wrap.empty())
+      throw std::invalid_argument("--reroute-at and --reroute-wrap go together");
+    const auto [w1, w2] = parse_pair(o.reroute_wrap, "--reroute-wrap");
+    s.reroute.at_s = *o.reroute_at_s;
+    s.reroute.sheath1_wrap_rad = w1;
+    s.reroute.sheath2_wrap_rad = w2;
+  }
+  validate(s.params);
+  return s;
+}
+
+std::string tissue_json(const TissueParams& t) {
+  const TissueTruth truth = tissue_truth(t);
+  nlohmann::json j;
+  j["preset"] = t.name;
+  j["present"] = t.present;
+  j["contact_law"] = std::string(contact_law_name(t.law));
+  j["surface_rad"] = t.surface_rad;
+  j["lever_m"] = t.lever_m;
+  j["outer_stiffness"] = {{"n_per_m", truth.outer_n_per_m}, {"nm_per_rad", truth.outer_nm_per_rad}};
+  if (truth.inclusion_depth_m > 0) {
+    j["inclusion"] = {{"depth_m", truth.inclusion_depth_m},
+                      {"depth_rad", truth.inclusion_depth_rad},
+                      {"n_per_m", truth.inclusion_n_per_m},
+                      {"nm_per_rad", truth.inclusion_nm_per_rad}};
+  } else {
+    j["inclusion"] = nullptr;
+  }
+  j["damping"] = t.damping;
+  j["exponent"] = t.law == ContactLaw::hunt_crossley ? t.exponent : 1.0;
+  return j.dump(2);
+}
+
+}  // namespace tsmh::virtual_tissue_slave::app

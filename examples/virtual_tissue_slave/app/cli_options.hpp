@@ -1,0 +1,65 @@
+#pragma once
+// The virtual-slave command line, and turning it into plant parameters.
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "virtual_tissue_slave/offline.hpp"
+#include "virtual_tissue_slave/slave.hpp"
+#include "virtual_tissue_slave/tissue.hpp"
+
+namespace tsmh::virtual_tissue_slave::app {
+
+struct CliOptions {
+  // mode
+  bool offline = false;
+  bool print_tissue = false;
+  bool list_scenarios = false;
+  double duration_s = 0.0;  ///< 0: scenario default (offline) / until SIGINT (real time)
+  std::string scenario = "sine";
+  std::string output;
+  int joint = 1;  ///< 1 = Joint1 (gripper), 2 = Joint2
+  bool exact_derivatives = false;
+  bool truth_columns = false;
+  std::uint64_t seed = 1;
+  // plant
+  std::string tissue;  ///< empty: scenario default (offline), nodule (real time)
+  std::string contact = "kelvin-voigt";
+  std::optional<double> surface_rad;
+  std::string wrap, pretension;
+  std::optional<double> mu;
+  std::vector<std::string> effects;
+  std::optional<double> reroute_at_s;
+  std::string reroute_wrap;
+  // sensors and controller
+  std::optional<double> load_cell_noise_n;
+  std::optional<int> motor_encoder_counts;
+  bool no_joint_encoder = false;
+  bool no_compensation = false;
+  // real time
+  std::string lcm_url;
+  std::string prefix;
+  double command_timeout_s = 0.1;
+  int rt_priority = 0;
+};
+
+void add_options(CLI::App& app, CliOptions& o);
+
+/// Everything the options decide, checked; throws std::invalid_argument with
+/// the option name at fault.
+struct Setup {
+  SlaveParams params;
+  TissueParams tissue;
+  FrictionEffects effects;
+  Reroute reroute;
+  int joint_index = 0;
+};
+Setup make_setup(const CliOptions& o, const Scenario* scenario);
+
+/// JSON (one object) describing `tissue` and its true stiffness values.
+std::string tissue_json(const TissueParams& tissue);
+
+}  // namespace tsmh::virtual_tissue_slave::app

@@ -1,0 +1,196 @@
+#include "realtime_mode.hpp"
+
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <bridge/clock.hpp>
+#include <bridge/latency_histogram.hpp>
+#include <bridge/receiver.hpp>
+#include <bridge/sender.hpp>
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+
+#include "virtual_tissue_slave/command_gate.hpp"
+
+namespace tsmh::virtual_tissue_slave::app {
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;  // the only way a signal handler may talk to the loop
+extern "C" void on_signal(int) {
+  g_stop = 1;
+}
+
+timespec to_timespec(std::int64_t ns) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(ns / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(ns % 1'000'000'000);
+  return ts;
+}
+
+void try_realtime_priority(int priority) {
+  if (priority <= 0) return;
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+    std::fprintf(stderr, "virtual-slave: note: mlockall failed (%s); continuing\n",
+                 std::strerror(errno));
+  sched_param sp{};
+  sp.sched_priority = priority;
+  if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0)
+    std::fprintf(stderr,
+                 "virtual-slave: note: SCHED_FIFO %d refused (%s); running with normal "
+                 "scheduling\n",
+                 priority, std::strerror(errno));
+}
+
+void fill_state(bridge::SlaveStateSample& out, const SlaveSample& s, const SlaveParams& p,
+                std::int32_t status) {
+  out.num_joints = kJoints;
+  out.status = status;
+  for (std::size_t j = 0; j < kJoints; ++j) {
+    out.x_in[j] = s.measured[j].x_in;
+    out.x_out[j] = s.measured[j].x_out;
+    out.T1[j] = s.measured[j].T1;
+    out.T3[j] = s.measured[j].T3;
+    out.radius_m[j] = p.joints[j].radius_m;
+  }
+}
+
+void fill_truth(bridge::SlaveTruthSample& out, const SlaveSample& s) {
+  out.num_joints = kJoints;
+  for (std::size_t j = 0; j < kJoints; ++j) {
+    const JointTruth& t = s.truth[j];
+    out.tau_out[j] = t.tau_out;
+    out.friction[j] = t.friction;
+    out.tau_in[j] = t.tau_in;
+    out.x_out[j] = t.x_out;
+    out.contact_force[j] = t.contact.force_n;
+    out.indentation[j] = t.contact.indentation_m;
+  }
+}
+
+}  // namespace
+
+int run_realtime_mode(const CliOptions& o) {
+  const Setup setup = make_setup(o, nullptr);
+  CommandGateParams gate_params;
+  gate_params.timeout_s = o.command_timeout_s;
+
+  bridge::BridgeConfig config;
+  config.url = bridge::resolve_lcm_url(o.lcm_url);
+  config.prefix = o.prefix;
+  bridge::Receiver rx(config);
+  bridge::InboxOptions<bridge::MasterCommandSample> inbox_options;
+  inbox_options.expected_joints = kJoints;
+  auto& commands = rx.subscribe<bridge::MasterCommandSample>(inbox_options);
+  bridge::Sender tx(config);
+  auto& state_box = tx.outbox<bridge::SlaveStateSample>();
+  auto& truth_box = tx.outbox<bridge::SlaveTruthSample>();
+
+  VirtualSlave slave(setup.params, o.seed);
+  for (int j = 0; j < kJoints; ++j)
+    slave.joint(j).set_effects(setup.effects);
+  const std::array<double, kJoints> home{0.0, 0.0};
+  slave.settle(home, 0.5);
+  CommandGate gate(gate_params, home);
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  try_realtime_priority(o.rt_priority);
+  rx.start();
+  tx.start();
+  std::fprintf(stderr,
+               "virtual-slave: 1 kHz on %s, channels %sMASTER_COMMAND -> %sSLAVE_STATE, "
+               "%sSLAVE_TRUTH; tissue %s at %.3f rad\n",
+               config.url.c_str(), o.prefix.c_str(), o.prefix.c_str(), o.prefix.c_str(),
+               setup.tissue.name.c_str(), setup.tissue.surface_rad);
+
+  // Everything the loop touches exists before it starts: no allocation,
+  // locks, blocking I/O or printing inside.
+  const std::int64_t period_ns =
+      static_cast<std::int64_t>(setup.params.control_period_s * 1e9 + 0.5);
+  const double dt = setup.params.control_period_s;
+  const std::int64_t end_ticks =
+      o.duration_s > 0 ? static_cast<std::int64_t>(o.duration_s / dt + 0.5) : -1;
+  bridge::LatencyHistogram lateness, compute;
+  bridge::MasterCommandSample cmd;
+  bridge::SlaveStateSample state;
+  bridge::SlaveTruthSample truth;
+  CommandView view;
+  std::int64_t overruns = 0, seq = 0;
+  const Reroute& rr = setup.reroute;
+  bool rerouted = std::isnan(rr.at_s);
+  const JointParams& base = setup.params.joints[static_cast<std::size_t>(setup.joint_index)];
+
+  std::int64_t next = bridge::monotonic_now_ns() + period_ns;
+  while (!g_stop && (end_ticks < 0 || seq < end_ticks)) {
+    const timespec ts = to_timespec(next);
+    if (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) continue;
+    const std::int64_t woke = bridge::monotonic_now_ns();
+    const std::int64_t late = woke - next;
+    lateness.record(late);
+    if (late >= period_ns) {
+      // Missed whole periods: skip them and re-base on the deadline grid
+      // rather than bursting to catch up.
+      const std::int64_t missed = late / period_ns;
+      overruns += missed;
+      next += missed * period_ns;
+    }
+
+    const std::uint64_t version = commands.latest(cmd);
+    view.version = version;
+    if (version != 0) {
+      view.age_s = static_cast<double>(woke - cmd.receive_ns) * 1e-9;
+      view.enable = cmd.enable;
+      view.clutch = cmd.clutch;
+      for (std::size_t j = 0; j < kJoints; ++j)
+        view.position_ref[j] = cmd.position_ref[j];
+    }
+    const auto& refs = gate.update(view, dt);
+    if (!rerouted && slave.time() >= rr.at_s) {
+      const double f1 =
+          base.tendon1.wrap_rad > 0 ? rr.sheath1_wrap_rad / base.tendon1.wrap_rad : 1.0;
+      const double w2 =
+          std::isnan(rr.sheath2_wrap_rad) ? base.tendon2.wrap_rad * f1 : rr.sheath2_wrap_rad;
+      const double f2 = base.tendon2.wrap_rad > 0 ? w2 / base.tendon2.wrap_rad : 1.0;
+      for (int j = 0; j < kJoints; ++j) {
+        const auto& jp = setup.params.joints[static_cast<std::size_t>(j)];
+        slave.joint(j).set_wraps(jp.tendon1.wrap_rad * f1, jp.tendon2.wrap_rad * f2);
+      }
+      rerouted = true;
+    }
+    const SlaveSample& s = slave.tick(refs);
+
+    // The sample was measured at the deadline of this tick.
+    state.utime = next / 1000;
+    state.seq = seq;
+    fill_state(state, s, setup.params, gate.status());
+    truth.utime = state.utime;
+    truth.seq = seq;
+    fill_truth(truth, s);
+    state_box.publish(state);
+    truth_box.publish(truth);
+    ++seq;
+    compute.record(bridge::monotonic_now_ns() - woke);
+    next += period_ns;
+  }
+
+  rx.stop();
+  tx.stop();
+  const bridge::LatencySummary l = lateness.summary();
+  const bridge::LatencySummary c = compute.summary();
+  const bridge::OutboxStats os = state_box.stats();
+  std::fprintf(stderr,
+               "virtual-slave: %lld ticks, %lld overruns; lateness p50 %.0f us, p99 %.0f us, max "
+               "%.0f us; tick compute p99 %.0f us; SLAVE_STATE published %llu, dropped %llu; "
+               "MASTER_COMMAND accepted %llu, rejected %llu\n",
+               static_cast<long long>(seq), static_cast<long long>(overruns), l.p50_us, l.p99_us,
+               l.max_us, c.p99_us, static_cast<unsigned long long>(os.published),
+               static_cast<unsigned long long>(os.dropped_full),
+               static_cast<unsigned long long>(commands.stats().accepted),
+               static_cast<unsigned long long>(commands.stats().rejected()));
+  return 0;
+}
+
+}  // namespace tsmh::virtual_tissue_slave::app

@@ -1,0 +1,106 @@
+#include "virtual_tissue_slave/scenario.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace tsmh::virtual_tissue_slave {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// 0 -> 1 with zero slope at both ends, for smooth approach and retract moves.
+double smoothstep(double u) {
+  if (u <= 0.0) return 0.0;
+  if (u >= 1.0) return 1.0;
+  return 0.5 - 0.5 * std::cos(std::numbers::pi * u);
+}
+
+// One palpation: rest, approach and press to `depth` past the surface, hold,
+// retract. Alternates a gentle press (stays in the soft layer of the nodule
+// preset) with a deep one (reaches the inclusion).
+double palpation(double t, double surface) {
+  constexpr double kCycle = 5.0, kMove = 1.5, kHold = 1.0;
+  constexpr double kRest = -0.1;
+  const double cycle = std::floor(t / kCycle);
+  const double u = t - cycle * kCycle;
+  const double depth = std::fmod(cycle, 2.0) == 0.0 ? 0.08 : 0.3;
+  const double target = surface + depth;
+  if (u < kMove) return kRest + (target - kRest) * smoothstep(u / kMove);
+  if (u < kMove + kHold) return target;
+  return target + (kRest - target) * smoothstep((u - kMove - kHold) / kMove);
+}
+
+}  // namespace
+
+std::vector<std::string> scenario_names() {
+  return {"sine", "multisine", "palpate", "chirp"};
+}
+
+Scenario make_scenario(std::string_view name) {
+  Scenario s;
+  s.name = std::string(name);
+  if (name == "sine") {
+    s.kind = ScenarioKind::sine;
+    s.description =
+        "0.8 rad sines (Joint1 0.5 Hz, Joint2 0.4 Hz) as in the paper's Fig. 2/8/9; "
+        "soft tissue at 0.6 rad, touched lightly at the top of each cycle";
+    s.default_duration_s = 30.0;
+    s.tissue = "soft";
+    s.surface_rad = 0.6;
+  } else if (name == "multisine") {
+    s.kind = ScenarioKind::multisine;
+    s.description =
+        "sum of four sines (0.13-2.3 Hz, up to 0.8 rad): many speeds and accelerations; "
+        "soft tissue at 0.5 rad";
+    s.default_duration_s = 60.0;
+    s.tissue = "soft";
+    s.surface_rad = 0.5;
+  } else if (name == "palpate") {
+    s.kind = ScenarioKind::palpate;
+    s.description =
+        "press the nodule tissue (surface 0.2 rad) every 5 s, alternately gently "
+        "(0.08 rad, soft layer) and deeply (0.3 rad, onto the inclusion)";
+    s.default_duration_s = 40.0;
+    s.tissue = "nodule";
+    s.surface_rad = 0.2;
+  } else if (name == "chirp") {
+    s.kind = ScenarioKind::chirp;
+    s.description = "0.5 rad chirp 0.1 -> 1.5 Hz over 30 s, repeated; free motion";
+    s.default_duration_s = 60.0;
+    s.tissue = "none";
+    s.surface_rad = 0.6;
+  } else {
+    throw std::invalid_argument("unknown scenario '" + std::string(name) +
+                                "' (known: sine, multisine, palpate, chirp)");
+  }
+  return s;
+}
+
+double Scenario::reference(double t, int joint) const {
+  switch (kind) {
+    case ScenarioKind::sine:
+      return 0.8 * std::sin(kTwoPi * (joint == 0 ? 0.5 : 0.4) * t);
+    case ScenarioKind::multisine: {
+      const double phase = joint == 0 ? 0.0 : 1.3;
+      return 0.35 * std::sin(kTwoPi * 0.13 * t + phase) +
+             0.25 * std::sin(kTwoPi * 0.41 * t + 1.0 + phase) +
+             0.15 * std::sin(kTwoPi * 0.97 * t + 2.0 + phase) +
+             0.05 * std::sin(kTwoPi * 2.3 * t + 3.0 + phase);
+    }
+    case ScenarioKind::palpate:
+      return palpation(joint == 0 ? t : t + 2.5, surface_rad);
+    case ScenarioKind::chirp: {
+      constexpr double kSweep = 30.0, kF0 = 0.1, kF1 = 1.5;
+      const double u = std::fmod(t, kSweep);
+      // Phase of a linear chirp; the amplitude ramps in over the first second
+      // of each sweep so the restart is smooth enough for the motor.
+      const double phase = kTwoPi * (kF0 * u + 0.5 * (kF1 - kF0) / kSweep * u * u);
+      const double ramp = smoothstep(u) * smoothstep((kSweep - u) / 1.0);
+      return 0.5 * ramp * std::sin(phase);
+    }
+  }
+  return 0.0;
+}
+
+}  // namespace tsmh::virtual_tissue_slave
