@@ -1,0 +1,62 @@
+#pragma once
+// What a run of the server achieved, from its trace: loop timing, how close
+// the fed-back distal torque was to the truth (estimated vs naive), and the
+// stiffness a surgeon would perceive for soft tissue and for the nodule
+// beside the true values. Written as the demo report (design.md §4).
+
+#include <string>
+#include <vector>
+
+#include "haptics/haptic_loop.hpp"
+#include "haptics/server_config.hpp"
+#include "haptics/trace.hpp"
+
+namespace tsmh::haptics {
+
+struct JointEvaluation {
+  std::string name;
+  std::size_t samples = 0;      ///< enabled ticks with matched truth
+  double rmse_estimated = 0.0;  ///< N m, tau_out_est vs true tau_out
+  double rmse_naive = 0.0;      ///< N m, tau_in vs true tau_out
+  double ratio = 0.0;           ///< rmse_estimated / rmse_naive
+  double true_peak = 0.0;       ///< N m, max |true tau_out|
+};
+
+/// Stiffness in slave joint space, N m/rad: perceived = slope of the rendered
+/// master torque against master angle, divided by force_scale * position_scale;
+/// true = slope of the true distal torque against the true joint angle, over
+/// the same samples.
+struct Stiffness {
+  double perceived = 0.0;
+  double truth = 0.0;
+  std::size_t samples = 0;
+};
+
+struct Discrimination {
+  int joint = -1;           ///< the joint that pressed the tissue (-1: no contact seen)
+  double boundary_m = 0.0;  ///< indentation separating soft layer from nodule
+  Stiffness soft, hard;
+};
+
+struct EvaluationReport {
+  double rate_hz = 0.0;  ///< measured mean rate
+  double nominal_rate_hz = 0.0;
+  TimingSummary jitter;
+  TimingSummary compute;
+  std::uint64_t overruns = 0;
+  double duration_s = 0.0;
+  std::string feedback;
+  std::vector<JointEvaluation> joints;
+  Discrimination discrimination;
+};
+
+EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config);
+
+/// Slope of y against x by least squares with intercept (NaN when degenerate).
+double slope(const std::vector<double>& x, const std::vector<double>& y);
+
+void write_report(const EvaluationReport& report, const std::string& path);  ///< JSON, atomic
+std::string format_report(const EvaluationReport& report);                   ///< human summary
+std::string report_to_json(const EvaluationReport& report);
+
+}  // namespace tsmh::haptics

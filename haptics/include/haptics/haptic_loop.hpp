@@ -1,0 +1,126 @@
+#pragma once
+// One tick of the haptic loop (issue 7):
+//   read the master -> newest SLAVE_STATE -> estimator per joint -> force
+//   mapping -> safety -> write the master -> MASTER_COMMAND (position mapping,
+//   clutch, enable) -> HAPTIC_STATUS every status_every ticks -> trace.
+// tick() takes the time from its caller, so the same code runs under the
+// real-time runner (CLOCK_MONOTONIC) and in deterministic simulated time.
+// Nothing in tick() allocates, locks, blocks or prints.
+
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "bridge/latency_histogram.hpp"
+#include "bridge/samples.hpp"
+#include "estimator/distal_estimator.hpp"
+#include "haptics/force_mapping.hpp"
+#include "haptics/joint_array.hpp"
+#include "haptics/position_mapping.hpp"
+#include "haptics/safety_filter.hpp"
+#include "haptics/safety_state.hpp"
+#include "haptics/slave_link.hpp"
+#include "haptics/timing_histogram.hpp"
+#include "haptics/trace.hpp"
+#include "master_devices/device.hpp"
+
+namespace tsmh::haptics {
+
+/// What is rendered: the model's estimate, the proximal torque (what you feel
+/// without the model), or nothing — for A/B feel tests.
+enum class FeedbackSource : std::int32_t { kEstimated = 0, kNaive = 1, kNone = 2 };
+std::string_view to_string(FeedbackSource s) noexcept;
+
+struct LoopConfig {
+  int joints = 2;
+  double rate_hz = 1000.0;
+  FeedbackSource source = FeedbackSource::kEstimated;
+  std::array<ForceMapping, kMaxJoints> force{};
+  std::array<PositionMappingConfig, kMaxJoints> position{};
+  std::array<JointSafetyLimits, kMaxJoints> limits{};
+  SafetyTiming timing{};
+  double slave_timeout_s = 1.0;  ///< no slave state this long: FAULT
+  int status_every = 10;         ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
+};
+
+struct LoopCounters {
+  std::uint64_t ticks = 0;
+  std::uint64_t overruns = 0;       ///< deadlines skipped (set by the runner)
+  std::uint64_t slave_samples = 0;  ///< new SLAVE_STATE samples used
+  std::uint64_t estimator_rejects = 0;
+  std::uint64_t nonfinite_requests = 0;
+  std::uint64_t saturated_ticks = 0;
+  std::uint64_t rate_limited_ticks = 0;
+  std::uint64_t stale_ticks = 0;
+};
+
+class HapticLoop {
+ public:
+  /// `estimators` has one entry per joint. `trace` may be null. Throws
+  /// std::invalid_argument on an inconsistent configuration.
+  HapticLoop(const LoopConfig& config, master_devices::Device& device, SlaveLink& link,
+             std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators,
+             Trace* trace = nullptr);
+
+  /// One tick at time now_ns (CLOCK_MONOTONIC, or simulated). `lateness_ns`:
+  /// how late this tick started against its deadline (for statistics).
+  void tick(std::int64_t now_ns, std::int64_t lateness_ns = 0) noexcept;
+
+  /// Compute time of the tick that just ran, and deadlines skipped after it.
+  void record_compute(std::int64_t compute_ns, std::int64_t skipped) noexcept;
+
+  /// Zero torque, torque output disabled, slave commanded to hold. Every exit
+  /// path calls this first. Idempotent; never throws.
+  void shutdown() noexcept;
+
+  LoopState state() const noexcept { return machine_.state(); }
+  FaultReason fault() const noexcept { return machine_.fault(); }
+  const LoopCounters& counters() const noexcept { return counters_; }
+  const SafetyOutput& last_output() const noexcept { return safety_.last(); }
+  const estimator::Estimate& estimate(int joint) const noexcept {
+    return estimates_[static_cast<std::size_t>(joint)];
+  }
+  const TimingHistogram& lateness() const noexcept { return lateness_; }
+  const TimingHistogram& compute() const noexcept { return compute_; }
+  double rate_hz() const noexcept { return config_.rate_hz; }
+  /// Mean tick rate measured over the whole run (ticks / elapsed time).
+  double measured_rate_hz() const noexcept;
+
+ private:
+  void publish_status(std::int64_t now_ns) noexcept;
+
+  LoopConfig config_;
+  master_devices::Device& device_;
+  SlaveLink& link_;
+  std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators_;
+  Trace* trace_;
+
+  SafetyStateMachine machine_;
+  SafetyFilter safety_;
+  std::array<PositionMapping, kMaxJoints> position_;
+  std::array<estimator::Estimate, kMaxJoints> estimates_{};
+
+  bridge::SlaveStateSample state_{};
+  bridge::SlaveTruthSample truth_{};
+  std::uint64_t state_version_ = 0;
+  bool have_state_ = false;
+  master_devices::DeviceReading reading_{};
+  bridge::MasterCommandSample command_{};
+  bridge::HapticStatusSample status_{};
+  master_devices::JointArray device_torque_{};
+
+  std::int64_t first_ns_ = 0;
+  std::int64_t last_ns_ = 0;
+  std::int64_t command_seq_ = 0;
+  std::int64_t status_seq_ = 0;
+  bool device_enabled_ = false;
+  bool shut_down_ = false;
+  LoopCounters counters_;
+  TimingHistogram lateness_;
+  TimingHistogram compute_;
+  bridge::LatencyHistogram window_lateness_;  // coarse, cheap to summarise at 100 Hz
+  bridge::LatencyHistogram window_compute_;
+};
+
+}  // namespace tsmh::haptics

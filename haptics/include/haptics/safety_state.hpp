@@ -1,0 +1,54 @@
+#pragma once
+// The server's state machine (after dVRK's explicit FAULT state):
+//
+//   DISABLED --dead-man pressed, device ok, no fault--> ENABLED
+//   ENABLED  --dead-man released-----------------------> DISABLED
+//   any      --e-stop, device fault/disconnect, slave lost, internal error--> FAULT
+//   FAULT    --cause gone AND dead-man released--------> DISABLED
+//
+// FAULT latches: the operator must let go of the dead-man before torque can
+// come back, so a cleared fault never re-enables under a held hand by itself.
+
+#include <cstdint>
+#include <string_view>
+
+namespace tsmh::haptics {
+
+enum class LoopState : std::int32_t { kDisabled = 0, kEnabled = 1, kFault = 2 };
+
+enum class FaultReason : std::int32_t {
+  kNone = 0,
+  kEStop,
+  kDevice,     ///< the master device reports fault or disconnected
+  kSlaveLost,  ///< no slave state for longer than the slave timeout
+  kInternal,   ///< an error path of the server itself
+};
+
+std::string_view to_string(LoopState s) noexcept;
+std::string_view to_string(FaultReason r) noexcept;
+
+struct SafetyInputs {
+  bool dead_man = false;
+  bool e_stop = false;
+  bool device_ok = false;
+  bool slave_lost = false;
+  bool internal_error = false;
+};
+
+class SafetyStateMachine {
+ public:
+  /// One tick; returns the new state.
+  LoopState update(const SafetyInputs& in) noexcept;
+  LoopState state() const noexcept { return state_; }
+  FaultReason fault() const noexcept { return fault_; }
+  std::uint64_t transitions() const noexcept { return transitions_; }
+
+ private:
+  void go(LoopState s) noexcept;
+
+  LoopState state_ = LoopState::kDisabled;
+  FaultReason fault_ = FaultReason::kNone;
+  std::uint64_t transitions_ = 0;
+};
+
+}  // namespace tsmh::haptics

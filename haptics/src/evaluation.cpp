@@ -1,0 +1,213 @@
+#include "haptics/evaluation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <numeric>
+
+#include "estimator/atomic_file.hpp"
+
+namespace tsmh::haptics {
+namespace {
+
+struct LineFit {
+  double slope = std::nan("");
+  double sse = 0.0;
+};
+
+LineFit fit_line(const std::vector<double>& x, const std::vector<double>& y) {
+  LineFit f;
+  const std::size_t n = x.size();
+  if (n < 3) return f;
+  const double mx = std::accumulate(x.begin(), x.end(), 0.0) / static_cast<double>(n);
+  const double my = std::accumulate(y.begin(), y.end(), 0.0) / static_cast<double>(n);
+  double sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sxx += (x[i] - mx) * (x[i] - mx);
+    sxy += (x[i] - mx) * (y[i] - my);
+  }
+  if (!(sxx > 0.0)) return f;
+  f.slope = sxy / sxx;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double e = y[i] - my - f.slope * (x[i] - mx);
+    f.sse += e * e;
+  }
+  return f;
+}
+
+bool enabled_with_truth(const TraceRow& r, std::size_t j) {
+  return r.state == static_cast<std::int32_t>(LoopState::kEnabled) &&
+         std::isfinite(r.joints[j].true_tau_out);
+}
+
+// Splits contact samples of joint j at the indentation where the force
+// against indentation changes slope most (two-segment least squares): the
+// edge of the hard inclusion under the soft layer.
+double find_boundary(const Trace& trace, std::size_t j) {
+  std::vector<std::pair<double, double>> pts;
+  for (std::size_t i = 0; i < trace.size(); ++i) {
+    const auto& q = trace[i].joints[j];
+    if (std::isfinite(q.indentation) && q.indentation > 0.0 && std::isfinite(q.contact_force))
+      pts.emplace_back(q.indentation, q.contact_force);
+  }
+  if (pts.size() < 50) return std::nan("");
+  std::sort(pts.begin(), pts.end());
+  double best = std::nan(""), best_sse = INFINITY;
+  for (int k = 1; k < 20; ++k) {
+    const std::size_t cut = pts.size() * static_cast<std::size_t>(k) / 20;
+    std::vector<double> x1, y1, x2, y2;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      (i < cut ? x1 : x2).push_back(pts[i].first), (i < cut ? y1 : y2).push_back(pts[i].second);
+    const LineFit a = fit_line(x1, y1), b = fit_line(x2, y2);
+    if (std::isnan(a.slope) || std::isnan(b.slope)) continue;
+    if (a.sse + b.sse < best_sse) best_sse = a.sse + b.sse, best = pts[cut].first;
+  }
+  return best;
+}
+
+}  // namespace
+
+double slope(const std::vector<double>& x, const std::vector<double>& y) {
+  return fit_line(x, y).slope;
+}
+
+EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config) {
+  EvaluationReport r;
+  r.nominal_rate_hz = config.loop.rate_hz;
+  r.rate_hz = loop.measured_rate_hz();
+  r.jitter = loop.lateness().summary();
+  r.compute = loop.compute().summary();
+  r.overruns = loop.counters().overruns;
+  r.duration_s = trace.size() ? trace[trace.size() - 1].t : 0.0;
+  r.feedback = std::string(to_string(config.loop.source));
+  const auto joints = static_cast<std::size_t>(config.loop.joints);
+
+  double deepest = 0.0;
+  for (std::size_t j = 0; j < joints; ++j) {
+    JointEvaluation je;
+    je.name = config.joints[j].name;
+    double se_est = 0, se_naive = 0;
+    for (std::size_t i = 0; i < trace.size(); ++i) {
+      const auto& row = trace[i];
+      if (!enabled_with_truth(row, j)) continue;
+      const auto& q = row.joints[j];
+      if (!std::isfinite(q.tau_out_est) || !std::isfinite(q.tau_in)) continue;
+      se_est += (q.tau_out_est - q.true_tau_out) * (q.tau_out_est - q.true_tau_out);
+      se_naive += (q.tau_in - q.true_tau_out) * (q.tau_in - q.true_tau_out);
+      je.true_peak = std::max(je.true_peak, std::fabs(q.true_tau_out));
+      ++je.samples;
+      if (std::isfinite(q.indentation) && q.indentation > deepest) {
+        deepest = q.indentation;
+        r.discrimination.joint = static_cast<int>(j);
+      }
+    }
+    if (je.samples) {
+      je.rmse_estimated = std::sqrt(se_est / static_cast<double>(je.samples));
+      je.rmse_naive = std::sqrt(se_naive / static_cast<double>(je.samples));
+      je.ratio = je.rmse_naive > 0 ? je.rmse_estimated / je.rmse_naive : 0.0;
+    }
+    r.joints.push_back(je);
+  }
+
+  auto& d = r.discrimination;
+  if (d.joint >= 0) {
+    const auto j = static_cast<std::size_t>(d.joint);
+    d.boundary_m = find_boundary(trace, j);
+    const double gain = config.loop.force[j].scale * config.loop.position[j].scale;
+    std::vector<double> qm[2], tm[2], xs[2], ts[2];
+    for (std::size_t i = 0; i < trace.size(); ++i) {
+      const auto& row = trace[i];
+      if (!enabled_with_truth(row, j)) continue;
+      const auto& q = row.joints[j];
+      if (!(q.indentation > 0.0) || !std::isfinite(q.true_x_out)) continue;
+      const int cls = std::isfinite(d.boundary_m) && q.indentation > d.boundary_m ? 1 : 0;
+      qm[cls].push_back(q.master_q);
+      tm[cls].push_back(q.torque_cmd);
+      xs[cls].push_back(q.true_x_out);
+      ts[cls].push_back(q.true_tau_out);
+    }
+    Stiffness* out[2] = {&d.soft, &d.hard};
+    for (int c = 0; c < 2; ++c) {
+      out[c]->samples = qm[c].size();
+      out[c]->perceived = std::fabs(slope(qm[c], tm[c])) / gain;
+      out[c]->truth = std::fabs(slope(xs[c], ts[c]));
+    }
+  }
+  return r;
+}
+
+std::string report_to_json(const EvaluationReport& r) {
+  using nlohmann::json;
+  const auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json joints = json::array();
+  for (const auto& j : r.joints)
+    joints.push_back({{"name", j.name},
+                      {"samples", j.samples},
+                      {"rmse_estimated", num(j.rmse_estimated)},
+                      {"rmse_naive", num(j.rmse_naive)},
+                      {"ratio", num(j.ratio)},
+                      {"true_peak", num(j.true_peak)}});
+  const auto& d = r.discrimination;
+  json doc = {{"loop",
+               {{"rate_hz", num(r.rate_hz)},
+                {"nominal_rate_hz", num(r.nominal_rate_hz)},
+                {"jitter_us",
+                 {{"p50", r.jitter.p50_us},
+                  {"p99", r.jitter.p99_us},
+                  {"p999", r.jitter.p999_us},
+                  {"max", r.jitter.max_us},
+                  {"mean", r.jitter.mean_us}}},
+                {"compute_us",
+                 {{"p50", r.compute.p50_us}, {"p99", r.compute.p99_us}, {"max", r.compute.max_us}}},
+                {"overruns", r.overruns},
+                {"duration_s", num(r.duration_s)}}},
+              {"feedback", r.feedback},
+              {"joints", joints},
+              {"discrimination",
+               {{"joint", d.joint},
+                {"boundary_m", num(d.boundary_m)},
+                {"soft_stiffness", num(d.soft.perceived)},
+                {"hard_stiffness", num(d.hard.perceived)},
+                {"soft_true", num(d.soft.truth)},
+                {"hard_true", num(d.hard.truth)},
+                {"soft_samples", d.soft.samples},
+                {"hard_samples", d.hard.samples},
+                {"units", "N m/rad, slave joint space"}}}};
+  return doc.dump(2) + "\n";
+}
+
+void write_report(const EvaluationReport& report, const std::string& path) {
+  estimator::write_text_atomically(path, report_to_json(report));
+}
+
+std::string format_report(const EvaluationReport& r) {
+  std::string s;
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "loop: %.2f Hz (nominal %.0f), lateness p50 %.1f / p99 %.1f / p99.9 %.1f / max "
+                "%.1f us, %llu overruns, %.1f s\n",
+                r.rate_hz, r.nominal_rate_hz, r.jitter.p50_us, r.jitter.p99_us, r.jitter.p999_us,
+                r.jitter.max_us, static_cast<unsigned long long>(r.overruns), r.duration_s);
+  s += line;
+  for (const auto& j : r.joints) {
+    std::snprintf(line, sizeof line,
+                  "joint %-8s distal torque rmse: estimated %.4f N m, naive %.4f N m, ratio %.2f "
+                  "(%zu samples, true peak %.3f N m)\n",
+                  j.name.c_str(), j.rmse_estimated, j.rmse_naive, j.ratio, j.samples, j.true_peak);
+    s += line;
+  }
+  const auto& d = r.discrimination;
+  if (d.joint >= 0) {
+    std::snprintf(
+        line, sizeof line,
+        "stiffness felt (joint %d, N m/rad): soft %.3f (true %.3f), nodule %.3f (true %.3f)\n",
+        d.joint, d.soft.perceived, d.soft.truth, d.hard.perceived, d.hard.truth);
+    s += line;
+  } else {
+    s += "stiffness felt: no tissue contact in this run\n";
+  }
+  return s;
+}
+
+}  // namespace tsmh::haptics

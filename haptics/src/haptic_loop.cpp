@@ -1,0 +1,241 @@
+#include "haptics/haptic_loop.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace tsmh::haptics {
+
+std::string_view to_string(FeedbackSource s) noexcept {
+  switch (s) {
+    case FeedbackSource::kEstimated:
+      return "estimated";
+    case FeedbackSource::kNaive:
+      return "naive";
+    case FeedbackSource::kNone:
+      return "none";
+  }
+  return "?";
+}
+
+HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device, SlaveLink& link,
+                       std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators,
+                       Trace* trace)
+    : config_(config),
+      device_(device),
+      link_(link),
+      estimators_(std::move(estimators)),
+      trace_(trace),
+      safety_(config.joints, config.limits, config.timing) {
+  if (static_cast<int>(estimators_.size()) != config_.joints)
+    throw std::invalid_argument("haptic loop: one estimator per joint is needed");
+  for (const auto& e : estimators_)
+    if (!e) throw std::invalid_argument("haptic loop: missing estimator");
+  if (!(config_.rate_hz >= 1.0 && config_.rate_hz <= 4000.0))
+    throw std::invalid_argument("rate_hz: must be within 1..4000");
+  if (config_.status_every < 1) throw std::invalid_argument("status_every: must be >= 1");
+  if (trace_ && trace_->joints() != config_.joints)
+    throw std::invalid_argument("haptic loop: trace joint count differs");
+  for (int j = 0; j < config_.joints; ++j)
+    position_[static_cast<std::size_t>(j)] =
+        PositionMapping(config_.position[static_cast<std::size_t>(j)]);
+}
+
+double HapticLoop::measured_rate_hz() const noexcept {
+  if (counters_.ticks < 2 || last_ns_ <= first_ns_) return 0.0;
+  return static_cast<double>(counters_.ticks - 1) /
+         (static_cast<double>(last_ns_ - first_ns_) * 1e-9);
+}
+
+void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
+  if (shut_down_) return;
+  const double nominal_dt = 1.0 / config_.rate_hz;
+  const double dt =
+      counters_.ticks == 0 ? nominal_dt : static_cast<double>(now_ns - last_ns_) * 1e-9;
+  if (counters_.ticks == 0) first_ns_ = now_ns;
+  last_ns_ = now_ns;
+  ++counters_.ticks;
+  lateness_.record(lateness_ns);
+  window_lateness_.record(lateness_ns);
+  const auto n = static_cast<std::size_t>(config_.joints);
+
+  // 1. The master.
+  reading_ = device_.read(now_ns);
+
+  // 2. The newest slave state; the estimator runs once per new sample, on the
+  //    slave's own clock (utime), so its differentiator sees true intervals.
+  const std::uint64_t version = link_.latest_state(state_);
+  if (version != 0 && version != state_version_) {
+    state_version_ = version;
+    have_state_ = true;
+    ++counters_.slave_samples;
+    const bool joints_ok = state_.num_joints >= config_.joints;
+    for (std::size_t j = 0; j < n; ++j) {
+      auto& e = estimates_[j];
+      e = joints_ok ? estimators_[j]->update_tensions(static_cast<double>(state_.utime) * 1e-6,
+                                                      state_.x_in[j], state_.T1[j], state_.T3[j])
+                    : estimator::Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
+      if (!e.valid) ++counters_.estimator_rejects;
+    }
+  }
+  const double age_s = have_state_ ? static_cast<double>(now_ns - state_.receive_ns) * 1e-9
+                                   : std::numeric_limits<double>::infinity();
+
+  // 3. Feedback request per joint (NaN passes through: the safety filter zeroes it).
+  JointArray request{};
+  for (std::size_t j = 0; j < n; ++j) {
+    double slave_tau = 0.0;
+    switch (config_.source) {
+      case FeedbackSource::kEstimated:
+        slave_tau = estimates_[j].tau_out_est;
+        break;
+      case FeedbackSource::kNaive:
+        slave_tau = estimates_[j].tau_in;
+        break;
+      case FeedbackSource::kNone:
+        slave_tau = 0.0;
+        break;
+    }
+    if (!estimates_[j].valid && config_.source != FeedbackSource::kNone)
+      slave_tau = std::numeric_limits<double>::quiet_NaN();
+    request[j] = config_.force[j](slave_tau);
+  }
+
+  // 4. State machine.
+  const LoopState before = machine_.state();
+  const LoopState now_state =
+      machine_.update({.dead_man = reading_.buttons.dead_man,
+                       .e_stop = reading_.buttons.e_stop,
+                       .device_ok = reading_.status == master_devices::DeviceStatus::kOk,
+                       .slave_lost = !(age_s <= config_.slave_timeout_s) &&
+                                     counters_.ticks * nominal_dt > config_.slave_timeout_s,
+                       .internal_error = false});
+  const bool enabled = now_state == LoopState::kEnabled;
+  if (enabled && before != LoopState::kEnabled) {
+    // Start from where the slave is, so enabling never makes it jump.
+    for (std::size_t j = 0; j < n; ++j) {
+      const double slave_at = std::isfinite(state_.x_out[j]) && have_state_
+                                  ? state_.x_out[j]
+                                  : position_[j].reference();
+      position_[j].align(reading_.q[j], slave_at);
+    }
+  }
+  if (enabled != device_enabled_) {
+    device_.set_enabled(enabled);
+    device_enabled_ = enabled;
+  }
+
+  // 5. Safety, then the device.
+  const SafetyOutput& out = safety_.apply(request, dt, age_s, enabled);
+  if (out.flags & safety_flags::kNonFinite) ++counters_.nonfinite_requests;
+  if (out.flags & safety_flags::kSaturated) ++counters_.saturated_ticks;
+  if (out.flags & safety_flags::kRateLimited) ++counters_.rate_limited_ticks;
+  if (out.flags & safety_flags::kStaleFade) ++counters_.stale_ticks;
+  for (std::size_t j = 0; j < master_devices::kMaxDof; ++j)
+    device_torque_[j] = j < n ? out.torque[j] : 0.0;
+  device_.write_torque(device_torque_);
+
+  // 6. Position command to the slave.
+  command_.utime = now_ns / 1000;
+  command_.seq = command_seq_++;
+  command_.num_joints = config_.joints;
+  command_.enable = enabled;
+  command_.clutch = reading_.buttons.clutch;
+  for (std::size_t j = 0; j < n; ++j)
+    command_.position_ref[j] = enabled ? position_[j].update(reading_.q[j], reading_.buttons.clutch)
+                                       : position_[j].reference();
+  link_.publish_command(command_);
+
+  // 7. Status at 100 Hz.
+  if (counters_.ticks % static_cast<std::uint64_t>(config_.status_every) == 0)
+    publish_status(now_ns);
+
+  // 8. Trace (evaluation, plots).
+  if (trace_) {
+    const std::uint64_t tv = link_.latest_truth(truth_);
+    const bool truth_matches = tv != 0 && have_state_ && truth_.seq == state_.seq;
+    TraceRow row;
+    row.t = static_cast<double>(now_ns - first_ns_) * 1e-9;
+    row.state_seq = have_state_ ? state_.seq : -1;
+    row.state = static_cast<std::int32_t>(now_state);
+    row.flags = static_cast<std::int32_t>(out.flags);
+    row.lateness_us = static_cast<double>(lateness_ns) * 1e-3;
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t j = 0; j < n; ++j) {
+      auto& r = row.joints[j];
+      r.master_q = reading_.q[j];
+      r.slave_ref = command_.position_ref[j];
+      r.tau_in = estimates_[j].tau_in;
+      r.tau_out_est = estimates_[j].tau_out_est;
+      r.torque_cmd = out.torque[j];
+      r.x_in = have_state_ ? state_.x_in[j] : nan;
+      r.x_out = have_state_ ? state_.x_out[j] : nan;
+      r.true_tau_out = truth_matches ? truth_.tau_out[j] : nan;
+      r.true_x_out = truth_matches ? truth_.x_out[j] : nan;
+      r.indentation = truth_matches ? truth_.indentation[j] : nan;
+      r.contact_force = truth_matches ? truth_.contact_force[j] : nan;
+    }
+    trace_->append(row);
+  }
+}
+
+void HapticLoop::record_compute(std::int64_t compute_ns, std::int64_t skipped) noexcept {
+  compute_.record(compute_ns);
+  window_compute_.record(compute_ns);
+  if (skipped > 0) counters_.overruns += static_cast<std::uint64_t>(skipped);
+}
+
+void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
+  const auto lat = window_lateness_.summary();
+  const auto cmp = window_compute_.summary();
+  const auto link = link_.stats();
+  const auto& out = safety_.last();
+  status_.utime = now_ns / 1000;
+  status_.seq = status_seq_++;
+  status_.num_joints = config_.joints;
+  status_.state = static_cast<std::int32_t>(machine_.state());
+  status_.feedback_source = static_cast<std::int32_t>(config_.source);
+  status_.rate_hz = measured_rate_hz();
+  status_.lateness_p50_us = lat.p50_us;
+  status_.lateness_p99_us = lat.p99_us;
+  status_.lateness_max_us = lat.max_us;
+  status_.compute_p99_us = cmp.p99_us;
+  status_.overruns = static_cast<std::int64_t>(counters_.overruns);
+  status_.slave_age_ms =
+      have_state_ ? static_cast<double>(now_ns - state_.receive_ns) * 1e-6 : -1.0;
+  status_.slave_rejected = link.rejected;
+  status_.slave_seq_gaps = link.seq_gaps;
+  status_.slave_latency_p99_us = link.latency_p99_us;
+  std::int32_t flags = 0;
+  if (out.flags & safety_flags::kStaleFade) flags |= 1 << 0;
+  if (reading_.buttons.e_stop) flags |= 1 << 1;
+  if (!reading_.buttons.dead_man) flags |= 1 << 2;
+  if (out.flags & safety_flags::kSaturated) flags |= 1 << 3;
+  if (out.flags & safety_flags::kRateLimited) flags |= 1 << 4;
+  status_.flags = flags;
+  for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j) {
+    status_.tau_in[j] = estimates_[j].tau_in;
+    status_.tau_out_est[j] = estimates_[j].tau_out_est;
+    status_.friction_est[j] = estimates_[j].friction;
+    status_.torque_cmd[j] = out.torque[j];
+    status_.master_q[j] = reading_.q[j];
+  }
+  link_.publish_status(status_);
+}
+
+void HapticLoop::shutdown() noexcept {
+  if (shut_down_) return;
+  device_torque_.fill(0.0);
+  device_.write_torque(device_torque_);
+  device_.set_enabled(false);
+  device_enabled_ = false;
+  command_.utime = last_ns_ / 1000;
+  command_.seq = command_seq_++;
+  command_.num_joints = config_.joints;
+  command_.enable = false;
+  command_.clutch = false;
+  link_.publish_command(command_);
+  shut_down_ = true;
+}
+
+}  // namespace tsmh::haptics

@@ -1,0 +1,55 @@
+#include "haptics/lcm_slave_link.hpp"
+
+namespace tsmh::haptics {
+
+LcmSlaveLink::LcmSlaveLink(const LcmSlaveLinkConfig& config)
+    : rx_(config.bridge), tx_(config.bridge) {
+  bridge::InboxOptions<bridge::SlaveStateSample> state_options;
+  state_options.expected_joints = config.joints;
+  state_ = &rx_.subscribe(state_options);
+  if (config.subscribe_truth) {
+    bridge::InboxOptions<bridge::SlaveTruthSample> truth_options;
+    truth_options.expected_joints = config.joints;
+    truth_ = &rx_.subscribe(truth_options);
+  }
+  command_ = &tx_.outbox<bridge::MasterCommandSample>();
+  status_ = &tx_.outbox<bridge::HapticStatusSample>();
+}
+
+LcmSlaveLink::~LcmSlaveLink() {
+  stop();
+}
+
+void LcmSlaveLink::start() {
+  rx_.start();
+  tx_.start();
+}
+
+void LcmSlaveLink::stop() noexcept {
+  tx_.stop();
+  rx_.stop();
+}
+
+std::uint64_t LcmSlaveLink::latest_state(bridge::SlaveStateSample& out) noexcept {
+  return state_->latest(out);
+}
+
+std::uint64_t LcmSlaveLink::latest_truth(bridge::SlaveTruthSample& out) noexcept {
+  return truth_ ? truth_->latest(out) : 0;
+}
+
+void LcmSlaveLink::publish_command(const bridge::MasterCommandSample& cmd) noexcept {
+  command_->publish(cmd);
+}
+
+void LcmSlaveLink::publish_status(const bridge::HapticStatusSample& status) noexcept {
+  status_->publish(status);
+}
+
+SlaveLinkStats LcmSlaveLink::stats() const noexcept {
+  const auto s = state_->stats();
+  return {static_cast<std::int64_t>(s.rejected()), static_cast<std::int64_t>(s.seq_gaps),
+          s.latency.p99_us};
+}
+
+}  // namespace tsmh::haptics

@@ -1,0 +1,100 @@
+#include "haptics/loop_runner.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+#include <time.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "haptics/tick_schedule.hpp"
+
+namespace tsmh::haptics {
+namespace {
+
+std::int64_t monotonic_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+void sleep_until(std::int64_t deadline_ns) noexcept {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(deadline_ns / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(deadline_ns % 1'000'000'000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+}  // namespace
+
+std::string lock_memory() noexcept {
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) return "";
+  return std::string("mlockall failed (") + std::strerror(errno) +
+         "); pages may fault during the loop. Allow it with `ulimit -l unlimited` or "
+         "CAP_IPC_LOCK (see docs/haptic-server.md).";
+}
+
+LoopRunner::LoopRunner(HapticLoop& loop, const RunnerOptions& options)
+    : loop_(loop), options_(options) {}
+
+LoopRunner::~LoopRunner() {
+  stop();
+  join();
+}
+
+void LoopRunner::start() {
+  thread_ = std::thread([this] { run(); });
+  while (!ready_.load(std::memory_order_acquire))
+    std::this_thread::yield();
+}
+
+void LoopRunner::join() noexcept {
+  if (thread_.joinable()) thread_.join();
+}
+
+void LoopRunner::run() noexcept {
+  if (options_.sched_fifo) {
+    sched_param sp{};
+    sp.sched_priority = options_.priority;
+    const int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+    status_.sched_fifo = rc == 0;
+    if (rc != 0)
+      status_.sched_note =
+          std::string("SCHED_FIFO not permitted (") + std::strerror(rc) +
+          "): running at normal priority, expect more jitter. Run as root, or give "
+          "the binary CAP_SYS_NICE, or raise RLIMIT_RTPRIO (docs/haptic-server.md).";
+  } else {
+    status_.sched_note = "SCHED_FIFO disabled by configuration (realtime.sched_fifo: false)";
+  }
+  if (options_.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(options_.cpu, &set);
+    const int rc = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+    status_.pinned = rc == 0;
+    if (rc != 0) status_.pin_note = std::string("CPU pinning failed: ") + std::strerror(rc);
+  }
+  ready_.store(true, std::memory_order_release);
+
+  const auto period = static_cast<std::int64_t>(1e9 / options_.rate_hz + 0.5);
+  const std::int64_t start = monotonic_ns() + period;
+  const std::int64_t end = options_.duration_s > 0
+                               ? start + static_cast<std::int64_t>(options_.duration_s * 1e9)
+                               : INT64_MAX;
+  std::int64_t deadline = start;
+  while (!stop_.load(std::memory_order_relaxed) && deadline < end) {
+    sleep_until(deadline);
+    const std::int64_t woke = monotonic_ns();
+    loop_.tick(woke, woke - deadline);
+    const std::int64_t done = monotonic_ns();
+    const NextTick next = next_tick(deadline, done, period);
+    loop_.record_compute(done - woke, next.skipped);
+    deadline = next.deadline_ns;
+  }
+  loop_.shutdown();
+  finished_.store(true, std::memory_order_release);
+}
+
+}  // namespace tsmh::haptics

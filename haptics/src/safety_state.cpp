@@ -1,0 +1,71 @@
+#include "haptics/safety_state.hpp"
+
+namespace tsmh::haptics {
+
+std::string_view to_string(LoopState s) noexcept {
+  switch (s) {
+    case LoopState::kDisabled:
+      return "DISABLED";
+    case LoopState::kEnabled:
+      return "ENABLED";
+    case LoopState::kFault:
+      return "FAULT";
+  }
+  return "?";
+}
+
+std::string_view to_string(FaultReason r) noexcept {
+  switch (r) {
+    case FaultReason::kNone:
+      return "none";
+    case FaultReason::kEStop:
+      return "e-stop pressed";
+    case FaultReason::kDevice:
+      return "master device fault or disconnected";
+    case FaultReason::kSlaveLost:
+      return "slave state lost";
+    case FaultReason::kInternal:
+      return "internal error";
+  }
+  return "?";
+}
+
+void SafetyStateMachine::go(LoopState s) noexcept {
+  if (s != state_) ++transitions_;
+  state_ = s;
+}
+
+LoopState SafetyStateMachine::update(const SafetyInputs& in) noexcept {
+  FaultReason cause = FaultReason::kNone;
+  if (in.internal_error)
+    cause = FaultReason::kInternal;
+  else if (in.e_stop)
+    cause = FaultReason::kEStop;
+  else if (!in.device_ok)
+    cause = FaultReason::kDevice;
+  else if (in.slave_lost)
+    cause = FaultReason::kSlaveLost;
+
+  if (cause != FaultReason::kNone) {
+    if (state_ != LoopState::kFault) fault_ = cause;
+    go(LoopState::kFault);
+    return state_;
+  }
+  switch (state_) {
+    case LoopState::kFault:
+      if (!in.dead_man) {
+        fault_ = FaultReason::kNone;
+        go(LoopState::kDisabled);
+      }
+      break;
+    case LoopState::kDisabled:
+      if (in.dead_man) go(LoopState::kEnabled);
+      break;
+    case LoopState::kEnabled:
+      if (!in.dead_man) go(LoopState::kDisabled);
+      break;
+  }
+  return state_;
+}
+
+}  // namespace tsmh::haptics

@@ -1,0 +1,208 @@
+// The haptic loop end to end in deterministic simulated time, with an
+// in-memory device and network.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "estimator/tsm_model.hpp"
+#include "fakes.hpp"
+#include "haptics/haptic_loop.hpp"
+
+namespace tsmh::haptics {
+namespace {
+
+using testing::FakeDevice;
+using testing::FakeLink;
+constexpr std::int64_t kMs = 1'000'000;
+
+LoopConfig config(FeedbackSource source = FeedbackSource::kEstimated) {
+  LoopConfig c;
+  c.joints = 2;
+  c.source = source;
+  for (int j = 0; j < 2; ++j) {
+    c.force[j] = {2.0, 1.0, 0.0};
+    c.position[j] = {.scale = 0.5};
+    c.limits[j] = {0.8, 100.0};
+  }
+  return c;
+}
+
+std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators() {
+  std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> v;
+  for (int j = 0; j < 2; ++j)
+    v.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
+        std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), 0.01));
+  return v;
+}
+
+struct Rig {
+  explicit Rig(FeedbackSource s = FeedbackSource::kEstimated, Trace* trace = nullptr)
+      : loop(config(s), device, link, estimators(), trace) {}
+  // Runs `ms` ticks; the slave sends a sample every tick while `alive`.
+  void run(int ms, bool alive = true, double t1 = 30.0, double t3 = 20.0) {
+    for (int i = 0; i < ms; ++i, now += kMs) {
+      if (alive) {
+        x += 1e-3;  // slow forward motion of the motor
+        link.push(now, x, t1, t3);
+      }
+      loop.tick(now);
+    }
+  }
+  FakeDevice device;
+  FakeLink link;
+  HapticLoop loop;
+  std::int64_t now = 1'000 * kMs;
+  double x = 0.0;
+};
+
+TEST(HapticLoop, RendersScaledEstimateOfDistalTorque) {
+  Rig rig;
+  rig.run(1000);
+  ASSERT_EQ(rig.loop.state(), LoopState::kEnabled);
+  const auto& e = rig.loop.estimate(0);
+  ASSERT_TRUE(e.valid);
+  EXPECT_DOUBLE_EQ(e.tau_in, 0.01 * (30.0 - 20.0));
+  EXPECT_NEAR(e.tau_out_est, e.tau_in - 0.01 * e.friction, 1e-12);
+  EXPECT_GT(e.friction, 5.0);  // sliding forward at 1 rad/s
+  EXPECT_NEAR(rig.device.torque[0], 2.0 * e.tau_out_est, 1e-9);
+  EXPECT_TRUE(rig.device.enabled);
+}
+
+TEST(HapticLoop, NaiveAndNoneSources) {
+  Rig naive(FeedbackSource::kNaive);
+  naive.run(1000);
+  EXPECT_NEAR(naive.device.torque[0], 2.0 * 0.1, 1e-9);
+  Rig none(FeedbackSource::kNone);
+  none.run(1000);
+  EXPECT_EQ(none.device.torque[0], 0.0);
+}
+
+TEST(HapticLoop, StaleSlaveFadesTorqueToZeroThenFaultsWhenLost) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(1000);
+  ASSERT_NEAR(rig.device.torque[0], 0.2, 1e-9);
+  rig.device.written.clear();
+  rig.run(100, /*alive=*/false);
+  // Full torque for the first 20 ms of silence, zero after 20 + 50 ms.
+  EXPECT_NEAR(rig.device.written[15], 0.2, 1e-9);
+  EXPECT_GT(rig.device.written[40], 0.0);
+  EXPECT_LT(rig.device.written[40], 0.2);
+  EXPECT_EQ(rig.device.written[75], 0.0);
+  EXPECT_EQ(rig.loop.state(), LoopState::kEnabled) << "a short loss only fades";
+  rig.run(1000, false);
+  EXPECT_EQ(rig.loop.state(), LoopState::kFault);
+  EXPECT_EQ(rig.loop.fault(), FaultReason::kSlaveLost);
+  // The slave comes back: still latched until the dead-man is released.
+  rig.run(10);
+  EXPECT_EQ(rig.loop.state(), LoopState::kFault);
+  rig.device.reading_.buttons.dead_man = false;
+  rig.run(1);
+  EXPECT_EQ(rig.loop.state(), LoopState::kDisabled);
+  rig.device.reading_.buttons.dead_man = true;
+  rig.run(500);
+  EXPECT_EQ(rig.loop.state(), LoopState::kEnabled);
+  EXPECT_NEAR(rig.device.torque[0], 0.2, 1e-9);  // recovered smoothly to full
+}
+
+TEST(HapticLoop, HostileSlaveValuesNeverReachTheDevice) {
+  Rig rig;
+  rig.run(500);
+  for (double bad : {std::nan(""), std::numeric_limits<double>::infinity(), 1e300, -1e300}) {
+    rig.run(50, true, bad, 20.0);
+    for (double w : rig.device.written) {
+      ASSERT_TRUE(std::isfinite(w));
+      ASSERT_LE(std::fabs(w), 0.8);
+    }
+  }
+  EXPECT_GT(rig.loop.counters().nonfinite_requests + rig.loop.counters().saturated_ticks, 0u);
+}
+
+TEST(HapticLoop, EStopAndDeadManZeroTorqueImmediately) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(1000);
+  ASSERT_GT(rig.device.torque[0], 0.1);
+  rig.device.reading_.buttons.dead_man = false;
+  rig.run(1);
+  EXPECT_EQ(rig.device.torque[0], 0.0);
+  EXPECT_FALSE(rig.device.enabled);
+  EXPECT_FALSE(rig.link.commands.back().enable);
+  rig.device.reading_.buttons.dead_man = true;
+  rig.run(500);
+  ASSERT_GT(rig.device.torque[0], 0.1);
+  rig.device.reading_.buttons.e_stop = true;
+  rig.run(1);
+  EXPECT_EQ(rig.device.torque[0], 0.0);
+  EXPECT_EQ(rig.loop.state(), LoopState::kFault);
+  EXPECT_EQ(rig.loop.fault(), FaultReason::kEStop);
+}
+
+TEST(HapticLoop, DeviceDisconnectFaults) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(500);
+  rig.device.reading_.status = master_devices::DeviceStatus::kDisconnected;
+  rig.run(1);
+  EXPECT_EQ(rig.loop.state(), LoopState::kFault);
+  EXPECT_EQ(rig.device.torque[0], 0.0);
+}
+
+TEST(HapticLoop, PositionCommandsFollowMasterWithClutchAndNoJumpOnEnable) {
+  Rig rig;
+  rig.device.reading_.buttons.dead_man = false;
+  rig.device.reading_.q[0] = 0.4;
+  rig.run(10);
+  EXPECT_FALSE(rig.link.commands.back().enable);
+  // Enabling aligns the reference with the slave's joint (x_out = 0 here).
+  rig.device.reading_.buttons.dead_man = true;
+  rig.run(1);
+  EXPECT_TRUE(rig.link.commands.back().enable);
+  EXPECT_DOUBLE_EQ(rig.link.commands.back().position_ref[0], 0.0);
+  rig.device.reading_.q[0] = 0.6;  // master moves 0.2 -> slave 0.1 (scale 0.5)
+  rig.run(1);
+  EXPECT_NEAR(rig.link.commands.back().position_ref[0], 0.1, 1e-12);
+  rig.device.reading_.buttons.clutch = true;
+  rig.device.reading_.q[0] = 1.6;
+  rig.run(1);
+  EXPECT_TRUE(rig.link.commands.back().clutch);
+  EXPECT_NEAR(rig.link.commands.back().position_ref[0], 0.1, 1e-12);
+  rig.device.reading_.buttons.clutch = false;
+  rig.run(1);
+  EXPECT_NEAR(rig.link.commands.back().position_ref[0], 0.1, 1e-12);
+  rig.device.reading_.q[0] = 1.8;
+  rig.run(1);
+  EXPECT_NEAR(rig.link.commands.back().position_ref[0], 0.2, 1e-12);
+}
+
+TEST(HapticLoop, StatusAt100HzAndShutdownWritesZero) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(1000);
+  EXPECT_EQ(rig.link.statuses.size(), 100u);
+  EXPECT_EQ(rig.link.statuses.back().state, 1);
+  EXPECT_NEAR(rig.link.statuses.back().rate_hz, 1000.0, 1e-6);
+  EXPECT_NEAR(rig.link.statuses.back().torque_cmd[0], 0.2, 1e-9);
+  rig.loop.shutdown();
+  EXPECT_EQ(rig.device.torque[0], 0.0);
+  EXPECT_FALSE(rig.device.enabled);
+  EXPECT_FALSE(rig.link.commands.back().enable);
+  rig.run(5);  // ticks after shutdown do nothing
+  EXPECT_EQ(rig.device.torque[0], 0.0);
+}
+
+TEST(HapticLoop, TraceRecordsAndMatchesTruthBySequence) {
+  Trace trace(2, 100);
+  Rig rig(FeedbackSource::kEstimated, &trace);
+  rig.link.truth_version = 1;
+  rig.link.truth.num_joints = 2;
+  rig.link.truth.tau_out[0] = 0.05;
+  for (int i = 0; i < 150; ++i) {
+    rig.link.truth.seq = (i % 2 == 0) ? static_cast<std::int64_t>(rig.link.version) : -7;
+    rig.run(1);
+  }
+  EXPECT_EQ(trace.size(), 100u);
+  EXPECT_EQ(trace.dropped(), 50u);
+  EXPECT_DOUBLE_EQ(trace[0].joints[0].true_tau_out, 0.05);
+  EXPECT_TRUE(std::isnan(trace[1].joints[0].true_tau_out));
+}
+
+}  // namespace
+}  // namespace tsmh::haptics
