@@ -52,20 +52,16 @@ std::shared_ptr<EmulatorBus> make_emulator(FieldReader& r, const DeviceProfile& 
     for (std::size_t j = 0; j < dof; ++j)
       options.firmware.joints[j].inertia_kgm2 += hand.inertia_kgm2;
     auto t = std::make_shared<double>(0.0);
-    std::vector<int> dir;
-    for (const auto& jp : profile.joints)
-      dir.push_back(jp.direction);
-    options.world = [scenario, hand, t, dir, buttons](Firmware& fw, std::int64_t dt_ns) {
+    options.world = [scenario, hand, t, dof, buttons](Firmware& fw, std::int64_t dt_ns) {
       *t += static_cast<double>(dt_ns) * 1e-9;
       fw.set_buttons(buttons);
-      const Intention in = intention_at(scenario, *t, dir.size());
-      for (std::size_t j = 0; j < dir.size(); ++j) {
-        // Joint frame = direction x mechanism frame, for angle and torque.
-        const double q = dir[j] * fw.position_rad(j);
-        const double qd = dir[j] * fw.velocity_rad_s(j);
-        const double tau =
-            hand.stiffness_nm_per_rad * (in.q[j] - q) + hand.damping_nms_per_rad * (in.qd[j] - qd);
-        fw.set_external_torque(j, dir[j] * tau);
+      const Intention in = intention_at(scenario, *t, dof);
+      // The mechanism frame is the joint frame (the profile's direction and
+      // zero offset undo the mounting), so the hand acts on it directly.
+      for (std::size_t j = 0; j < dof; ++j) {
+        const double tau = hand.stiffness_nm_per_rad * (in.q[j] - fw.position_rad(j)) +
+                           hand.damping_nms_per_rad * (in.qd[j] - fw.velocity_rad_s(j));
+        fw.set_external_torque(j, tau);
       }
     };
   }
@@ -93,7 +89,7 @@ FirmwareConfig firmware_for_profile(const DeviceProfile& profile) {
     c.info.max_current_ma[j] = static_cast<std::uint16_t>(std::min<long>(
         protocol::kMaxCurrentMa, std::lround(std::ceil(jp.current_limit_peak_a * 1000.0))));
     c.encoder_offset_counts[j] = jp.zero_offset_counts;
-    c.encoder_direction[j] = static_cast<std::int8_t>(jp.direction);
+    c.mount_direction[j] = static_cast<std::int8_t>(jp.direction);
     c.joints[j].torque_constant_nm_per_a = jp.torque_constant_nm_per_a;
     c.joints[j].position_min_rad = jp.position_min_rad - 0.1;
     c.joints[j].position_max_rad = jp.position_max_rad + 0.1;

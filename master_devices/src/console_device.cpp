@@ -248,6 +248,7 @@ void ConsoleDevice::supervise() {
       // and callbacks (on_link_lost) take this lock.
       std::unique_ptr<Transport> t = std::move(transport_);
       connected_path_.clear();
+      loss_reason_ = last_error();
       link_lost_ = false;
       lock.unlock();
       if (t) t->stop();
@@ -260,8 +261,9 @@ void ConsoleDevice::supervise() {
       try {
         connect();
         n_reconnects_++;
+        loss_reason_.clear();
       } catch (const std::exception& e) {
-        set_error(e.what());
+        set_error(loss_reason_.empty() ? e.what() : loss_reason_ + "; reconnecting: " + e.what());
       }
       lock.lock();
     }

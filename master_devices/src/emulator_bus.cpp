@@ -83,7 +83,8 @@ class EmulatorTransport final : public Transport {
 EmulatorBus::EmulatorBus(Options options)
     : options_(std::move(options)),
       period_ns_(1'000'000'000LL / std::max<int>(1, options_.firmware.info.nominal_rate_hz)),
-      firmware_(options_.firmware) {
+      firmware_(options_.firmware),
+      plugged_(!options_.start_unplugged) {
   if (options_.clock == Clock::kRealTime) clock_thread_ = std::thread([this] { run_clock(); });
 }
 
@@ -152,6 +153,11 @@ void EmulatorBus::tick() {
   tick_once();
 }
 
+void EmulatorBus::corrupt_next_input_reports(int n) {
+  std::lock_guard lock(mutex_);
+  corrupt_ = n;
+}
+
 void EmulatorBus::tick_once() {
   std::array<std::uint8_t, protocol::kMaxReportSize> report{};
   std::size_t size = 0;
@@ -169,6 +175,10 @@ void EmulatorBus::tick_once() {
       deliver_lost = true;
     } else {
       size = firmware_.make_input_report(report);
+      if (corrupt_ > 0) {
+        --corrupt_;
+        report[8] ^= 0x10;  // inside counts[0]: only the CRC can tell
+      }
     }
   }
   std::lock_guard delivery(delivery_mutex_);

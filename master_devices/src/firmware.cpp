@@ -17,7 +17,7 @@ FirmwareConfig default_console_firmware() {
   c.info.max_current_ma = {4000, 4000};
   c.info.default_watchdog_ms = 50;
   c.encoder_offset_counts = {0, 0};
-  c.encoder_direction = {1, 1};
+  c.mount_direction = {1, 1};
   return c;
 }
 
@@ -35,7 +35,8 @@ bool Firmware::motors_on() const {
 }
 
 double Firmware::applied_torque_nm(std::size_t j) const {
-  return applied_current_a(j) * config_.joints[j].torque_constant_nm_per_a;
+  return config_.mount_direction[j] * applied_current_a(j) *
+         config_.joints[j].torque_constant_nm_per_a;
 }
 
 void Firmware::update_applied_current() {
@@ -86,7 +87,7 @@ std::int32_t Firmware::encoder_counts(std::size_t j) const {
   if (j >= config_.info.dof) return 0;
   const double counts_per_rad = config_.info.counts_per_rev[j] / (2.0 * std::numbers::pi);
   const double raw = config_.encoder_offset_counts[j] +
-                     config_.encoder_direction[j] * std::floor(q_[j] * counts_per_rad + 0.5);
+                     config_.mount_direction[j] * std::floor(q_[j] * counts_per_rad + 0.5);
   // A real 24-bit counter wraps; clamping keeps the emulator's reports valid.
   return static_cast<std::int32_t>(
       std::clamp(raw, double{protocol::kCountsMin}, double{protocol::kCountsMax}));

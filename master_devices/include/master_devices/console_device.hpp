@@ -136,6 +136,7 @@ class ConsoleDevice final : public Device, private TransportListener {
   mutable std::mutex mutex_;  // guards the fields below and error_
   std::condition_variable wake_;
   bool link_lost_ = false;
+  std::string loss_reason_;  // why the link went down, kept for reconnect errors
   bool arrival_ = false;
   bool stopping_ = false;
   std::unique_ptr<Transport> transport_;

@@ -39,6 +39,8 @@ class EmulatorBus final : public TransportProvider {
     /// Called on the bus's clock (the firmware locked) before each firmware
     /// step, e.g. to apply an operator's hand torque. Optional.
     std::function<void(Firmware&, std::int64_t dt_ns)> world;
+    /// Start unplugged (replug() plugs it in).
+    bool start_unplugged = false;
   };
 
   explicit EmulatorBus(Options options);
@@ -59,6 +61,9 @@ class EmulatorBus final : public TransportProvider {
   bool plugged() const;
   /// kManual only: one firmware period, then one input report to the open transport.
   void tick();
+  /// Flips one bit in each of the next `n` input reports (a noisy link or a
+  /// firmware bug): the host must drop them, and fault after too many.
+  void corrupt_next_input_reports(int n);
   /// Runs `f` with the firmware locked (buttons, hand torque, observation).
   void with_firmware(const std::function<void(Firmware&)>& f);
   std::int64_t period_ns() const { return period_ns_; }
@@ -76,6 +81,7 @@ class EmulatorBus final : public TransportProvider {
   std::mutex delivery_mutex_;  // held while a listener callback runs
   Firmware firmware_;
   bool plugged_ = true;
+  int corrupt_ = 0;
   std::shared_ptr<Session> session_;  // the open transport, if any
   std::function<void()> arrival_;
   std::atomic<bool> stopping_{false};

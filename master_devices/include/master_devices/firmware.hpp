@@ -35,8 +35,9 @@ struct FirmwareConfig {
   protocol::DeviceInfo info;  ///< what the DEVICE_INFO feature report says
   /// Raw encoder count at mechanism angle 0 (what a profile's zero offset undoes).
   std::array<std::int32_t, protocol::kJoints> encoder_offset_counts{};
-  /// Sign of counts relative to the mechanism angle (what a profile's direction undoes).
-  std::array<std::int8_t, protocol::kJoints> encoder_direction{1, 1};
+  /// A joint mounted reversed (-1): encoder counts and motor torque both have
+  /// the opposite sign of the mechanism frame (what a profile's direction undoes).
+  std::array<std::int8_t, protocol::kJoints> mount_direction{1, 1};
   std::array<MechanismJoint, protocol::kJoints> joints{};
 };
 

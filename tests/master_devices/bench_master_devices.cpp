@@ -1,0 +1,170 @@
+// bench_master_devices: numbers for the master device layer (not a test).
+//   codec and lock-free cell costs; a 1 kHz loop against the real-time
+//   emulator through the console driver (reading age, call costs, lateness);
+//   unplug detection and replug recovery times; sim device speed in
+//   simulated time.
+// Usage: bench_master_devices [seconds-of-1kHz-run, default 5]
+
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <thread>
+#include <vector>
+
+#include "master_devices/builtin_drivers.hpp"
+#include "master_devices/clock.hpp"
+#include "master_devices/console_device.hpp"
+#include "master_devices/emulator_bus.hpp"
+#include "master_devices/latest_value.hpp"
+#include "master_devices/protocol.hpp"
+#include "master_devices/sim_device.hpp"
+
+namespace md = tsmh::master_devices;
+namespace p = tsmh::master_devices::protocol;
+
+namespace {
+
+struct Percentiles {
+  double p50, p99, p999, max;
+};
+
+Percentiles percentiles(std::vector<double> v) {
+  if (v.empty()) return {0, 0, 0, 0};
+  std::sort(v.begin(), v.end());
+  auto at = [&](double q) {
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * v.size()))];
+  };
+  return {at(0.5), at(0.99), at(0.999), v.back()};
+}
+
+void print(const char* what, const char* unit, const Percentiles& p) {
+  std::printf("  %-34s p50 %8.2f  p99 %8.2f  p99.9 %8.2f  max %8.2f %s\n", what, p.p50, p.p99,
+              p.p999, p.max, unit);
+}
+
+template <class F>
+double ns_per_op(int n, F&& f) {
+  const std::int64_t t0 = md::monotonic_ns();
+  for (int i = 0; i < n; ++i)
+    f(i);
+  return static_cast<double>(md::monotonic_ns() - t0) / n;
+}
+
+void sleep_until(std::int64_t t_ns) {
+  timespec ts{static_cast<time_t>(t_ns / 1'000'000'000), static_cast<long>(t_ns % 1'000'000'000)};
+  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const double seconds = argc > 1 ? std::atof(argv[1]) : 5.0;
+
+  std::printf("== codec (single thread)\n");
+  {
+    std::array<std::uint8_t, p::kMaxReportSize> buf{};
+    p::InputReport in;
+    in.counts = {123456, -654321};
+    volatile std::size_t sink = 0;
+    const double enc = ns_per_op(1'000'000, [&](int i) {
+      in.sequence = static_cast<std::uint16_t>(i);
+      sink = sink + p::encode(in, buf).value;
+    });
+    const std::span<const std::uint8_t> bytes(buf.data(), p::kInputReportSize);
+    const double dec =
+        ns_per_op(1'000'000, [&](int) { sink = sink + p::decode_input(bytes).value.sequence; });
+    std::printf("  encode input report %.1f ns, decode input report %.1f ns\n", enc, dec);
+  }
+
+  std::printf("== LatestValue<DeviceReading> (single thread)\n");
+  {
+    md::LatestValue<md::DeviceReading> cell;
+    md::DeviceReading r;
+    const double both = ns_per_op(1'000'000, [&](int i) {
+      r.sequence = static_cast<std::uint64_t>(i);
+      cell.publish(r);
+      cell.fetch(r);
+    });
+    std::printf("  publish + fetch %.1f ns (sizeof reading %zu bytes)\n", both,
+                sizeof(md::DeviceReading));
+  }
+
+  std::printf("== 1 kHz loop vs real-time emulator through the console driver, %.1f s\n", seconds);
+  {
+    md::EmulatorBus::Options o;
+    o.clock = md::EmulatorBus::Clock::kRealTime;
+    o.firmware = md::firmware_for_profile(md::builtin_console_profile());
+    auto bus = std::make_shared<md::EmulatorBus>(o);
+    md::ConsoleSettings cs;
+    cs.reconnect_interval_ms = 20;
+    md::ConsoleDevice dev("emulator", md::builtin_console_profile(), cs, bus);
+    dev.open();
+    dev.set_enabled(true);
+    std::vector<double> age_us, read_ns, write_ns, late_us;
+    const int ticks = static_cast<int>(seconds * 1000);
+    int fresh = 0;
+    int unplug_at = ticks / 2;
+    int detected_after = -1;
+    int recovered_after = -1;
+    std::int64_t next = md::monotonic_ns();
+    for (int k = 0; k < ticks; ++k) {
+      next += 1'000'000;
+      sleep_until(next);
+      const std::int64_t now = md::monotonic_ns();
+      late_us.push_back((now - next) * 1e-3);
+      if (k == unplug_at) bus->unplug();
+      if (k == unplug_at + 100) bus->replug();
+      const std::int64_t t0 = md::monotonic_ns();
+      const md::DeviceReading r = dev.read(now);
+      const std::int64_t t1 = md::monotonic_ns();
+      dev.write_torque(md::JointArray{0.05 * std::sin(k * 0.01), 0.0});
+      const std::int64_t t2 = md::monotonic_ns();
+      read_ns.push_back(static_cast<double>(t1 - t0));
+      write_ns.push_back(static_cast<double>(t2 - t1));
+      if (k >= unplug_at && detected_after < 0 && r.status == md::DeviceStatus::kDisconnected) {
+        detected_after = k - unplug_at;
+      }
+      if (k > unplug_at + 100 && recovered_after < 0 && r.status == md::DeviceStatus::kOk) {
+        recovered_after = k - (unplug_at + 100);
+        dev.set_enabled(true);
+      }
+      if (r.status == md::DeviceStatus::kOk) {
+        age_us.push_back((now - r.t_ns) * 1e-3);
+        fresh += r.fresh ? 1 : 0;
+      }
+    }
+    const md::ConsoleStats s = dev.stats();
+    print("reading age at read()", "us", percentiles(age_us));
+    print("read() cost", "ns", percentiles(read_ns));
+    print("write_torque() cost", "ns", percentiles(write_ns));
+    print("loop wake-up lateness", "us", percentiles(late_us));
+    std::printf(
+        "  fresh readings %d of %zu OK ticks; reports %llu, lost %llu, bad %llu, outputs %llu\n",
+        fresh, age_us.size(), static_cast<unsigned long long>(s.reports),
+        static_cast<unsigned long long>(s.lost_reports),
+        static_cast<unsigned long long>(s.bad_reports),
+        static_cast<unsigned long long>(s.outputs_sent));
+    std::printf("  unplug seen by the loop after %d tick(s); replug back to OK after %d ms\n",
+                detected_after, recovered_after);
+    dev.close();
+  }
+
+  std::printf("== sim device, simulated time (palpate, feedback from a wall)\n");
+  {
+    md::SimSettings s;
+    s.simulated_time = true;
+    md::SimDevice dev(s);
+    dev.open();
+    dev.set_enabled(true);
+    const int n = 200'000;
+    const double per_tick = ns_per_op(n, [&](int k) {
+      const md::DeviceReading r = dev.read(static_cast<std::int64_t>(k) * 1'000'000);
+      dev.write_torque(md::JointArray{-2.0 * std::max(0.0, r.q[0] - 0.1), 0.0});
+    });
+    std::printf("  %.0f ns per 1 ms tick: %.0fx faster than real time\n", per_tick, 1e6 / per_tick);
+  }
+  return 0;
+}

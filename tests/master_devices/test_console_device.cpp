@@ -1,0 +1,456 @@
+// The console driver (the code behind `hid`, `usb` and `emulator`) against
+// the emulated firmware: handshake, 1 kHz read/write, limits, unplug and
+// replug, faults, malformed reports. Manual-clock tests tick the emulator
+// one firmware period at a time on the test thread, so they are exact.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "master_devices/builtin_drivers.hpp"
+#include "master_devices/clock.hpp"
+#include "master_devices/console_device.hpp"
+#include "master_devices/emulator_bus.hpp"
+
+namespace tsmh::master_devices {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct Rig {
+  std::shared_ptr<EmulatorBus> bus;
+  std::unique_ptr<ConsoleDevice> device;
+
+  explicit Rig(ConsoleSettings settings = {}, DeviceProfile profile = builtin_console_profile(),
+               EmulatorBus::Options options = manual_options()) {
+    bus = std::make_shared<EmulatorBus>(std::move(options));
+    device =
+        std::make_unique<ConsoleDevice>("emulator", std::move(profile), std::move(settings), bus);
+  }
+
+  static EmulatorBus::Options manual_options() {
+    EmulatorBus::Options o;
+    o.clock = EmulatorBus::Clock::kManual;
+    o.firmware = firmware_for_profile(builtin_console_profile());
+    return o;
+  }
+
+  // One loop cycle: the device produces a report (and gets our previous
+  // command back), then the loop reads.
+  DeviceReading cycle() {
+    bus->tick();
+    return device->read(monotonic_ns());
+  }
+
+  double applied_torque(std::size_t j) {
+    double tau = 0;
+    bus->with_firmware([&](Firmware& fw) { tau = fw.applied_torque_nm(j); });
+    return tau;
+  }
+
+  // Ticks (in real time, so the supervisor thread can reconnect) until the
+  // device is OK again; bounded so a broken reconnect fails instead of hanging.
+  bool wait_ok(std::chrono::milliseconds limit = 3000ms) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < end) {
+      if (cycle().status == DeviceStatus::kOk) return true;
+      std::this_thread::sleep_for(1ms);
+    }
+    return false;
+  }
+};
+
+TEST(ConsoleDevice, OpensAndProgramsTheProfileIntoTheFirmware) {
+  Rig rig;
+  rig.device->open();
+  EXPECT_EQ(rig.device->status(), DeviceStatus::kOk);
+  EXPECT_EQ(rig.device->connected_path(), "emu:0");
+  rig.bus->with_firmware([](Firmware& fw) {
+    EXPECT_EQ(fw.calibration().watchdog_ms, 50);
+    EXPECT_EQ(fw.calibration().current_limit_ma[0], 3000);
+    EXPECT_EQ(fw.calibration().current_limit_ma[1], 3000);
+  });
+  const DeviceReading first = rig.cycle();
+  EXPECT_EQ(first.status, DeviceStatus::kOk);
+  EXPECT_TRUE(first.fresh);
+  EXPECT_EQ(first.sequence, 1u);
+  EXPECT_FALSE(first.enabled) << "torque starts disabled";
+  EXPECT_EQ(rig.device->spec().dof, 2u);
+  EXPECT_EQ(rig.device->spec().driver, "emulator");
+}
+
+TEST(ConsoleDevice, ReadsAndWritesEveryCycleAtOneKilohertz) {
+  Rig rig;
+  rig.device->open();
+  rig.device->set_enabled(true);
+  std::uint64_t expected_seq = 0;
+  int torque_ok = 0;
+  int position_ok = 0;
+  for (int k = 0; k < 1000; ++k) {
+    const DeviceReading r = rig.cycle();
+    ASSERT_EQ(r.status, DeviceStatus::kOk) << "cycle " << k;
+    ASSERT_TRUE(r.fresh) << "cycle " << k;
+    ASSERT_EQ(r.sequence, ++expected_seq);
+    // The loop's command of the previous cycle is what the firmware applies now.
+    const double cmd = 0.1 * std::sin(2 * 3.141592653589793 * 2.0 * k / 1000.0);
+    if (k > 0) {
+      const double prev = 0.1 * std::sin(2 * 3.141592653589793 * 2.0 * (k - 1) / 1000.0);
+      if (std::abs(rig.applied_torque(0) - prev) < 1e-3 &&
+          std::abs(rig.applied_torque(1) + prev) < 1e-3) {
+        ++torque_ok;
+      }
+    }
+    double q_true = 0;
+    rig.bus->with_firmware([&](Firmware& fw) { q_true = fw.position_rad(0); });
+    if (std::abs(r.q[0] - q_true) <= 1.0 / 6518.0) ++position_ok;
+    rig.device->write_torque(JointArray{cmd, -cmd});
+  }
+  EXPECT_EQ(torque_ok, 999);
+  EXPECT_EQ(position_ok, 1000);
+  const ConsoleStats s = rig.device->stats();
+  EXPECT_EQ(s.reports, 1000u);
+  EXPECT_EQ(s.lost_reports, 0u);
+  EXPECT_EQ(s.bad_reports, 0u);
+  EXPECT_EQ(s.outputs_sent, 1000u);
+  rig.bus->with_firmware([](Firmware& fw) {
+    EXPECT_EQ(fw.stats().output_accepted, 1000u);
+    EXPECT_EQ(fw.stats().output_rejected, 0u);
+    EXPECT_EQ(fw.stats().watchdog_trips, 0u);
+  });
+}
+
+TEST(ConsoleDevice, VelocityComesFromTheDeviceClock) {
+  Rig rig;
+  rig.device->open();
+  rig.device->set_enabled(true);
+  DeviceReading r;
+  for (int k = 0; k < 200; ++k) {
+    r = rig.cycle();
+    rig.device->write_torque(JointArray{0.01, 0.0});
+  }
+  double qd_true = 0;
+  rig.bus->with_firmware([&](Firmware& fw) { qd_true = fw.velocity_rad_s(0); });
+  EXPECT_GT(qd_true, 0.5);
+  EXPECT_NEAR(r.qd[0], qd_true, 0.05 * qd_true + 0.05);
+}
+
+TEST(ConsoleDevice, NoTorqueWhileDisabledAndTorqueClampedToPeak) {
+  Rig rig;
+  rig.device->open();
+  for (int k = 0; k < 10; ++k) {
+    rig.cycle();
+    rig.device->write_torque(JointArray{0.2, 0.2});
+  }
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{5.0, -5.0});  // far above the 0.3 N m peak
+  rig.cycle();
+  const DeviceReading r = rig.cycle();
+  EXPECT_NEAR(rig.applied_torque(0), 0.3, 1e-6);
+  EXPECT_NEAR(rig.applied_torque(1), -0.3, 1e-6);
+  EXPECT_NEAR(r.tau_commanded[0], 0.3, 1e-6);
+  EXPECT_TRUE(r.enabled);
+  rig.device->write_torque(JointArray{std::nan(""), 0.1});
+  rig.cycle();
+  EXPECT_EQ(rig.applied_torque(0), 0.0) << "NaN commands become zero";
+}
+
+TEST(ConsoleDevice, TorqueStopsWhenTheLoopStopsWriting) {
+  ConsoleSettings s;
+  s.command_timeout_ms = 5;
+  Rig rig(s);
+  rig.device->open();
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{0.1, 0.1});
+  rig.cycle();
+  rig.cycle();
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+  std::this_thread::sleep_for(15ms);  // the loop "hangs": no write_torque() for > 5 ms
+  rig.cycle();
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
+}
+
+TEST(ConsoleDevice, UnplugIsDetectedWithinOneCycleWithZeroTorqueAndReplugRecovers) {
+  ConsoleSettings s;
+  s.reconnect_interval_ms = 10;
+  Rig rig(s);
+  rig.device->open();
+  rig.device->set_enabled(true);
+  for (int k = 0; k < 500; ++k) {
+    ASSERT_EQ(rig.cycle().status, DeviceStatus::kOk);
+    rig.device->write_torque(JointArray{0.1, -0.1});
+  }
+  EXPECT_NE(rig.applied_torque(0), 0.0);
+
+  rig.bus->unplug();
+  const DeviceReading after = rig.cycle();  // the very next cycle
+  EXPECT_EQ(after.status, DeviceStatus::kDisconnected);
+  EXPECT_FALSE(after.enabled);
+  EXPECT_EQ(after.tau_commanded[0], 0.0);
+  EXPECT_EQ(after.tau_commanded[1], 0.0);
+  EXPECT_EQ(rig.applied_torque(0), 0.0) << "the console itself drops torque on link loss";
+  EXPECT_EQ(rig.applied_torque(1), 0.0);
+  EXPECT_NE(rig.device->last_error().find("link lost"), std::string::npos);
+
+  // Stays disconnected while unplugged, the loop keeps running.
+  for (int k = 0; k < 20; ++k) {
+    EXPECT_EQ(rig.cycle().status, DeviceStatus::kDisconnected);
+    rig.device->write_torque(JointArray{0.1, -0.1});
+    std::this_thread::sleep_for(1ms);
+  }
+
+  rig.bus->replug();
+  ASSERT_TRUE(rig.wait_ok()) << rig.device->last_error();
+  EXPECT_EQ(rig.device->stats().reconnects, 1u);
+  EXPECT_EQ(rig.device->stats().disconnects, 1u);
+  // Back, but disabled until the host enables again.
+  for (int k = 0; k < 5; ++k) {
+    rig.device->write_torque(JointArray{0.1, -0.1});
+    EXPECT_FALSE(rig.cycle().enabled);
+  }
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{0.1, -0.1});
+  rig.cycle();
+  const DeviceReading r = rig.cycle();
+  EXPECT_TRUE(r.enabled);
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+}
+
+TEST(ConsoleDevice, OpenFailsClearlyWithoutADeviceUnlessToldToWait) {
+  EmulatorBus::Options o = Rig::manual_options();
+  o.start_unplugged = true;
+  {
+    Rig rig({}, builtin_console_profile(), o);
+    try {
+      rig.device->open();
+      FAIL() << "open() without a device must throw";
+    } catch (const DeviceError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("1209:0001"), std::string::npos) << what;
+      EXPECT_NE(what.find("tsm-console-2dof"), std::string::npos) << what;
+    }
+  }
+  ConsoleSettings s;
+  s.wait_for_device = true;
+  s.reconnect_interval_ms = 10;
+  Rig rig(s, builtin_console_profile(), o);
+  rig.device->open();
+  EXPECT_EQ(rig.cycle().status, DeviceStatus::kDisconnected);
+  rig.bus->replug();
+  EXPECT_TRUE(rig.wait_ok()) << rig.device->last_error();
+}
+
+TEST(ConsoleDevice, SelectsTheDeviceByPathAndSerial) {
+  ConsoleSettings s;
+  s.serial = "SOMEONE-ELSE";
+  Rig rig(s);
+  try {
+    rig.device->open();
+    FAIL();
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("present: emu:0 (serial EMU-0001)"), std::string::npos)
+        << e.what();
+  }
+  ConsoleSettings ok;
+  ok.path = "emu:0";
+  ok.serial = "EMU-0001";
+  Rig rig2(ok);
+  EXPECT_NO_THROW(rig2.device->open());
+}
+
+TEST(ConsoleDevice, RefusesAProfileThatDoesNotMatchTheDevice) {
+  DeviceProfile wrong = builtin_console_profile();
+  wrong.joints[1].counts_per_rad *= 2.0;
+  Rig a({}, wrong);
+  try {
+    a.device->open();
+    FAIL();
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("joints[1].counts_per_rad"), std::string::npos)
+        << e.what();
+  }
+  DeviceProfile greedy = builtin_console_profile();
+  greedy.joints[0].current_limit_peak_a = 5.0;  // the device can do 3 A
+  Rig b({}, greedy);
+  try {
+    b.device->open();
+    FAIL();
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("joints[0].current_limit_peak_a"), std::string::npos)
+        << e.what();
+  }
+  DeviceProfile one = builtin_console_profile();
+  one.joints.pop_back();
+  Rig c({}, one);
+  EXPECT_THROW(c.device->open(), DeviceError);
+}
+
+TEST(ConsoleDevice, ZeroOffsetAndDirectionFromTheProfile) {
+  DeviceProfile p = builtin_console_profile();
+  p.joints[0].zero_offset_counts = 12345;
+  p.joints[0].direction = -1;
+  EmulatorBus::Options o = Rig::manual_options();
+  o.firmware = firmware_for_profile(p);  // a console mounted that way
+  Rig rig({}, p, o);
+  rig.device->open();
+  rig.bus->with_firmware([](Firmware& fw) { fw.set_position(0, -0.4); });  // mechanism frame
+  // The profile's offset and direction undo the mounting: the joint angle is
+  // the mechanism's, although the raw counts run the other way from 12345.
+  const DeviceReading r = rig.cycle();
+  EXPECT_NEAR(r.q[0], -0.4, 1e-3);
+  // Positive joint torque pushes the joint positive (a negative motor current).
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{0.1, 0.0});
+  rig.cycle();
+  rig.cycle();
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+  double current = 0;
+  rig.bus->with_firmware([&](Firmware& fw) { current = fw.applied_current_a(0); });
+  EXPECT_NEAR(current, -1.0, 1e-6);
+}
+
+TEST(ConsoleDevice, DeviceFaultLatchesZeroTorqueAndClears) {
+  EmulatorBus::Options o = Rig::manual_options();
+  o.clock = EmulatorBus::Clock::kRealTime;  // clear_fault() needs reports to flow
+  Rig rig({}, builtin_console_profile(), o);
+  rig.device->open();
+  rig.device->set_enabled(true);
+  std::atomic<bool> stop{false};
+  std::thread loop([&] {
+    while (!stop) {
+      rig.device->write_torque(JointArray{0.05, 0.05});
+      std::this_thread::sleep_for(1ms);
+    }
+  });
+  std::this_thread::sleep_for(30ms);
+  rig.bus->with_firmware(
+      [](Firmware& fw) { fw.inject_fault(protocol::FirmwareFault::kOverCurrent); });
+  std::this_thread::sleep_for(30ms);
+  EXPECT_EQ(rig.device->status(), DeviceStatus::kFault);
+  const DeviceReading r = rig.device->read(monotonic_ns());
+  EXPECT_EQ(r.fault, FaultCode::kDeviceReported);
+  EXPECT_EQ(r.tau_commanded[0], 0.0);
+  EXPECT_NE(rig.device->last_error().find("over-current"), std::string::npos)
+      << rig.device->last_error();
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
+  EXPECT_TRUE(rig.device->clear_fault());
+  EXPECT_EQ(rig.device->status(), DeviceStatus::kOk);
+  EXPECT_FALSE(rig.device->read(monotonic_ns()).enabled)
+      << "a cleared fault leaves torque disabled";
+  stop = true;
+  loop.join();
+}
+
+TEST(ConsoleDevice, WorkspaceViolationIsAFaultNamingTheJoint) {
+  Rig rig;
+  rig.device->open();
+  rig.device->set_enabled(true);
+  rig.cycle();
+  rig.bus->with_firmware([](Firmware& fw) { fw.set_position(1, 1.5); });  // workspace 1.0 + 0.2
+  const DeviceReading r = rig.cycle();
+  EXPECT_EQ(r.status, DeviceStatus::kFault);
+  EXPECT_EQ(r.fault, FaultCode::kWorkspace);
+  EXPECT_NE(rig.device->last_error().find("joint 1 at 1.4"), std::string::npos)
+      << rig.device->last_error();
+  rig.device->write_torque(JointArray{0.1, 0.1});
+  rig.cycle();
+  EXPECT_EQ(rig.applied_torque(1), 0.0);
+}
+
+TEST(ConsoleDevice, MalformedReportsAreDroppedAndTooManyFault) {
+  ConsoleSettings s;
+  s.max_bad_reports = 5;
+  Rig rig(s);
+  rig.device->open();
+  rig.cycle();
+  rig.bus->corrupt_next_input_reports(3);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_FALSE(rig.cycle().fresh) << "a corrupt report is no reading";
+  DeviceReading r = rig.cycle();
+  EXPECT_TRUE(r.fresh);
+  EXPECT_EQ(r.status, DeviceStatus::kOk) << "a few bad reports are survivable";
+  EXPECT_EQ(rig.device->stats().bad_reports, 3u);
+  EXPECT_NE(rig.device->last_error().find("bad CRC"), std::string::npos)
+      << rig.device->last_error();
+  rig.bus->corrupt_next_input_reports(5);
+  for (int k = 0; k < 5; ++k)
+    r = rig.cycle();
+  EXPECT_EQ(r.status, DeviceStatus::kFault);
+  EXPECT_EQ(r.fault, FaultCode::kBadReports);
+}
+
+TEST(ConsoleDevice, HostRaisedFaultZeroesTorque) {
+  Rig rig;
+  rig.device->open();
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{0.1, 0.1});
+  rig.cycle();
+  rig.device->raise_fault(FaultCode::kHostRequested);
+  rig.cycle();
+  const DeviceReading r = rig.cycle();
+  EXPECT_EQ(r.status, DeviceStatus::kFault);
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
+  EXPECT_EQ(rig.device->last_error(), "fault raised by the host");
+}
+
+TEST(ConsoleDevice, StaleReadingsReadAsDisconnected) {
+  ConsoleSettings s;
+  s.stale_timeout_ms = 5;
+  Rig rig(s);
+  rig.device->open();
+  EXPECT_EQ(rig.cycle().status, DeviceStatus::kOk);
+  std::this_thread::sleep_for(10ms);  // the device goes silent (no tick)
+  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected);
+}
+
+TEST(ConsoleDevice, CloseSendsZeroAndDisable) {
+  EmulatorBus::Options o = Rig::manual_options();
+  o.clock = EmulatorBus::Clock::kRealTime;
+  Rig rig({}, builtin_console_profile(), o);
+  rig.device->open();
+  rig.device->set_enabled(true);
+  for (int k = 0; k < 20; ++k) {
+    rig.device->write_torque(JointArray{0.1, 0.1});
+    std::this_thread::sleep_for(1ms);
+  }
+  rig.device->close();
+  EXPECT_EQ(rig.device->status(), DeviceStatus::kClosed);
+  bool enabled = true;
+  rig.bus->with_firmware([&](Firmware& fw) { enabled = fw.torque_enabled(); });
+  EXPECT_FALSE(enabled);
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
+}
+
+TEST(ConsoleDevice, RealTimeEmulatorStreamsToAOneKilohertzLoop) {
+  EmulatorBus::Options o = Rig::manual_options();
+  o.clock = EmulatorBus::Clock::kRealTime;
+  Rig rig({}, builtin_console_profile(), o);
+  rig.device->open();
+  rig.device->set_enabled(true);
+  std::uint64_t fresh = 0;
+  std::uint64_t last_seq = 0;
+  bool monotonic = true;
+  std::int64_t next = monotonic_ns();
+  for (int k = 0; k < 300; ++k) {
+    next += 1'000'000;
+    timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    const DeviceReading r = rig.device->read(monotonic_ns());
+    fresh += r.fresh ? 1 : 0;
+    monotonic = monotonic && r.sequence >= last_seq;
+    last_seq = r.sequence;
+    rig.device->write_torque(JointArray{0.05, -0.05});
+  }
+  EXPECT_TRUE(monotonic);
+  EXPECT_GT(fresh, 0u);
+  EXPECT_GT(rig.device->stats().outputs_sent, 0u);
+  EXPECT_EQ(rig.device->stats().bad_reports, 0u);
+  EXPECT_NEAR(rig.applied_torque(0), 0.05, 1e-6);
+}
+
+}  // namespace
+}  // namespace tsmh::master_devices

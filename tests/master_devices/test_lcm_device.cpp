@@ -1,0 +1,165 @@
+// The lcm driver against an "external driver" in the same process, over an
+// in-memory LCM provider (memq://), so no network or multicast route is needed.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <lcm/lcm-cpp.hpp>
+#include <mutex>
+#include <thread>
+#include <tsmh/master_force_t.hpp>
+#include <tsmh/master_state_t.hpp>
+#include <vector>
+
+#include "master_devices/clock.hpp"
+#include "master_devices/lcm_device.hpp"
+
+namespace tsmh::master_devices {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct ForceLog {
+  std::mutex mutex;
+  std::vector<tsmh::master_force_t> forces;
+  void on_force(const lcm::ReceiveBuffer*, const std::string&, const tsmh::master_force_t* msg) {
+    std::lock_guard lock(mutex);
+    forces.push_back(*msg);
+  }
+  tsmh::master_force_t last() {
+    std::lock_guard lock(mutex);
+    return forces.empty() ? tsmh::master_force_t{} : forces.back();
+  }
+  std::size_t count() {
+    std::lock_guard lock(mutex);
+    return forces.size();
+  }
+};
+
+struct Rig {
+  std::shared_ptr<lcm::LCM> lcm = std::make_shared<lcm::LCM>("memq://");
+  ForceLog log;
+  std::unique_ptr<LcmDevice> device;
+  std::int64_t seq = 0;
+
+  explicit Rig(LcmSettings s = {}) {
+    if (s.peak_torque_nm[0] == 0.0) {
+      for (std::size_t j = 0; j < s.dof; ++j) {
+        s.peak_torque_nm[j] = 0.3;
+        s.continuous_torque_nm[j] = 0.15;
+        s.position_min_rad[j] = -1;
+        s.position_max_rad[j] = 1;
+      }
+    }
+    lcm->subscribe(s.force_channel(), &ForceLog::on_force, &log);
+    device = std::make_unique<LcmDevice>(s, lcm);
+    device->open();
+  }
+
+  // Publishes a MASTER_STATE and waits until the device's LCM thread has answered it.
+  void send_state(double q0, double q1, int buttons = 1, int status = 0, int num_joints = 2) {
+    tsmh::master_state_t m;
+    m.utime = monotonic_ns() / 1000;
+    m.seq = seq++;
+    m.num_joints = num_joints;
+    m.q.assign(static_cast<std::size_t>(num_joints), 0.0);
+    m.qd.assign(static_cast<std::size_t>(num_joints), 0.0);
+    m.q[0] = q0;
+    if (num_joints > 1) m.q[1] = q1;
+    m.buttons = buttons;
+    m.status = status;
+    const std::size_t before = log.count();
+    const std::uint64_t rejected = device->rejected_messages();
+    lcm->publish(device_state_channel, &m);
+    for (int i = 0; i < 500 && log.count() == before && device->rejected_messages() == rejected;
+         ++i) {
+      std::this_thread::sleep_for(1ms);
+    }
+  }
+  std::string device_state_channel = "MASTER_STATE";
+};
+
+TEST(LcmDevice, StateInForceOut) {
+  Rig rig;
+  rig.send_state(0.25, -0.5, /*dead-man + clutch*/ 5);
+  DeviceReading r = rig.device->read(monotonic_ns());
+  EXPECT_EQ(r.status, DeviceStatus::kOk);
+  EXPECT_DOUBLE_EQ(r.q[0], 0.25);
+  EXPECT_DOUBLE_EQ(r.q[1], -0.5);
+  EXPECT_TRUE(r.buttons.dead_man);
+  EXPECT_TRUE(r.buttons.clutch);
+  EXPECT_FALSE(r.buttons.e_stop);
+  // Disabled: the answer carries zero torque and enable = false.
+  tsmh::master_force_t f = rig.log.last();
+  EXPECT_EQ(f.num_joints, 2);
+  EXPECT_FALSE(f.enable);
+  EXPECT_EQ(f.torque[0], 0.0);
+
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{0.1, 9.0});
+  rig.send_state(0.25, -0.5);
+  f = rig.log.last();
+  EXPECT_TRUE(f.enable);
+  EXPECT_DOUBLE_EQ(f.torque[0], 0.1);
+  EXPECT_DOUBLE_EQ(f.torque[1], 0.3) << "clamped to peak";
+  r = rig.device->read(monotonic_ns());
+  EXPECT_TRUE(r.enabled);
+  EXPECT_DOUBLE_EQ(r.tau_commanded[1], 0.3);
+}
+
+TEST(LcmDevice, RejectsMalformedStateMessages) {
+  Rig rig;
+  rig.send_state(0.1, 0.1, 1, 0, /*num_joints*/ 3);
+  EXPECT_EQ(rig.device->rejected_messages(), 1u);
+  EXPECT_NE(rig.device->last_error().find("MASTER_STATE: num_joints 3, expected 2"),
+            std::string::npos)
+      << rig.device->last_error();
+  rig.send_state(std::nan(""), 0.1);
+  EXPECT_EQ(rig.device->rejected_messages(), 2u);
+  rig.send_state(0.1, 0.1, 0x10);
+  EXPECT_EQ(rig.device->rejected_messages(), 3u);
+  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected)
+      << "nothing valid received yet";
+}
+
+TEST(LcmDevice, ExternalFaultLatchesAndStaleStateDisconnects) {
+  LcmSettings s;
+  s.stale_timeout_ms = 5;
+  Rig rig(s);
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{0.1, 0.1});
+  rig.send_state(0, 0, 1, /*fault*/ 1);
+  EXPECT_EQ(rig.device->status(), DeviceStatus::kFault);
+  EXPECT_FALSE(rig.log.last().enable);
+  EXPECT_TRUE(rig.device->clear_fault());
+  rig.send_state(0, 0);
+  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kOk);
+  std::this_thread::sleep_for(20ms);
+  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected);
+}
+
+TEST(LcmDevice, ChannelPrefixAndRegistration) {
+  LcmSettings s;
+  s.channel_prefix = "LEFT_";
+  EXPECT_EQ(s.state_channel(), "LEFT_MASTER_STATE");
+  EXPECT_EQ(s.force_channel(), "LEFT_MASTER_FORCE");
+  Rig rig(s);
+  rig.device_state_channel = "LEFT_MASTER_STATE";
+  rig.send_state(0.3, 0.0);
+  EXPECT_DOUBLE_EQ(rig.device->read(monotonic_ns()).q[0], 0.3);
+
+  DriverRegistry registry;
+  register_lcm_driver(registry);
+  EXPECT_TRUE(registry.has("lcm"));
+  try {
+    registry.create("lcm", YAML::Load("dof: 0\n"),
+                    DriverContext{"server.yaml", "device.settings", {}});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("server.yaml: device.settings.dof: must be 1 .. 8"),
+              std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace tsmh::master_devices
