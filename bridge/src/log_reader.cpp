@@ -49,13 +49,13 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
                               std::string_view prefix) {
   const std::string file = path.string();
   if (joint < 0 || joint >= kMaxJoints)
-    throw LogError(file + ": --joint " + std::to_string(joint) + " is outside 0.." +
-                   std::to_string(kMaxJoints - 1));
-  if (!std::filesystem::is_regular_file(path)) throw LogError(file + ": no such file");
+    throw LogError(file, "joint " + std::to_string(joint) + " is outside 0.." +
+                             std::to_string(kMaxJoints - 1));
+  if (!std::filesystem::is_regular_file(path)) throw LogError(file, "no such file");
   if (!is_lcm_log(path))
-    throw LogError(file + ": not an LCM log (it does not start with LCM's event sync word)");
+    throw LogError(file, "not an LCM log (it does not start with LCM's event sync word)");
   lcm::LogFile log(file, "r");
-  if (!log.good()) throw LogError(file + ": cannot open as an LCM log");
+  if (!log.good()) throw LogError(file, "cannot open as an LCM log");
 
   const std::string state_channel = channel_name(prefix, Channel::SlaveState);
   const std::string truth_channel = channel_name(prefix, Channel::SlaveTruth);
@@ -111,14 +111,15 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
 
   if (states.empty()) {
     if (lacking_joint > 0)
-      throw LogError(file + ": joint " + std::to_string(joint) + " does not exist: " +
-                     state_channel + " has " + std::to_string(max_joints_seen) + " joint(s)");
+      throw LogError(file, "joint " + std::to_string(joint) + " does not exist: " + state_channel +
+                               " has " + std::to_string(max_joints_seen) + " joint(s)");
     if (out.state_messages > 0)
-      throw LogError(file + ": none of the " + std::to_string(out.state_messages) + " " +
-                     state_channel + " messages is usable (undecodable or NaN/Inf for joint " +
-                     std::to_string(joint) + ")");
-    throw LogError(file + ": no " + state_channel + " messages (prefix '" + out.prefix + "'); " +
-                   channel_summary(seen));
+      throw LogError(file, "none of the " + std::to_string(out.state_messages) + " " +
+                               state_channel +
+                               " messages is usable (undecodable or NaN/Inf for joint " +
+                               std::to_string(joint) + ")");
+    throw LogError(file, "no " + state_channel + " messages (prefix '" + out.prefix + "'); " +
+                             channel_summary(seen));
   }
 
   const bool have_truth = !truths.empty();
@@ -147,14 +148,14 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
       out.first_utime = r.utime;
       out.radius_m = r.radius;
       if (!(r.radius > 0))
-        throw LogError(file + ": event " + std::to_string(r.event) + " " + state_channel +
-                       " radius_m[" + std::to_string(joint) + "] = " + std::to_string(r.radius) +
-                       " is not positive");
+        throw LogError(file, "event " + std::to_string(r.event) + " " + state_channel +
+                                 " radius_m[" + std::to_string(joint) +
+                                 "] = " + std::to_string(r.radius) + " is not positive");
     } else if (std::abs(r.radius - out.radius_m) > 1e-12 * std::abs(out.radius_m)) {
-      throw LogError(file + ": event " + std::to_string(r.event) + " " + state_channel +
-                     " radius_m[" + std::to_string(joint) + "] changes from " +
-                     std::to_string(out.radius_m) + " to " + std::to_string(r.radius) +
-                     "; one CSV holds one radius");
+      throw LogError(file, "event " + std::to_string(r.event) + " " + state_channel + " radius_m[" +
+                               std::to_string(joint) + "] changes from " +
+                               std::to_string(out.radius_m) + " to " + std::to_string(r.radius) +
+                               "; one CSV holds one radius");
     }
     last_utime = r.utime;
     out.t.push_back(static_cast<double>(r.utime - out.first_utime) * 1e-6);
@@ -166,8 +167,8 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
     x_out_has_nan = x_out_has_nan || std::isnan(r.x_out);
   }
   if (out.t.empty())
-    throw LogError(file + ": no " + state_channel + " message of joint " + std::to_string(joint) +
-                   " has a matching " + truth_channel + " (matched by seq)");
+    throw LogError(file, "no " + state_channel + " message of joint " + std::to_string(joint) +
+                             " has a matching " + truth_channel + " (matched by seq)");
   // The CSV contract has no NaN: a joint without an encoder has no x_out column.
   if (x_out_has_nan) out.x_out.clear();
   return out;

@@ -1,11 +1,18 @@
 #include "bridge/sender.hpp"
 
+#include <ctime>
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
+#include "bridge/clock.hpp"
+
 namespace tsmh::bridge {
 
-Sender::Sender(BridgeConfig config) : config_(std::move(config)), lcm_(open_lcm(config_.url)) {}
+Sender::Sender(BridgeConfig config, SenderOptions options)
+    : config_(std::move(config)),
+      options_(options),
+      lcm_(open_lcm(config_.url)),
+      signal_(/*wake_on_publish=*/options.poll_period.count() <= 0) {}
 
 Sender::~Sender() {
   stop();
@@ -26,11 +33,13 @@ void Sender::start() {
 void Sender::stop() noexcept {
   if (!running()) return;
   stop_requested_.store(true, std::memory_order_release);
-  signal_.notify();
+  signal_.force();
   thread_.join();
 }
 
 void Sender::run() noexcept {
+  const std::int64_t period_ns = options_.poll_period.count() * 1000;
+  std::int64_t next_ns = monotonic_now_ns();
   for (;;) {
     const std::uint32_t seen = signal_.current();
     for (auto& box : outboxes_)
@@ -40,7 +49,17 @@ void Sender::run() noexcept {
         box->flush(*lcm_);  // what was pushed before stop()
       return;
     }
-    signal_.wait_change(seen);
+    if (period_ns <= 0) {
+      signal_.wait_change(seen);
+      continue;
+    }
+    // Polling: absolute deadlines; after a stall, re-base instead of catching up.
+    next_ns += period_ns;
+    const std::int64_t now = monotonic_now_ns();
+    if (next_ns < now) next_ns = now + period_ns;
+    const timespec ts{static_cast<time_t>(next_ns / 1'000'000'000),
+                      static_cast<long>(next_ns % 1'000'000'000)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
   }
 }
 

@@ -11,7 +11,9 @@ int main(int argc, char** argv) {
   CLI::App app{"tsm: tendon-sheath friction models: simulate, identify, find model gaps"};
   app.require_subcommand(1);
   Context ctx;
+  ctx.sources.add(lcm_log_source(ctx.lcm_log));
   add_simulate_command(app, ctx);
+  add_convert_command(app, ctx);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -3,9 +3,9 @@
 //   1. loop-side read of the newest SLAVE_STATE (Inbox::latest) while a real
 //      udpm sender runs at 1 kHz                       target < 100 ns
 //   2. publish cost seen by the calling thread: lcm publish directly vs
-//      Outbox::publish (SPSC hand-off to the publish thread)
+//      Outbox::publish (SPSC hand-off; publish thread woken by futex or polling)
 //   3. one-way latency on loopback udpm (utime -> receive thread, and
-//      utime -> the loop's first read), through Outbox and directly
+//      utime -> the loop's first read), for the same three ways of sending
 // Usage: bench_bridge [--count N] (messages per latency run, default 5000)
 #include <algorithm>
 #include <cstdio>
@@ -70,10 +70,21 @@ void sleep_until_ns(std::int64_t t) {
   clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
 }
 
-// A 1 kHz sender thread; `direct`: lcm publish in the thread, else through an Outbox.
+// How the sending thread publishes.
+struct Mode {
+  const char* name;
+  bool direct;                     // lcm publish in the sending thread
+  std::chrono::microseconds poll;  // Outbox: publish-thread poll period (0: futex wake)
+};
+constexpr Mode kDirect{"direct lcm publish", true, std::chrono::microseconds(0)};
+constexpr Mode kNotify{"Outbox, futex wake", false, std::chrono::microseconds(0)};
+constexpr Mode kPoll100{"Outbox, 100 us poll", false, std::chrono::microseconds(100)};
+
+// A 1 kHz sender thread.
 class Pacer {
  public:
-  Pacer(const BridgeConfig& cfg, int count, bool direct) : tx_(cfg), direct_(direct) {
+  Pacer(const BridgeConfig& cfg, int count, const Mode& mode)
+      : tx_(cfg, SenderOptions{mode.poll}), direct_(mode.direct) {
     box_ = &tx_.outbox<SlaveStateSample>();
     tx_.start();
     channel_ = channel_name(cfg.prefix, Channel::SlaveState);
@@ -110,7 +121,7 @@ void bench_read(const std::string& prefix) {
   Receiver rx(cfg);
   auto& inbox = rx.subscribe<SlaveStateSample>({.expected_joints = 2});
   rx.start();
-  Pacer pacer(cfg, 4000, /*direct=*/false);
+  Pacer pacer(cfg, 4000, kNotify);
   SlaveStateSample s;
   while (inbox.latest(s) == 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -153,43 +164,50 @@ void bench_publish_cost(const std::string& prefix, int count) {
   Receiver rx(cfg);
   auto& inbox = rx.subscribe<SlaveStateSample>();
   rx.start();
-  Sender tx(cfg);
-  auto& box = tx.outbox<SlaveStateSample>();
-  tx.start();
+  Sender notify_tx(cfg);
+  auto& notify_box = notify_tx.outbox<SlaveStateSample>();
+  notify_tx.start();
+  Sender poll_tx(cfg, SenderOptions{std::chrono::microseconds(100)});
+  auto& poll_box = poll_tx.outbox<SlaveStateSample>();
+  poll_tx.start();
   const std::string channel = channel_name(cfg.prefix, Channel::SlaveState);
 
-  std::vector<double> direct_us, outbox_us;
+  // Interleaved at 1 kHz each so that all three see the same machine load.
+  std::vector<double> direct_us, notify_us, poll_us;
   std::int64_t next = monotonic_now_ns();
+  std::int64_t seq = 0;
+  auto timed = [&](std::vector<double>& out, auto&& publish) {
+    const SlaveStateSample s = sample(seq++);
+    const std::int64_t t0 = monotonic_now_ns();
+    publish(s);
+    out.push_back(static_cast<double>(monotonic_now_ns() - t0) * 1e-3);
+    next += 333'333;
+    sleep_until_ns(next);
+  };
   for (int i = 0; i < count; ++i) {
-    SlaveStateSample s = sample(2 * i);
-    std::int64_t t0 = monotonic_now_ns();
-    publish_sample(tx.lcm(), channel, s);
-    direct_us.push_back(static_cast<double>(monotonic_now_ns() - t0) * 1e-3);
-    next += 500'000;
-    sleep_until_ns(next);
-    s = sample(2 * i + 1);
-    t0 = monotonic_now_ns();
-    box.publish(s);
-    outbox_us.push_back(static_cast<double>(monotonic_now_ns() - t0) * 1e-3);
-    next += 500'000;
-    sleep_until_ns(next);
+    timed(direct_us,
+          [&](const SlaveStateSample& s) { publish_sample(notify_tx.lcm(), channel, s); });
+    timed(notify_us, [&](const SlaveStateSample& s) { notify_box.publish(s); });
+    timed(poll_us, [&](const SlaveStateSample& s) { poll_box.publish(s); });
   }
-  print_header("2. publish cost in the calling thread, SLAVE_STATE 2 joints, 1 kHz");
+  print_header("2. publish cost in the calling thread, SLAVE_STATE 2 joints, 1 kHz each");
   print_row("lcm publish directly (encode + sendmsg)", "us", direct_us);
-  print_row("Outbox::publish (ring copy + futex wake)", "us", outbox_us);
-  std::printf("  outbox: %llu dropped (ring full); receiver accepted %llu of %d\n",
-              static_cast<unsigned long long>(box.stats().dropped_full),
-              static_cast<unsigned long long>(inbox.stats().accepted), 2 * count);
+  print_row("Outbox::publish, futex wake", "us", notify_us);
+  print_row("Outbox::publish, 100 us polling thread", "us", poll_us);
+  std::printf("  outboxes dropped %llu + %llu (ring full); receiver accepted %llu of %lld\n",
+              static_cast<unsigned long long>(notify_box.stats().dropped_full),
+              static_cast<unsigned long long>(poll_box.stats().dropped_full),
+              static_cast<unsigned long long>(inbox.stats().accepted), static_cast<long long>(seq));
 }
 
-void bench_latency(const std::string& prefix, int count, bool direct) {
-  const BridgeConfig cfg{std::string(kDefaultLcmUrl), prefix + (direct ? "LATD_" : "LATO_")};
+void bench_latency(const std::string& prefix, int count, const Mode& mode, const char* tag) {
+  const BridgeConfig cfg{std::string(kDefaultLcmUrl), prefix + tag};
   Receiver rx(cfg);
   auto& inbox = rx.subscribe<SlaveStateSample>({.expected_joints = 2});
   rx.start();
   std::vector<double> to_receive_us, to_loop_us;
   {
-    Pacer pacer(cfg, count, direct);
+    Pacer pacer(cfg, count, mode);
     // The "loop" spins on latest() and notes when each new version shows up.
     std::uint64_t last_version = 0;
     SlaveStateSample s;
@@ -205,8 +223,9 @@ void bench_latency(const std::string& prefix, int count, bool direct) {
     }
   }
   const ChannelStats st = inbox.stats();
-  print_header(direct ? "3b. one-way latency, udpm loopback, sender publishes directly, 1 kHz"
-                      : "3a. one-way latency, udpm loopback, sender uses an Outbox, 1 kHz");
+  std::string title = "3. one-way latency, udpm loopback, 1 kHz, sender: ";
+  title += mode.name;
+  print_header(title.c_str());
   print_row("utime -> receive thread (receive_ns)", "us", to_receive_us);
   print_row("utime -> loop sees it (busy-polling latest)", "us", to_loop_us);
   std::printf("  accepted %llu, gaps %llu, dropped %llu; Inbox histogram p50 %.0f us p99 %.0f us\n",
@@ -227,8 +246,9 @@ int main(int argc, char** argv) {
   try {
     bench_read(prefix);
     bench_publish_cost(prefix, count);
-    bench_latency(prefix, count, /*direct=*/false);
-    bench_latency(prefix, count, /*direct=*/true);
+    bench_latency(prefix, count, kNotify, "LATN_");
+    bench_latency(prefix, count, kPoll100, "LATP_");
+    bench_latency(prefix, count, kDirect, "LATD_");
   } catch (const BridgeError& e) {
     std::fprintf(stderr, "bench_bridge: %s\n", e.what());
     return 1;

@@ -13,11 +13,18 @@
 
 namespace tsmh::bridge {
 
-/// A log that cannot be used; what() names the file and, where it applies,
-/// the event number, channel and field.
+/// A log that cannot be used. what() is "FILE: DETAIL"; DETAIL names, where
+/// it applies, the event number, channel, joint and field.
 class LogError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  LogError(const std::string& file, const std::string& detail)
+      : std::runtime_error(file + ": " + detail), file_(file), detail_(detail) {}
+  const std::string& file() const noexcept { return file_; }
+  const std::string& detail() const noexcept { return detail_; }
+
+ private:
+  std::string file_;
+  std::string detail_;
 };
 
 /// True when the file starts with LCM's log event sync word (0xEDA1DA01).

@@ -30,10 +30,15 @@ struct OutboxStats {
   std::uint64_t publish_errors = 0;  ///< LCM publish failures
 };
 
-/// Wakes the publish thread. Lives in the Sender; outboxes share it.
+/// Wakes the publish thread. Lives in the Sender; outboxes share it. In
+/// polling mode (SenderOptions::poll_period > 0) notify() does nothing and the
+/// publish thread wakes on its own period, so publish() makes no system call.
 class PublishSignal {
  public:
+  explicit PublishSignal(bool wake_on_publish = true) noexcept
+      : wake_on_publish_(wake_on_publish) {}
   void notify() noexcept {
+    if (!wake_on_publish_) return;
     work_.fetch_add(1, std::memory_order_release);
     work_.notify_one();
   }
@@ -42,8 +47,14 @@ class PublishSignal {
   void wait_change(std::uint32_t seen) const noexcept {
     work_.wait(seen, std::memory_order_acquire);
   }
+  /// Wakes the publish thread regardless of the mode (stop()).
+  void force() noexcept {
+    work_.fetch_add(1, std::memory_order_release);
+    work_.notify_one();
+  }
 
  private:
+  bool wake_on_publish_;
   std::atomic<std::uint32_t> work_{0};
 };
 

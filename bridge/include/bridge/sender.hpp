@@ -9,6 +9,7 @@
 //   ... each tick: s.utime = monotonic_utime(); s.seq = tick; state.publish(s);
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -18,10 +19,20 @@
 
 namespace tsmh::bridge {
 
+struct SenderOptions {
+  /// How the publish thread learns about new samples (docs/bridge.md has the
+  /// measurements behind the default):
+  ///  0   Outbox::publish() wakes it (a futex wake: ~1-10 us in the caller,
+  ///      lowest latency);
+  ///  > 0 it wakes every poll_period and Outbox::publish() is a plain copy
+  ///      into the ring with no system call; adds up to poll_period latency.
+  std::chrono::microseconds poll_period{0};
+};
+
 class Sender {
  public:
   /// Opens LCM at config.url (throws BridgeError with a fix when it cannot).
-  explicit Sender(BridgeConfig config);
+  explicit Sender(BridgeConfig config, SenderOptions options = {});
   ~Sender();
   Sender(const Sender&) = delete;
   Sender& operator=(const Sender&) = delete;
@@ -54,6 +65,7 @@ class Sender {
   void run() noexcept;
 
   BridgeConfig config_;
+  SenderOptions options_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<OutboxBase>> outboxes_;
   PublishSignal signal_;

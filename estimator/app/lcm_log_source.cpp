@@ -1,0 +1,64 @@
+#include "lcm_log_source.hpp"
+
+#include <charconv>
+
+#include "bridge/log_reader.hpp"
+#include "estimator/table.hpp"
+
+namespace tsmh::tsm_cli {
+
+estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
+                                            const LcmLogSelection& sel,
+                                            std::optional<double> radius_override,
+                                            const estimator::RecordingRequirements& need,
+                                            std::string* summary) {
+  bridge::JointSeries js;
+  try {
+    js = bridge::read_joint_series(path, sel.joint, sel.prefix);
+  } catch (const bridge::LogError& e) {
+    throw estimator::DataError(e.file(), 0, "", e.detail());
+  }
+  if (summary != nullptr) {
+    *summary = std::to_string(js.state_messages) + " SLAVE_STATE and " +
+               std::to_string(js.truth_messages) +
+               " SLAVE_TRUTH messages; left out: " + std::to_string(js.skipped_invalid) +
+               " invalid, " + std::to_string(js.skipped_not_increasing) +
+               " with time not increasing, " + std::to_string(js.rows_without_truth) +
+               " without matching SLAVE_TRUTH" +
+               (js.x_out.empty() ? "; no x_out (NaN in the log)" : "");
+  }
+  // Through the CSV contract's own checks (time strictly increasing,
+  // requirements, tau_in from T1 and T3), so a log and a CSV behave the same.
+  estimator::Table table;
+  table.source = path.string();
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof buf, js.radius_m);
+  table.meta["radius_m"] = std::string(buf, res.ptr);
+  table.set("t", std::move(js.t));
+  table.set("x_in", std::move(js.x_in));
+  if (!js.tau_out.empty()) table.set("tau_out", std::move(js.tau_out));
+  if (!js.x_out.empty()) table.set("x_out", std::move(js.x_out));
+  table.set("T1", std::move(js.T1));
+  table.set("T3", std::move(js.T3));
+  return estimator::recording_from_table(table, radius_override, need);
+}
+
+DataSource lcm_log_source(const LcmLogSelection& sel) {
+  DataSource s;
+  s.name = "lcm-log";
+  s.accepts = [](const std::filesystem::path& p) { return bridge::is_lcm_log(p); };
+  s.load = [&sel](const std::filesystem::path& p, std::optional<double> radius,
+                  const estimator::RecordingRequirements& need) {
+    return recording_from_lcm_log(p, sel, radius, need);
+  };
+  return s;
+}
+
+void add_lcm_log_options(CLI::App& cmd, LcmLogSelection& sel) {
+  cmd.add_option("--joint", sel.joint, "LCM log DATA: joint index to read (default 0)")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--prefix", sel.prefix,
+                 "LCM log DATA: channel prefix of the arm, e.g. ARM1_ (default none)");
+}
+
+}  // namespace tsmh::tsm_cli

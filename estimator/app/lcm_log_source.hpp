@@ -1,0 +1,39 @@
+#pragma once
+// LCM logs as DATA for `tsm` (design.md §4): one joint of the SLAVE_STATE
+// stream (with SLAVE_TRUTH's tau_out matched by seq), read by the bridge
+// module and turned into the same Recording a CSV gives.
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "data_sources.hpp"
+#include "estimator/recording.hpp"
+
+namespace tsmh::tsm_cli {
+
+/// Which joint and which arm (channel prefix) of a log to read.
+struct LcmLogSelection {
+  int joint = 0;
+  std::string prefix;  ///< e.g. "ARM1_"; empty: SLAVE_STATE, SLAVE_TRUTH
+};
+
+/// Reads joint `sel.joint` of `sel.prefix`SLAVE_STATE (+ SLAVE_TRUTH) from an
+/// LCM log. tau_in = R (T1 - T3) with R from the log's radius_m unless
+/// `radius_override`. Throws estimator::DataError naming the file (and what
+/// is wrong in it). `summary`, when given, receives what was read and left out.
+estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
+                                            const LcmLogSelection& sel,
+                                            std::optional<double> radius_override,
+                                            const estimator::RecordingRequirements& need,
+                                            std::string* summary = nullptr);
+
+/// The "lcm-log" data source: accepts files starting with LCM's log sync word.
+/// `sel` is read when a file is loaded, so options parsed later apply.
+DataSource lcm_log_source(const LcmLogSelection& sel);
+
+/// Adds --joint and --prefix (which part of an LCM log DATA is) to `cmd`.
+void add_lcm_log_options(CLI::App& cmd, LcmLogSelection& sel);
+
+}  // namespace tsmh::tsm_cli
