@@ -1,0 +1,182 @@
+// external-master-adapter: bridges a haptic master whose vendor SDK runs
+// outside haptic-server to the server's `lcm` driver.
+//
+//   every period:  read the device -> publish MASTER_STATE
+//                  newest MASTER_FORCE -> device torque
+//   watchdog:      no MASTER_FORCE for --watchdog-ms (server or network
+//                  gone) or enable false -> zero torque. The server answers
+//                  every MASTER_STATE, so forces stop exactly when it dies.
+//
+// FakeVendorMaster stands in for the vendor SDK; replace its four calls
+// (read angles, velocities, buttons; write torques) with the real ones.
+//
+//   external-master-adapter [--lcm-url URL] [--channel-prefix LEFT_] [--rate-hz 1000]
+//                           [--watchdog-ms 50] [--duration S]
+// Server side: device: {driver: lcm, settings: {channel_prefix: LEFT_}}
+
+#include <pthread.h>
+#include <signal.h>
+#include <time.h>
+
+#include <CLI/CLI.hpp>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <tsmh/master_force_t.hpp>
+#include <tsmh/master_state_t.hpp>
+
+namespace {
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
+}
+
+/// Stand-in for a vendor SDK: a 2-DOF handle (inertia, damping) moved by a
+/// hand that sweeps it slowly, plus whatever torque we command.
+class FakeVendorMaster {
+ public:
+  static constexpr int kDof = 2;
+
+  void step(double dt) {
+    t_ += dt;
+    for (int j = 0; j < kDof; ++j) {
+      const double target = 0.2 * std::sin(2.0 * 3.14159265358979 * (0.2 + 0.1 * j) * t_);
+      const double hand = 3.0 * (target - q_[j]) - 0.2 * qd_[j];
+      qd_[j] += dt * (hand + torque_[j] - 0.005 * qd_[j]) / 0.007;
+      q_[j] += dt * qd_[j];
+    }
+  }
+  // The four calls a real SDK provides.
+  std::array<double, kDof> joint_angles() const { return q_; }
+  std::array<double, kDof> joint_velocities() const { return qd_; }
+  int buttons() const { return 1; }  // bit 0 dead-man held
+  void set_joint_torques(const std::array<double, kDof>& tau) { torque_ = tau; }
+
+ private:
+  double t_ = 0.0;
+  std::array<double, kDof> q_{}, qd_{}, torque_{};
+};
+
+struct ForceInbox {
+  std::array<double, FakeVendorMaster::kDof> torque{};
+  bool enable = false;
+  std::int64_t received_ns = 0;
+  std::int64_t rejected = 0;
+
+  void on_force(const lcm::ReceiveBuffer*, const std::string&, const tsmh::master_force_t* msg) {
+    if (msg->num_joints != FakeVendorMaster::kDof) {
+      ++rejected;
+      return;
+    }
+    for (int j = 0; j < FakeVendorMaster::kDof; ++j) {
+      if (!std::isfinite(msg->torque[static_cast<std::size_t>(j)])) {
+        ++rejected;
+        return;
+      }
+    }
+    for (int j = 0; j < FakeVendorMaster::kDof; ++j)
+      torque[j] = msg->torque[static_cast<std::size_t>(j)];
+    enable = msg->enable;
+    received_ns = monotonic_ns();
+  }
+};
+
+// Ctrl-C / SIGTERM are blocked and polled once per period, so stopping
+// needs no global flag and always ends with zero torque.
+bool stop_requested(const sigset_t& set) {
+  sigset_t pending;
+  sigpending(&pending);
+  for (int s : {SIGINT, SIGTERM}) {
+    if (sigismember(&set, s) && sigismember(&pending, s)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"external-master-adapter: a vendor master driver talking to haptic-server over LCM"};
+  std::string url;
+  std::string prefix;
+  double rate_hz = 1000.0;
+  double watchdog_ms = 50.0;
+  double duration_s = 0.0;
+  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  app.add_option("--channel-prefix", prefix, "per-arm prefix, e.g. LEFT_ -> LEFT_MASTER_STATE");
+  app.add_option("--rate-hz", rate_hz, "device read / MASTER_STATE rate")
+      ->check(CLI::Range(1.0, 20000.0));
+  app.add_option("--watchdog-ms", watchdog_ms, "zero torque when MASTER_FORCE is older")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
+  CLI11_PARSE(app, argc, argv);
+
+  lcm::LCM lcm(url);  // an empty URL honours LCM_DEFAULT_URL, as LCM's tools do
+  if (!lcm.good()) {
+    std::fprintf(
+        stderr,
+        "external-master-adapter: cannot start LCM%s%s (no multicast route? ip link set lo "
+        "multicast on; ip route add 224.0.0.0/4 dev lo)\n",
+        url.empty() ? "" : " at ", url.c_str());
+    return 1;
+  }
+  ForceInbox inbox;
+  lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_force, &inbox);
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  FakeVendorMaster device;
+  tsmh::master_state_t state;
+  state.num_joints = FakeVendorMaster::kDof;
+  state.q.resize(FakeVendorMaster::kDof);
+  state.qd.resize(FakeVendorMaster::kDof);
+  const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
+  const std::int64_t start = monotonic_ns();
+  std::int64_t next = start;
+  std::int64_t seq = 0;
+  std::int64_t watchdog_trips = 0;
+  bool was_fresh = false;
+
+  while (!stop_requested(stop_signals) &&
+         (duration_s <= 0.0 || monotonic_ns() - start < duration_s * 1e9)) {
+    next += period_ns;  // absolute deadlines: no drift
+    timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+
+    while (lcm.handleTimeout(0) > 0) {
+    }  // drain MASTER_FORCE without blocking
+    const std::int64_t now = monotonic_ns();
+    const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= watchdog_ms * 1e6;
+    if (was_fresh && !fresh) ++watchdog_trips;
+    was_fresh = fresh;
+    device.set_joint_torques(fresh && inbox.enable ? inbox.torque : std::array<double, 2>{});
+    device.step(static_cast<double>(period_ns) * 1e-9);
+
+    state.utime = now / 1000;
+    state.seq = seq++;
+    const auto q = device.joint_angles();
+    const auto qd = device.joint_velocities();
+    for (int j = 0; j < FakeVendorMaster::kDof; ++j) {
+      state.q[static_cast<std::size_t>(j)] = q[j];
+      state.qd[static_cast<std::size_t>(j)] = qd[j];
+    }
+    state.buttons = device.buttons();
+    state.status = 0;
+    lcm.publish(prefix + "MASTER_STATE", &state);
+  }
+  device.set_joint_torques({});
+  std::printf(
+      "external-master-adapter: sent %lld MASTER_STATE, watchdog trips %lld, rejected forces "
+      "%lld\n",
+      static_cast<long long>(seq), static_cast<long long>(watchdog_trips),
+      static_cast<long long>(inbox.rejected));
+  return 0;
+}
