@@ -28,7 +28,7 @@ void BM_ControlTick(benchmark::State& state) {
   state.counters["x_realtime"] = benchmark::Counter(
       static_cast<double>(state.iterations()) * p.control_period_s, benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_ControlTick);
+BENCHMARK(BM_ControlTick)->UseRealTime();
 
 // A whole offline scenario run, as `virtual-slave --offline` does it (no CSV).
 void BM_OfflineScenario(benchmark::State& state, const char* name) {
@@ -45,9 +45,13 @@ void BM_OfflineScenario(benchmark::State& state, const char* name) {
   }
   state.counters["x_realtime"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
 }
-BENCHMARK_CAPTURE(BM_OfflineScenario, sine, "sine")->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_OfflineScenario, palpate, "palpate")->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_OfflineScenario, multisine, "multisine")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_OfflineScenario, sine, "sine")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_OfflineScenario, palpate, "palpate")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_OfflineScenario, multisine, "multisine")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

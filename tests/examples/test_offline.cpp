@@ -117,7 +117,7 @@ TEST(Offline, EffectSpecsParseAndBadOnesAreNamed) {
 TEST(OfflineCli, WritesTheCsvDataContract) {
   const auto path = temp_file("sine.csv");
   ASSERT_EQ(
-      run_cli("--offline --scenario sine --duration 2 --joint 2 --exact-derivatives --output " +
+      run_cli("--offline --scenario sine --duration 2 --joint 1 --exact-derivatives --output " +
               path.string()),
       0);
   const auto table = tsmh::estimator::read_csv_table(path);
@@ -142,7 +142,7 @@ TEST(OfflineCli, BadOptionsFailWithoutWritingAnything) {
   const auto path = temp_file("bad.csv");
   EXPECT_NE(run_cli("--offline --scenario nope --output " + path.string()), 0);
   EXPECT_NE(run_cli("--offline --effect drag=1 --output " + path.string()), 0);
-  EXPECT_NE(run_cli("--offline --joint 3 --output " + path.string()), 0);
+  EXPECT_NE(run_cli("--offline --joint 2 --output " + path.string()), 0);
   EXPECT_NE(run_cli("--offline --reroute-at 3 --output " + path.string()), 0);
   EXPECT_NE(run_cli("--offline"), 0);  // no --output
   EXPECT_FALSE(std::filesystem::exists(path));

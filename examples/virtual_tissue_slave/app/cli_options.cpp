@@ -19,8 +19,9 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--output", o.output, "offline: CSV file to write (data contract, design.md §4)");
   app.add_option(
          "--joint", o.joint,
-         "joint written to --output, and whose sheaths --wrap/--pretension set: 1 (gripper) or 2")
-      ->check(CLI::Range(1, 2));
+         "joint index written to --output, and whose sheaths --wrap/--pretension/--reroute-wrap "
+         "set: 0 (Joint1, the gripper) or 1 (Joint2); 0-based like `tsm convert --joint`")
+      ->check(CLI::Range(0, 1));
   app.add_flag(
       "--exact-derivatives", o.exact_derivatives,
       "offline: add xd_in, xdd_in columns (the simulator's true motor velocity, acceleration)");
@@ -72,7 +73,7 @@ void add_options(CLI::App& app, CliOptions& o) {
 Setup make_setup(const CliOptions& o, const Scenario* scenario) {
   Setup s;
   s.params = paper_slave();
-  s.joint_index = o.joint - 1;
+  s.joint_index = o.joint;
   JointParams& jp = s.params.joints[static_cast<std::size_t>(s.joint_index)];
 
   if (!o.wrap.empty()) {

@@ -71,7 +71,7 @@ int run_offline_mode(const CliOptions& o) {
     estimator::write_recording_csv(rec, o.output);
   }
   std::fprintf(stderr,
-               "virtual-slave: %s, joint %d, %.1f s simulated in %.2f s (%.0fx real time), "
+               "virtual-slave: %s, joint index %d, %.1f s simulated in %.2f s (%.0fx real time), "
                "%ld samples -> %s\n",
                scenario.name.c_str(), o.joint, stats.simulated_s, stats.wall_s,
                stats.realtime_factor(), stats.samples, o.output.c_str());

@@ -13,7 +13,7 @@ OfflineStats run_offline(const SlaveParams& params, const OfflineOptions& option
   if (!(std::isfinite(options.settle_s) && options.settle_s >= 0))
     throw std::invalid_argument("settle time must be >= 0 s");
   if (options.joint < 0 || options.joint >= kJoints)
-    throw std::invalid_argument("--joint must be 1 or 2");
+    throw std::invalid_argument("--joint must be 0 or 1");
   const Reroute& rr = options.reroute;
   const bool reroute = !std::isnan(rr.at_s);
   if (reroute) {
