@@ -54,7 +54,9 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
   if (!(r_ > 0.0)) r_ = 1e-12;
   threshold_ = cfg_.acc_sign_threshold;
   if (threshold_ < 0.0) {
-    // Steady-state acceleration uncertainty of this filter at 1 kHz.
+    // Steady-state acceleration uncertainty of this filter at 1 kHz. Encoder
+    // quantisation makes the estimate wander up to ~1.6x this at constant
+    // velocity (docs/friction-model.md), so +-1 needs 2x.
     std::array<double, 3> s{};
     Mat3 p{};
     p[0][0] = r_;
@@ -64,7 +66,7 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
       predict_covariance(p, 1e-3, cfg_.jerk_psd);
       correct(s, p, 0.0, r_);
     }
-    threshold_ = 1.5 * std::sqrt(p[2][2]);
+    threshold_ = 2.0 * std::sqrt(p[2][2]);
   }
   reset();
 }
@@ -107,8 +109,13 @@ Derivatives Differentiator::update(double t, double x) noexcept {
   correct(s_, p_, x, r_);
 
   int sign = out_.acc_sign;
-  if (s_[2] > threshold_) sign = 1;
-  if (s_[2] < -threshold_) sign = -1;
+  if (s_[2] > threshold_) {
+    sign = 1;
+  } else if (s_[2] < -threshold_) {
+    sign = -1;
+  } else if (sign * s_[2] < 0.0) {
+    sign = 0;  // crossed zero: the sign is unknown until |xdd| clears the threshold
+  }
   out_ = {s_[0], s_[1], s_[2], sign, true};
   return out_;
 }

@@ -76,6 +76,14 @@ class Reader {
   std::string origin_;
 };
 
+// A top-level section, or an empty map when absent: const lookups in it then
+// give undefined nodes (defaults apply) instead of nulls.
+YAML::Node section(const YAML::Node& root, const char* key) {
+  const YAML::Node n = root[key];
+  if (n && !n.IsNull()) return n;
+  return YAML::Node(YAML::NodeType::Map);
+}
+
 std::string resolve(const std::filesystem::path& base, const std::string& p) {
   if (p.empty() || std::filesystem::path(p).is_absolute()) return p;
   return (base / p).lexically_normal().string();
@@ -115,49 +123,41 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   }
   c.duration_s = r.number(root["duration_s"], "duration_s", 0.0, 0.0, 1e7);
 
-  const YAML::Node device = root["device"];
+  const YAML::Node device = section(root, "device");
   r.only(device, {"driver", "settings"}, "device");
-  c.device_driver = r.text(device ? device["driver"] : YAML::Node(), "device.driver", "sim");
+  c.device_driver = r.text(device["driver"], "device.driver", "sim");
   c.device_settings =
       device && device["settings"] ? device["settings"] : YAML::Node(YAML::NodeType::Map);
 
-  const YAML::Node lcm = root["lcm"];
+  const YAML::Node lcm = section(root, "lcm");
   r.only(lcm, {"url", "prefix"}, "lcm");
-  c.lcm_url = r.text(lcm ? lcm["url"] : YAML::Node(), "lcm.url", "");
-  c.lcm_prefix = r.text(lcm ? lcm["prefix"] : YAML::Node(), "lcm.prefix", "");
+  c.lcm_url = r.text(lcm["url"], "lcm.url", "");
+  c.lcm_prefix = r.text(lcm["prefix"], "lcm.prefix", "");
 
-  const YAML::Node safety = root["safety"];
+  const YAML::Node safety = section(root, "safety");
   r.only(safety, {"stale_after_ms", "fade_ms", "recover_ms", "slave_timeout_ms"}, "safety");
   const auto sfield = [&](const char* key, double def) {
-    return r.number(safety ? safety[key] : YAML::Node(), std::string("safety.") + key, def, 0.0,
-                    1e6, true) *
-           1e-3;
+    return r.number(safety[key], std::string("safety.") + key, def, 0.0, 1e6, true) * 1e-3;
   };
   c.loop.timing.stale_after_s = sfield("stale_after_ms", 20.0);
   c.loop.timing.fade_s = sfield("fade_ms", 50.0);
   c.loop.timing.recover_s = sfield("recover_ms", 200.0);
   c.loop.slave_timeout_s = sfield("slave_timeout_ms", 1000.0);
 
-  const YAML::Node rt = root["realtime"];
+  const YAML::Node rt = section(root, "realtime");
   r.only(rt, {"sched_fifo", "priority", "lock_memory", "cpu"}, "realtime");
-  c.realtime.sched_fifo =
-      r.boolean(rt ? rt["sched_fifo"] : YAML::Node(), "realtime.sched_fifo", true);
-  c.realtime.priority = static_cast<int>(
-      r.number(rt ? rt["priority"] : YAML::Node(), "realtime.priority", 80, 1, 99));
-  c.realtime.lock_memory =
-      r.boolean(rt ? rt["lock_memory"] : YAML::Node(), "realtime.lock_memory", true);
-  c.realtime.cpu =
-      static_cast<int>(r.number(rt ? rt["cpu"] : YAML::Node(), "realtime.cpu", -1, -1, 1023));
+  c.realtime.sched_fifo = r.boolean(rt["sched_fifo"], "realtime.sched_fifo", true);
+  c.realtime.priority = static_cast<int>(r.number(rt["priority"], "realtime.priority", 80, 1, 99));
+  c.realtime.lock_memory = r.boolean(rt["lock_memory"], "realtime.lock_memory", true);
+  c.realtime.cpu = static_cast<int>(r.number(rt["cpu"], "realtime.cpu", -1, -1, 1023));
 
-  const YAML::Node ev = root["evaluation"];
+  const YAML::Node ev = section(root, "evaluation");
   r.only(ev, {"truth", "trace", "report", "max_trace_s"}, "evaluation");
-  c.evaluation.truth = r.boolean(ev ? ev["truth"] : YAML::Node(), "evaluation.truth", false);
-  c.evaluation.trace =
-      resolve(base_dir, r.text(ev ? ev["trace"] : YAML::Node(), "evaluation.trace", ""));
-  c.evaluation.report =
-      resolve(base_dir, r.text(ev ? ev["report"] : YAML::Node(), "evaluation.report", ""));
-  c.evaluation.max_trace_s = r.number(ev ? ev["max_trace_s"] : YAML::Node(),
-                                      "evaluation.max_trace_s", 600.0, 1.0, 86400.0);
+  c.evaluation.truth = r.boolean(ev["truth"], "evaluation.truth", false);
+  c.evaluation.trace = resolve(base_dir, r.text(ev["trace"], "evaluation.trace", ""));
+  c.evaluation.report = resolve(base_dir, r.text(ev["report"], "evaluation.report", ""));
+  c.evaluation.max_trace_s =
+      r.number(ev["max_trace_s"], "evaluation.max_trace_s", 600.0, 1.0, 86400.0);
 
   const YAML::Node joints = root["joints"];
   if (!joints || !joints.IsSequence() || joints.size() == 0)

@@ -22,8 +22,9 @@ struct DifferentiatorConfig {
   double quantum = 2.0 * std::numbers::pi / 40960.0;
   /// Additional white measurement noise on the angle, rad (standard deviation).
   double position_noise = 0.0;
-  /// Schmitt-trigger half-width for sgn(xdd), rad/s^2. Negative: automatic,
-  /// 1.5 x the steady-state acceleration uncertainty at 1 kHz.
+  /// |xdd| above which sgn(xdd) becomes +-1, rad/s^2 (it returns to 0 when
+  /// the estimate crosses zero). Negative: automatic, 2 x the steady-state acceleration
+  /// uncertainty at 1 kHz.
   double acc_sign_threshold = -1.0;
   /// A gap longer than this (s) restarts the filter at the new sample.
   double max_gap = 1.0;
