@@ -111,3 +111,57 @@ hidraw_for() {
   done
   return 1
 }
+
+# proc_state PID: the one-letter state of a process (T = stopped), "" when gone.
+proc_state() { sed -n 's/^[0-9]* (.*) \([A-Za-z]\).*/\1/p' "/proc/$1/stat" 2>/dev/null; }
+proc_stopped_or_gone() { s=$(proc_state "$1"); [ -z "$s" ] || [ "$s" = T ] || [ "$s" = t ]; }
+
+# run_driver_case PREFIX DRIVER PERSONALITY: the console firmware on a
+# FunctionFS gadget with the given personality, our DRIVER on the host side
+# (usb_stack_console_host), tsm-devices --list when it is built.
+run_driver_case() {
+  prefix=$1; driver=$2; personality=$3
+  gadget_create console 0x1209 0x0001 "tsm-haptics console" &&
+    gadget_add_ffs console console || { result "${prefix}_gadget" FAIL "configfs/functionfs setup failed"; return; }
+  usb_stack_ffs_console --ffs /dev/ffs-console --personality "$personality" --prefix "$prefix" &
+  fw=$!
+  WAIT_S=5 wait_for test -e /dev/ffs-console/ep2 ||
+    { result "${prefix}_gadget" FAIL "firmware did not write its descriptors"; kill $fw; return; }
+  t0=$(uptime_ms)
+  gadget_bind console || { result "${prefix}_gadget" FAIL "bind to $UDC_NAME failed"; kill $fw; return; }
+  # Enumerated when the USB device is configured (sysfs bConfigurationValue = 1).
+  if ! WAIT_S=10 wait_for grep -q 1 /sys/bus/usb/devices/1-1/bConfigurationValue; then
+    result "${prefix}_gadget" FAIL "device 1-1 not configured within 10 s"; kill $fw; return
+  fi
+  [ -x /lib/systemd/systemd-udevd ] && udevadm settle -t 5 2>/dev/null
+  result "${prefix}_gadget" PASS "enumerated $(( $(uptime_ms) - t0 )) ms after bind"
+
+  # The listings a user runs: the console must be found by VID:PID with the
+  # driver that can open it.
+  for tool in tsm-devices:--list haptic-server:--list-devices; do
+    prog=${tool%%:*}
+    command -v "$prog" >/dev/null || continue
+    out=$("$prog" "${tool#*:}" 2>&1)
+    line=$(echo "$out" | grep -i "1209:0001" | grep -w "$driver" | head -n1)
+    if [ -n "$line" ]; then
+      result "${prefix}_$(echo "$prog" | tr - _)_list" PASS "$prog ${tool#*:}: $(echo "$line" | tr '\t' ' ')"
+    else
+      result "${prefix}_$(echo "$prog" | tr - _)_list" FAIL "$prog ${tool#*:}: no $driver 1209:0001 line in: $(echo "$out" | tr '\n' '|')"
+    fi
+  done
+
+  usb_stack_console_host --driver "$driver" --prefix "$prefix" --udc "$CONFIGFS/console/UDC" \
+    --seconds "${STREAM_S:-3}" --replugs "${REPLUGS:-2}" &
+  host=$!
+  # The host stops itself (SIGSTOP) to play a host that died silently: the
+  # firmware's watchdog must zero the torque. Let it judge, then continue.
+  if WAIT_S=60 wait_for proc_stopped_or_gone $host && [ -n "$(proc_state $host)" ]; then
+    usleep 300000
+    kill -USR1 $fw
+    usleep 200000
+    kill -CONT $host
+  fi
+  wait $host || echo "usb_stack_console_host exited with status $?"
+  kill -TERM $fw
+  wait $fw 2>/dev/null || true
+}

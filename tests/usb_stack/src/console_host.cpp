@@ -1,0 +1,424 @@
+// Host side of the driver cases: our console driver (`hid` over hidapi or
+// `usb` over libusb, created through the driver registry as the server does)
+// against the firmware on the gadget side of the dummy_hcd cable.
+//
+// Phases, each reported as RESULT <prefix>_<phase> lines:
+//   list      the registry's device listing finds the console by VID/PID
+//   open      open(): DEVICE_INFO and CALIBRATION handshake over the real control path
+//   stream    a 1 kHz loop on absolute deadlines for --seconds, torque enabled:
+//             input sequence, malformed reports, outputs, lateness (METRIC lines)
+//   watchdog  the loop commands torque, then this whole process stops itself
+//             (SIGSTOP: the host dies silently); the case script lets the
+//             firmware judge its watchdog and continues us; the driver must
+//             come back to OK
+//   unplug    --replugs times: unbind the gadget (write "" to --udc) while the
+//             loop commands torque; the driver must report it within one loop
+//             cycle of the kernel removing the device, with zero torque; rebind
+//             must be picked up again, the device coming back disabled
+//
+// Usage: usb_stack_console_host --driver hid|usb --prefix P --udc FILE
+//          [--udc-name dummy_udc.0] [--seconds 3] [--replugs 2]
+//          [--stale-timeout-ms N] [--no-watchdog]
+
+#include <signal.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "guest_report.hpp"
+#include "loop_clock.hpp"
+#include "master_devices/builtin_drivers.hpp"
+#include "master_devices/clock.hpp"
+#include "master_devices/console_device.hpp"
+#include "master_devices/profile.hpp"
+#include "master_devices/registry.hpp"
+#include "stats.hpp"
+
+namespace md = tsmh::master_devices;
+using md::monotonic_ns;
+using tsmh::usb_stack::LoopClock;
+using tsmh::usb_stack::metric;
+using tsmh::usb_stack::result;
+
+namespace {
+
+constexpr std::int64_t kPeriodNs = 1'000'000;
+
+struct Options {
+  std::string driver = "hid";
+  std::string prefix;
+  std::string udc_file;
+  std::string udc_name = "dummy_udc.0";
+  double seconds = 3.0;
+  int replugs = 2;
+  long stale_timeout_ms = 0;  // 0: the driver's default
+  bool watchdog = true;
+  double torque_nm = 0.01;  ///< rendered torque limit, N m
+};
+
+__attribute__((format(printf, 1, 2))) std::string fmt(const char* f, ...) {
+  char b[400];
+  va_list args;
+  va_start(args, f);
+  std::vsnprintf(b, sizeof b, f, args);
+  va_end(args);
+  return b;
+}
+
+double ms(std::int64_t ns) {
+  return static_cast<double>(ns) * 1e-6;
+}
+
+/// sysfs directory that exists exactly while the kernel has the device.
+std::string sysfs_of(const std::string& path) {
+  if (path.rfind("/dev/", 0) == 0) return "/sys/class/hidraw/" + path.substr(5);
+  if (path.rfind("usb:", 0) == 0) return "/sys/bus/usb/devices/" + path.substr(4);
+  return "";
+}
+
+bool exists(const std::string& p) {
+  return !p.empty() && ::access(p.c_str(), F_OK) == 0;
+}
+
+/// Writes the UDC file on a helper thread (bind/unbind block for a while)
+/// and records when the write returned.
+class UdcWriter {
+ public:
+  UdcWriter(std::string file, std::string value)
+      : thread_([this, file = std::move(file), value = std::move(value)] {
+          std::ofstream f(file);
+          f << value << '\n';
+          f.flush();
+          ok_ = static_cast<bool>(f);
+          done_ns_ = monotonic_ns();
+        }) {}
+  ~UdcWriter() { thread_.join(); }
+  std::int64_t done_ns() const { return done_ns_; }
+  bool ok() const { return ok_; }
+
+ private:
+  std::atomic<std::int64_t> done_ns_{0};
+  std::atomic<bool> ok_{false};
+  std::thread thread_;
+};
+
+class Host {
+ public:
+  Host(Options o, md::DriverRegistry& registry) : o_(std::move(o)), registry_(registry) {}
+
+  bool list() {
+    const auto profile = md::builtin_console_profile();
+    std::string found;
+    for (const md::ConnectedDevice& d : registry_.list_connected()) {
+      if (d.driver == o_.driver && d.vendor_id == profile.vendor_id &&
+          d.product_id == profile.product_id)
+        found = d.driver + " " + d.path + " " + md::usb_id_string(d.vendor_id, d.product_id) +
+                " profile " + d.profile + " serial '" + d.serial + "' product '" + d.product + "'";
+    }
+    result(name("list"), !found.empty(),
+           found.empty() ? "no " + o_.driver + " device with the console's VID:PID listed" : found);
+    return !found.empty();
+  }
+
+  bool open() {
+    YAML::Node settings(YAML::NodeType::Map);
+    if (o_.stale_timeout_ms > 0) settings["stale_timeout_ms"] = o_.stale_timeout_ms;
+    try {
+      device_ = registry_.create(o_.driver, settings);
+      console_ = dynamic_cast<md::ConsoleDevice*>(device_.get());
+      const std::int64_t t0 = monotonic_ns();
+      device_->open();
+      result(name("open"), console_ != nullptr,
+             fmt("%s opened in %.1f ms (DEVICE_INFO read, CALIBRATION written and read back)",
+                 console_ ? console_->connected_path().c_str() : "?", ms(monotonic_ns() - t0)));
+      return console_ != nullptr;
+    } catch (const std::exception& e) {
+      result(name("open"), false, e.what());
+      return false;
+    }
+  }
+
+  bool stream() {
+    const md::ConsoleStats before = console_->stats();
+    device_->set_enabled(true);
+    LoopClock clock(kPeriodNs);
+    const auto ticks = static_cast<int>(o_.seconds * 1000.0);
+    std::vector<double> lateness_us, age_us;
+    lateness_us.reserve(static_cast<std::size_t>(ticks));
+    age_us.reserve(static_cast<std::size_t>(ticks));
+    int not_ok = 0, fresh = 0, enabled = 0, torque_seen = 0;
+    std::uint64_t last_seq = 0;
+    for (int k = 0; k < ticks; ++k) {
+      const std::int64_t now = clock.wait();
+      lateness_us.push_back(static_cast<double>(clock.lateness_ns()) * 1e-3);
+      const md::DeviceReading r = device_->read(now);
+      device_->write_torque(render(now, r));
+      if (r.status != md::DeviceStatus::kOk) ++not_ok;
+      if (r.fresh && r.sequence != last_seq) {
+        ++fresh;
+        last_seq = r.sequence;
+        age_us.push_back(static_cast<double>(now - r.t_ns) * 1e-3);
+      }
+      if (r.enabled) ++enabled;
+      if (r.tau_commanded[0] != 0.0 || r.tau_commanded[1] != 0.0) ++torque_seen;
+    }
+    const md::ConsoleStats s = console_->stats();
+    const auto late = tsmh::usb_stack::percentiles(lateness_us);
+    const auto age = tsmh::usb_stack::percentiles(age_us);
+    const auto d = [](std::uint64_t a, std::uint64_t b) {
+      return static_cast<unsigned long long>(a - b);
+    };
+    const bool ok = s.disconnects == before.disconnects && s.bad_reports == before.bad_reports &&
+                    s.outputs_failed == before.outputs_failed && enabled > 0 && torque_seen > 0 &&
+                    s.reports > before.reports;
+    const std::string status(md::to_string(device_->status()));
+    const std::string error = device_->last_error();
+    result(
+        name("stream"), ok && device_->status() == md::DeviceStatus::kOk,
+        fmt("%d ticks: %d fresh samples, input reports %llu, lost (sequence gaps) %llu, malformed "
+            "%llu; outputs sent %llu, failed %llu; disconnects %llu; ticks not OK %d, enabled %d, "
+            "torque sent %d; now %s%s%s",
+            ticks, fresh, d(s.reports, before.reports), d(s.lost_reports, before.lost_reports),
+            d(s.bad_reports, before.bad_reports), d(s.outputs_sent, before.outputs_sent),
+            d(s.outputs_failed, before.outputs_failed), d(s.disconnects, before.disconnects),
+            not_ok, enabled, torque_seen, status.c_str(), error.empty() ? "" : ": ",
+            error.c_str()));
+    metric(name("input_reports_per_s"),
+           static_cast<double>(s.reports - before.reports) / o_.seconds, "Hz");
+    metric(name("lost_reports"), static_cast<double>(s.lost_reports - before.lost_reports),
+           "reports");
+    metric(name("fresh_ratio"), static_cast<double>(fresh) / ticks, "of ticks");
+    metric(name("ticks_not_ok"), not_ok, "ticks");
+    metric(name("lateness_p50"), late.p50, "us");
+    metric(name("lateness_p99"), late.p99, "us");
+    metric(name("lateness_max"), late.max, "us");
+    metric(name("sample_age_p50"), age.p50, "us");
+    metric(name("sample_age_p99"), age.p99, "us");
+    metric(name("sample_age_max"), age.max, "us");
+    return ok;
+  }
+
+  // The case script sees us stopped, asks the firmware for its watchdog
+  // verdict, and continues us.
+  bool watchdog() {
+    device_->set_enabled(true);
+    LoopClock clock(kPeriodNs);
+    for (int k = 0; k < 300; ++k) {  // torque flowing before the host "dies"
+      const std::int64_t now = clock.wait();
+      device_->write_torque(render(now, device_->read(now)));
+    }
+    std::printf("HOST_STOPPING\n");
+    std::fflush(stdout);
+    ::raise(SIGSTOP);
+    // Continued: the driver must be back to OK with fresh samples (stale
+    // samples from the stop are not OK), torque enabled again when asked.
+    const std::int64_t t0 = monotonic_ns();
+    clock.rebase();
+    std::int64_t ok_at = 0, enabled_at = 0;
+    for (int k = 0; k < 2000 && enabled_at == 0; ++k) {
+      const std::int64_t now = clock.wait();
+      const md::DeviceReading r = device_->read(now);
+      if (r.status == md::DeviceStatus::kOk && ok_at == 0) ok_at = now;
+      if (r.status == md::DeviceStatus::kOk && r.enabled) enabled_at = now;
+      device_->write_torque(render(now, r));
+    }
+    result(name("watchdog_resume"), enabled_at != 0,
+           enabled_at != 0 ? fmt("after the stop: OK in %.1f ms, torque enabled again in %.1f ms",
+                                 ms(ok_at - t0), ms(enabled_at - t0))
+                           : fmt("not back to OK with torque within 2000 ticks (OK: %s)",
+                                 ok_at ? "yes" : "no"));
+    return enabled_at != 0;
+  }
+
+  bool unplug(int round) {
+    const std::string tag = fmt("unplug%d", round);
+    const std::string sysfs = sysfs_of(console_->connected_path());
+    if (!exists(sysfs)) {
+      result(name(tag), false, "no sysfs entry for " + console_->connected_path());
+      return false;
+    }
+    device_->set_enabled(true);
+    LoopClock clock(kPeriodNs);
+    for (int k = 0; k < 200; ++k) {  // settle with torque flowing
+      const std::int64_t now = clock.wait();
+      device_->write_torque(render(now, device_->read(now)));
+    }
+    // What the loop sees: read() must say "not OK, zero torque" no later
+    // than the cycle after the kernel removed the device (earlier is fine:
+    // the gadget stops sending before the host notices, and stale samples
+    // count), and must keep saying so until the device is back. Separately,
+    // the driver's own link state (status(), no staleness in it) must flip,
+    // which is what starts its reconnection; its latency is reported.
+    const std::int64_t t_start = monotonic_ns();
+    int gone_tick = -1, not_ok_tick = -1, link_tick = -1, ok_again = 0, torque_leaks = 0;
+    std::int64_t gone_ns = 0, link_ns = 0;
+    {
+      UdcWriter unbind(o_.udc_file, "");
+      for (int tick = 0; tick < 5000 && (gone_tick < 0 || link_tick < 0 || unbind.done_ns() == 0);
+           ++tick) {
+        const std::int64_t now = clock.wait();
+        if (gone_tick < 0 && !exists(sysfs)) {  // the kernel first, then the driver
+          gone_tick = tick;
+          gone_ns = now;
+        }
+        const md::DeviceReading r = device_->read(now);
+        if (link_tick < 0 && device_->status() != md::DeviceStatus::kOk) {
+          link_tick = tick;
+          link_ns = now;
+        }
+        if (r.status != md::DeviceStatus::kOk) {
+          if (not_ok_tick < 0) not_ok_tick = tick;
+          if (r.enabled || std::any_of(r.tau_commanded.begin(), r.tau_commanded.end(),
+                                       [](double t) { return t != 0.0; }))
+            ++torque_leaks;
+        } else if (not_ok_tick >= 0 && gone_tick >= 0) {
+          ++ok_again;  // OK again while the device is unplugged
+        }
+        device_->write_torque(render(now, r));  // the loop keeps asking for torque
+      }
+      if (!unbind.ok()) {
+        result(name(tag), false, "writing '' to " + o_.udc_file + " failed");
+        return false;
+      }
+    }
+    const bool ok = gone_tick >= 0 && not_ok_tick >= 0 && not_ok_tick <= gone_tick + 1 &&
+                    torque_leaks == 0 && ok_again == 0 && link_tick >= 0;
+    result(
+        name(tag), ok,
+        fmt("kernel removed the device %.1f ms after the unbind started (tick %d); read() not OK "
+            "from tick %d (%+d cycles), torque %s, OK again %d times; driver link state lost "
+            "%+.1f ms after the kernel removal",
+            gone_tick >= 0 ? ms(gone_ns - t_start) : -1.0, gone_tick, not_ok_tick,
+            not_ok_tick - gone_tick, torque_leaks == 0 ? "zero" : "NOT zero", ok_again,
+            link_tick >= 0 && gone_tick >= 0 ? ms(link_ns - gone_ns) : -1.0));
+    metric(name(tag + "_link_loss_after_kernel"), ms(link_ns - gone_ns), "ms");
+
+    // Rebind: the supervisor must find the device again by itself.
+    const std::int64_t t_bind = monotonic_ns();
+    std::int64_t ok_at = 0;
+    int enabled_while_not_asked = 0;
+    {
+      UdcWriter bind(o_.udc_file, o_.udc_name);
+      clock.rebase();
+      for (int k = 0; k < 10000 && ok_at == 0; ++k) {
+        const std::int64_t now = clock.wait();
+        const md::DeviceReading r = device_->read(now);
+        if (r.status == md::DeviceStatus::kOk && r.fresh) {
+          ok_at = now;
+          if (r.enabled) ++enabled_while_not_asked;
+        }
+        device_->write_torque(render(now, r));
+      }
+    }
+    // Back, but disabled until the loop asks again: check a few more ticks.
+    for (int k = 0; k < 100 && ok_at != 0; ++k) {
+      const std::int64_t now = clock.wait();
+      const md::DeviceReading r = device_->read(now);
+      if (r.enabled) ++enabled_while_not_asked;
+      device_->write_torque(render(now, r));
+    }
+    const std::string path = console_->connected_path();
+    result(name(tag + "_rebind"), ok_at != 0 && enabled_while_not_asked == 0,
+           ok_at != 0 ? fmt("back as %s %.1f ms after the bind started, %s", path.c_str(),
+                            ms(ok_at - t_bind),
+                            enabled_while_not_asked == 0 ? "torque disabled until re-enabled"
+                                                         : "torque ENABLED without being asked")
+                      : std::string("not back within 10 s: ") + device_->last_error());
+    metric(name(tag + "_rebind_ms"), ok_at != 0 ? ms(ok_at - t_bind) : -1.0, "ms");
+    return ok_at != 0;
+  }
+
+  void close() {
+    if (device_) device_->close();
+  }
+
+ private:
+  std::string name(const std::string& phase) const { return o_.prefix + "_" + phase; }
+  // A soft virtual spring-damper the handle follows (joint 0 tracks a slow
+  // sine, joint 1 is pushed off centre by a constant bias), as a haptic
+  // loop renders: motor current flows all the time, and the handle stays
+  // inside its workspace only if the driver's angle and torque signs agree.
+  // Without a reading the previous command is repeated: the driver, not
+  // the loop, must zero the torque when the device goes away.
+  md::JointArray render(std::int64_t now, const md::DeviceReading& r) {
+    if (r.status != md::DeviceStatus::kOk || r.sequence == 0) return last_tau_;
+    // Soft enough (1.1 Hz with the handle's inertia, overdamped by its own
+    // friction) to stay stable with the tens of ms of delay an emulated,
+    // loaded guest adds.
+    constexpr double kStiffness = 0.01;  // N m / rad
+    const double t = static_cast<double>(now) * 1e-9;
+    const std::array<double, 2> ref{0.2 * std::sin(2.0 * 3.14159265 * 0.5 * t), 0.0};
+    const std::array<double, 2> bias{0.0, o_.torque_nm * 0.2};
+    for (std::size_t j = 0; j < 2 && j < r.dof; ++j) {
+      last_tau_[j] =
+          std::clamp(-kStiffness * (r.q[j] - ref[j]) + bias[j], -o_.torque_nm, o_.torque_nm);
+    }
+    return last_tau_;
+  }
+
+  Options o_;
+  md::DriverRegistry& registry_;
+  std::unique_ptr<md::Device> device_;
+  md::ConsoleDevice* console_ = nullptr;
+  md::JointArray last_tau_{};
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (flag == "--no-watchdog") {
+      o.watchdog = false;
+    } else if (flag == "--driver" && has_value) {
+      o.driver = argv[++i];
+    } else if (flag == "--prefix" && has_value) {
+      o.prefix = argv[++i];
+    } else if (flag == "--udc" && has_value) {
+      o.udc_file = argv[++i];
+    } else if (flag == "--udc-name" && has_value) {
+      o.udc_name = argv[++i];
+    } else if (flag == "--seconds" && has_value) {
+      o.seconds = std::atof(argv[++i]);
+    } else if (flag == "--replugs" && has_value) {
+      o.replugs = std::atoi(argv[++i]);
+    } else if (flag == "--stale-timeout-ms" && has_value) {
+      o.stale_timeout_ms = std::atol(argv[++i]);
+    } else {
+      std::fprintf(stderr, "console_host: bad argument %s\n", flag.c_str());
+      return 2;
+    }
+  }
+  if (o.prefix.empty()) o.prefix = o.driver;
+  if (o.udc_file.empty()) {
+    std::fprintf(stderr, "console_host: --udc FILE is required\n");
+    return 2;
+  }
+
+  md::DriverRegistry registry;
+  md::register_builtin_drivers(registry);
+  Host host(o, registry);
+  host.list();
+  if (!host.open()) return 1;
+  host.stream();
+  if (o.watchdog) host.watchdog();
+  for (int k = 1; k <= o.replugs; ++k) {
+    if (!host.unplug(k)) break;
+  }
+  host.close();
+  return 0;
+}
