@@ -34,6 +34,15 @@ void LatencyHistogram::record(std::int64_t latency_ns) noexcept {
   count_.store(n + 1, std::memory_order_release);
 }
 
+void LatencyHistogram::reset() noexcept {
+  count_.store(0, std::memory_order_release);
+  for (auto& b : buckets_)
+    b.store(0, std::memory_order_relaxed);
+  sum_ns_.store(0, std::memory_order_relaxed);
+  min_ns_.store(0, std::memory_order_relaxed);
+  max_ns_.store(0, std::memory_order_relaxed);
+}
+
 LatencySummary LatencyHistogram::summary() const noexcept {
   LatencySummary s;
   s.count = count_.load(std::memory_order_acquire);

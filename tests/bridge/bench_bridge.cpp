@@ -159,25 +159,33 @@ void bench_read(const std::string& prefix) {
 }
 
 void bench_publish_cost(const std::string& prefix, int count) {
-  const BridgeConfig cfg{std::string(kDefaultLcmUrl), prefix + "PUB_"};
-  // A subscriber exists, as in operation (the kernel loops packets back to it).
-  Receiver rx(cfg);
-  auto& inbox = rx.subscribe<SlaveStateSample>();
-  rx.start();
-  Sender notify_tx(cfg);
+  // One channel per way of sending, each with a subscriber, as in operation
+  // (the kernel copies every datagram to the local subscribers in sendmsg).
+  const BridgeConfig direct_cfg{std::string(kDefaultLcmUrl), prefix + "PUBD_"};
+  const BridgeConfig notify_cfg{std::string(kDefaultLcmUrl), prefix + "PUBN_"};
+  const BridgeConfig poll_cfg{std::string(kDefaultLcmUrl), prefix + "PUBP_"};
+  Receiver rx_direct(direct_cfg), rx_notify(notify_cfg), rx_poll(poll_cfg);
+  auto& in_direct = rx_direct.subscribe<SlaveStateSample>();
+  auto& in_notify = rx_notify.subscribe<SlaveStateSample>();
+  auto& in_poll = rx_poll.subscribe<SlaveStateSample>();
+  rx_direct.start();
+  rx_notify.start();
+  rx_poll.start();
+  Sender notify_tx(notify_cfg);
   auto& notify_box = notify_tx.outbox<SlaveStateSample>();
   notify_tx.start();
-  Sender poll_tx(cfg, SenderOptions{std::chrono::microseconds(100)});
+  Sender poll_tx(poll_cfg, SenderOptions{std::chrono::microseconds(100)});
   auto& poll_box = poll_tx.outbox<SlaveStateSample>();
   poll_tx.start();
-  const std::string channel = channel_name(cfg.prefix, Channel::SlaveState);
+  const std::string channel = channel_name(direct_cfg.prefix, Channel::SlaveState);
 
   // Interleaved at 1 kHz each so that all three see the same machine load.
   std::vector<double> direct_us, notify_us, poll_us;
   std::int64_t next = monotonic_now_ns();
-  std::int64_t seq = 0;
+  int seq = 0;
   auto timed = [&](std::vector<double>& out, auto&& publish) {
-    const SlaveStateSample s = sample(seq++);
+    const SlaveStateSample s = sample(seq / 3);
+    ++seq;
     const std::int64_t t0 = monotonic_now_ns();
     publish(s);
     out.push_back(static_cast<double>(monotonic_now_ns() - t0) * 1e-3);
@@ -194,10 +202,13 @@ void bench_publish_cost(const std::string& prefix, int count) {
   print_row("lcm publish directly (encode + sendmsg)", "us", direct_us);
   print_row("Outbox::publish, futex wake", "us", notify_us);
   print_row("Outbox::publish, 100 us polling thread", "us", poll_us);
-  std::printf("  outboxes dropped %llu + %llu (ring full); receiver accepted %llu of %lld\n",
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::printf("  outboxes dropped %llu + %llu (ring full); accepted %llu / %llu / %llu of %d\n",
               static_cast<unsigned long long>(notify_box.stats().dropped_full),
               static_cast<unsigned long long>(poll_box.stats().dropped_full),
-              static_cast<unsigned long long>(inbox.stats().accepted), static_cast<long long>(seq));
+              static_cast<unsigned long long>(in_direct.stats().accepted),
+              static_cast<unsigned long long>(in_notify.stats().accepted),
+              static_cast<unsigned long long>(in_poll.stats().accepted), count);
 }
 
 void bench_latency(const std::string& prefix, int count, const Mode& mode, const char* tag) {

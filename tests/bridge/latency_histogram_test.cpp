@@ -36,6 +36,15 @@ TEST(LatencyHistogram, SummaryOfKnownSamples) {
   EXPECT_EQ(s.p50_us, 11.0) << "upper edge of the 10 us bucket";
   EXPECT_GE(s.p99_us, 100.0);
   EXPECT_LE(s.p99_us, 112.5);
+
+  h.reset();  // a new window
+  EXPECT_EQ(h.summary().count, 0U);
+  h.record(3'000);
+  const LatencySummary w = h.summary();
+  EXPECT_EQ(w.count, 1U);
+  EXPECT_EQ(w.min_us, 3.0);
+  EXPECT_EQ(w.max_us, 3.0);
+  EXPECT_EQ(w.p99_us, 3.0) << "capped at the exact maximum";
 }
 
 }  // namespace

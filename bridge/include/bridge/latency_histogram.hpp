@@ -24,6 +24,9 @@ class LatencyHistogram {
   void record(std::int64_t latency_ns) noexcept;
   /// Any thread; a summary taken during a record() may be off by that one sample.
   LatencySummary summary() const noexcept;
+  /// Writer thread only: forget everything (e.g. start a new statistics
+  /// window). A concurrent summary() may see a partly cleared histogram.
+  void reset() noexcept;
 
   /// Bucket index of a latency in microseconds (exposed for tests).
   static int bucket_of(std::uint64_t us) noexcept;
