@@ -216,7 +216,7 @@ void ConsoleDevice::close() noexcept {
   // Ask for one last zero-torque, disabled output report before stopping.
   enable_requested_ = false;
   const std::uint64_t sent = n_sent_.load();
-  for (int i = 0; i < 50 && link_up_ && n_sent_.load() < sent + 2; ++i) {
+  for (int i = 0; i < 100 && link_up_ && n_sent_.load() < sent + 2; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   provider_->set_arrival_callback({});

@@ -79,7 +79,7 @@ device:
 }
 
 TEST(Registry, EmulatorDriverRunsTheConsoleCodeWithASimulatedOperator) {
-  const YAML::Node settings = YAML::Load("operator: {scenario: sine}\n");
+  const YAML::Node settings = YAML::Load("operator: {scenario: sine}\nstale_timeout_ms: 2000\n");
   auto dev = builtin().create("emulator", settings);
   dev->open();
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
