@@ -1,0 +1,119 @@
+// The real-time node over real LCM (udpm on this host): it follows
+// MASTER_COMMAND, publishes SLAVE_STATE and SLAVE_TRUTH with matching seq,
+// and holds position when the commands stop. Skips (with the fix) where the
+// host has no multicast route.
+
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <ctime>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <string>
+#include <tsmh/master_command_t.hpp>
+#include <tsmh/slave_state_t.hpp>
+#include <tsmh/slave_truth_t.hpp>
+
+namespace {
+
+double monotonic_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+struct Listener {
+  tsmh::slave_state_t last{};
+  long states = 0;
+  std::map<std::int64_t, double> truth_x_out;  // seq -> true joint angle
+  double last_receive_s = 0.0;
+  void on_state(const lcm::ReceiveBuffer*, const std::string&, const tsmh::slave_state_t* m) {
+    last = *m;
+    ++states;
+    last_receive_s = monotonic_s();
+  }
+  void on_truth(const lcm::ReceiveBuffer*, const std::string&, const tsmh::slave_truth_t* m) {
+    if (m->num_joints == 2) truth_x_out[m->seq] = m->x_out[0];
+  }
+};
+
+// Handles incoming messages for `seconds`, calling `each()` about every 2 ms.
+template <class F>
+void pump(lcm::LCM& lcm, double seconds, F each) {
+  const double end = monotonic_s() + seconds;
+  double next = monotonic_s();
+  while (monotonic_s() < end) {
+    if (monotonic_s() >= next) {
+      each();
+      next += 0.002;
+    }
+    pollfd p{lcm.getFileno(), POLLIN, 0};
+    if (poll(&p, 1, 1) > 0) lcm.handle();
+  }
+}
+
+}  // namespace
+
+TEST(Node, FollowsCommandsPublishesStateAndTruthAndHoldsWhenCommandsStop) {
+  lcm::LCM lcm;  // LCM_DEFAULT_URL or LCM's default, like the node
+  if (!lcm.good())
+    GTEST_SKIP() << "LCM cannot start here (no multicast route?): ip link set lo multicast on; "
+                    "ip route add 224.0.0.0/4 dev lo";
+  const std::string prefix = "VSTEST" + std::to_string(::getpid()) + "_";
+
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    execl(VIRTUAL_SLAVE_BIN, VIRTUAL_SLAVE_BIN, "--duration", "5", "--prefix", prefix.c_str(),
+          "--tissue", "none", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+
+  Listener listener;
+  lcm.subscribe(prefix + "SLAVE_STATE", &Listener::on_state, &listener);
+  lcm.subscribe(prefix + "SLAVE_TRUTH", &Listener::on_truth, &listener);
+  pump(lcm, 1.0, [] {});
+  ASSERT_GT(listener.states, 100) << "no SLAVE_STATE from the node";
+  EXPECT_EQ(listener.last.num_joints, 2);
+  EXPECT_EQ(listener.last.status & 2, 2) << "holding before any command";
+  EXPECT_NEAR(listener.last.radius_m[0], 0.01, 1e-12);
+  EXPECT_NEAR(static_cast<double>(listener.last.utime) * 1e-6, listener.last_receive_s, 0.5)
+      << "utime is CLOCK_MONOTONIC microseconds";
+
+  // Command 0.3 / -0.2 rad for 1.5 s.
+  tsmh::master_command_t cmd{};
+  cmd.num_joints = 2;
+  cmd.position_ref = {0.3, -0.2};
+  cmd.enable = true;
+  pump(lcm, 1.5, [&] {
+    cmd.utime = static_cast<std::int64_t>(monotonic_s() * 1e6);
+    ++cmd.seq;
+    lcm.publish(prefix + "MASTER_COMMAND", &cmd);
+  });
+  EXPECT_EQ(listener.last.status & 1, 1) << "following";
+  EXPECT_NEAR(listener.last.x_out[0], 0.3, 0.01);
+  EXPECT_NEAR(listener.last.x_out[1], -0.2, 0.01);
+
+  // Silence: the node holds where it is.
+  pump(lcm, 0.5, [] {});
+  EXPECT_EQ(listener.last.status & 2, 2) << "holding after the commands stopped";
+  const double held = listener.last.x_out[0];
+  double lo = held, hi = held;
+  pump(lcm, 1.0, [&] {
+    lo = std::min(lo, listener.last.x_out[0]);
+    hi = std::max(hi, listener.last.x_out[0]);
+  });
+  EXPECT_LT(hi - lo, 0.003);
+  EXPECT_NEAR(held, 0.3, 0.01);
+  // SLAVE_TRUTH carries the same seq as SLAVE_STATE of the same tick.
+  EXPECT_TRUE(listener.truth_x_out.count(listener.last.seq) == 1 ||
+              listener.truth_x_out.count(listener.last.seq - 1) == 1);
+
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
