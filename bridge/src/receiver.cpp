@@ -66,13 +66,27 @@ void Receiver::stop() noexcept {
   [[maybe_unused]] const ssize_t m = read(wake_fd_, &drained, sizeof drained);
 }
 
+void Receiver::back_off() noexcept {
+  // Counted, then 100 ms of quiet (still woken by stop()) instead of spinning
+  // on a descriptor that keeps failing.
+  transport_errors_.fetch_add(1, std::memory_order_relaxed);
+  pollfd wake{wake_fd_, POLLIN, 0};
+  poll(&wake, 1, 100);
+}
+
 void Receiver::run() noexcept {
   const int lcm_fd = lcm_fd_;
   while (!stop_requested_.load(std::memory_order_relaxed)) {
     pollfd fds[2] = {{lcm_fd, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
     const int ready = poll(fds, 2, -1);
     if (ready < 0) {
-      if (errno != EINTR) transport_errors_.fetch_add(1, std::memory_order_relaxed);
+      if (errno != EINTR) back_off();
+      continue;
+    }
+    if ((fds[0].revents & (POLLERR | POLLHUP | POLLNVAL)) != 0 && (fds[0].revents & POLLIN) == 0) {
+      // LCM's descriptor is broken (e.g. a file:// provider at its end):
+      // count it and back off instead of spinning, still waking on stop().
+      back_off();
       continue;
     }
     if ((fds[0].revents & POLLIN) == 0) continue;
@@ -81,7 +95,7 @@ void Receiver::run() noexcept {
     for (;;) {
       const int handled = lcm_->handleTimeout(0);
       if (handled > 0) continue;
-      if (handled < 0) transport_errors_.fetch_add(1, std::memory_order_relaxed);
+      if (handled < 0) back_off();  // e.g. a file:// provider past the end of its log
       break;
     }
   }

@@ -129,33 +129,36 @@ TEST(LcmLog, LoggerRoundTripThroughTsmConvert) {
 }
 #endif
 
+// Writes 100 SLAVE_STATE events (seq 0..99, 1 ms apart) and one corrupt event.
+void write_replay_log(const fs::path& log, const std::string& channel) {
+  lcm::LogFile out(log.string(), "w");
+  ASSERT_TRUE(out.good());
+  const std::int64_t t0 = monotonic_utime();
+  std::vector<std::uint8_t> bytes;
+  for (int i = 0; i < 100; ++i) {
+    encode_sample(test::make_state(i, t0 + i * 1000), bytes);
+    lcm::LogEvent ev{};
+    ev.timestamp = 1'700'000'000'000'000 + i * 1000;  // 1 kHz, as recorded
+    ev.channel = channel;
+    ev.datalen = static_cast<std::int32_t>(bytes.size());
+    ev.data = bytes.data();
+    ASSERT_EQ(out.writeEvent(&ev), 0);
+  }
+  std::uint8_t junk[7] = {9, 9, 9, 9, 9, 9, 9};
+  lcm::LogEvent ev{};
+  ev.timestamp = 1'700'000'000'100'000;
+  ev.channel = channel;
+  ev.datalen = sizeof junk;
+  ev.data = junk;
+  ASSERT_EQ(out.writeEvent(&ev), 0);
+}
+
 TEST(LcmLog, LogplayerReplaysIntoOurReceiver) {
   const fs::path dir = temp_dir();
   const std::string prefix = test::unique_prefix();
   const std::string channel = channel_name(prefix, Channel::SlaveState);
   const fs::path log = dir / "replay.lcmlog";
-  {
-    lcm::LogFile out(log.string(), "w");
-    ASSERT_TRUE(out.good());
-    const std::int64_t t0 = monotonic_utime();
-    std::vector<std::uint8_t> bytes;
-    for (int i = 0; i < 100; ++i) {
-      encode_sample(test::make_state(i, t0 + i * 1000), bytes);
-      lcm::LogEvent ev{};
-      ev.timestamp = 1'700'000'000'000'000 + i * 1000;  // 1 kHz, as recorded
-      ev.channel = channel;
-      ev.datalen = static_cast<std::int32_t>(bytes.size());
-      ev.data = bytes.data();
-      ASSERT_EQ(out.writeEvent(&ev), 0);
-    }
-    std::uint8_t junk[7] = {9, 9, 9, 9, 9, 9, 9};  // a corrupt message in the log
-    lcm::LogEvent ev{};
-    ev.timestamp = 1'700'000'000'100'000;
-    ev.channel = channel;
-    ev.datalen = sizeof junk;
-    ev.data = junk;
-    ASSERT_EQ(out.writeEvent(&ev), 0);
-  }
+  write_replay_log(log, channel);
 
   Receiver rx({.url = test::test_url(), .prefix = prefix});
   // Logged utimes are from the past: no latency, but ordering still applies.
@@ -172,6 +175,26 @@ TEST(LcmLog, LogplayerReplaysIntoOurReceiver) {
   SlaveStateSample s;
   ASSERT_EQ(inbox.latest(s), 100U);
   EXPECT_EQ(s.seq, 99);
+  fs::remove_all(dir);
+}
+
+// LCM's file:// provider as the Receiver's URL: a log replayed straight into
+// the bridge (e.g. `haptic-server --lcm-url file:///run.lcmlog?speed=1`). At
+// the end of the log LCM's handle() fails; the receive thread must back off,
+// not spin.
+TEST(LcmLog, FileProviderUrlFeedsAReceiver) {
+  const fs::path dir = temp_dir();
+  const std::string prefix = test::unique_prefix();
+  const fs::path log = dir / "replay.lcmlog";
+  write_replay_log(log, channel_name(prefix, Channel::SlaveState));
+  Receiver rx({.url = test::cat("file://", log.string(), "?speed=0"), .prefix = prefix});
+  auto& inbox = rx.subscribe<SlaveStateSample>({.expected_joints = 2, .clocks_shared = false});
+  rx.start();
+  ASSERT_TRUE(test::wait_until([&] { return inbox.stats().received == 101; }));
+  std::this_thread::sleep_for(300ms);  // past the end of the log
+  EXPECT_EQ(inbox.stats().accepted, 100U);
+  EXPECT_LT(rx.transport_errors(), 100U) << "the receive thread spun on a failing descriptor";
+  rx.stop();
   fs::remove_all(dir);
 }
 

@@ -61,6 +61,7 @@ class Receiver {
  private:
   void add(std::unique_ptr<InboxBase> inbox);
   void run() noexcept;
+  void back_off() noexcept;
 
   BridgeConfig config_;
   std::unique_ptr<lcm::LCM> lcm_;
