@@ -66,7 +66,9 @@ class EmulatorTransport final : public Transport {
     std::lock_guard lock(bus_.mutex_);
     if (session_->lost || !bus_.plugged_) return false;
     // The firmware ignores (and counts) malformed reports, like a real device.
-    (void)bus_.firmware_.on_output_report(report);
+    if (!bus_.firmware_.on_output_report(report) && bus_.options_.after_output) {
+      bus_.options_.after_output(bus_.firmware_);
+    }
     return true;
   }
 

@@ -8,7 +8,10 @@
 #include <time.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <thread>
@@ -97,9 +100,25 @@ int main(int argc, char** argv) {
     md::EmulatorBus::Options o;
     o.clock = md::EmulatorBus::Clock::kRealTime;
     o.firmware = md::firmware_for_profile(md::builtin_console_profile());
+    // Command-to-motor latency: the loop writes a torque that encodes its
+    // tick (k % 1000 + 1) x 0.2 mN m; the firmware side decodes the torque it
+    // applies and looks up when that tick wrote it.
+    auto written_ns = std::make_shared<std::array<std::atomic<std::int64_t>, 1000>>();
+    auto latency_us = std::make_shared<std::vector<double>>();
+    latency_us->reserve(100000);
+    auto last_index = std::make_shared<int>(-1);
+    o.after_output = [written_ns, latency_us, last_index](const md::Firmware& fw) {
+      const double tau = fw.applied_torque_nm(1);
+      const int index = static_cast<int>(std::lround(tau / 2e-4)) - 1;
+      if (index < 0 || index >= 1000 || index == *last_index) return;
+      *last_index = index;
+      const std::int64_t t = (*written_ns)[static_cast<std::size_t>(index)].load();
+      if (t > 0) latency_us->push_back((md::monotonic_ns() - t) * 1e-3);
+    };
     auto bus = std::make_shared<md::EmulatorBus>(o);
     md::ConsoleSettings cs;
     cs.reconnect_interval_ms = 20;
+    cs.command_timeout_ms = 100;
     md::ConsoleDevice dev("emulator", md::builtin_console_profile(), cs, bus);
     dev.open();
     dev.set_enabled(true);
@@ -120,7 +139,8 @@ int main(int argc, char** argv) {
       const std::int64_t t0 = md::monotonic_ns();
       const md::DeviceReading r = dev.read(now);
       const std::int64_t t1 = md::monotonic_ns();
-      dev.write_torque(md::JointArray{0.05 * std::sin(k * 0.01), 0.0});
+      (*written_ns)[static_cast<std::size_t>(k % 1000)] = md::monotonic_ns();
+      dev.write_torque(md::JointArray{0.05 * std::sin(k * 0.01), (k % 1000 + 1) * 2e-4});
       const std::int64_t t2 = md::monotonic_ns();
       read_ns.push_back(static_cast<double>(t1 - t0));
       write_ns.push_back(static_cast<double>(t2 - t1));
@@ -141,6 +161,9 @@ int main(int argc, char** argv) {
     print("read() cost", "ns", percentiles(read_ns));
     print("write_torque() cost", "ns", percentiles(write_ns));
     print("loop wake-up lateness", "us", percentiles(late_us));
+    std::vector<double> latency;
+    bus->with_firmware([&](md::Firmware&) { latency = *latency_us; });
+    print("write_torque() -> motor current", "us", percentiles(latency));
     std::printf(
         "  fresh readings %d of %zu OK ticks; reports %llu, lost %llu, bad %llu, outputs %llu\n",
         fresh, age_us.size(), static_cast<unsigned long long>(s.reports),

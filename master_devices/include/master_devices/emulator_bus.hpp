@@ -39,6 +39,9 @@ class EmulatorBus final : public TransportProvider {
     /// Called on the bus's clock (the firmware locked) before each firmware
     /// step, e.g. to apply an operator's hand torque. Optional.
     std::function<void(Firmware&, std::int64_t dt_ns)> world;
+    /// Called (firmware locked) right after the firmware accepted an output
+    /// report: lets benchmarks time command-to-motor latency. Optional.
+    std::function<void(const Firmware&)> after_output;
     /// Start unplugged (replug() plugs it in).
     bool start_unplugged = false;
   };
