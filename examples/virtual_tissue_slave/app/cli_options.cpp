@@ -127,6 +127,7 @@ Setup make_setup(const CliOptions& o, const Scenario* scenario) {
     s.reroute.at_s = *o.reroute_at_s;
     s.reroute.sheath1_wrap_rad = w1;
     s.reroute.sheath2_wrap_rad = w2;
+    validate(s.reroute);
   }
   validate(s.params);
   return s;

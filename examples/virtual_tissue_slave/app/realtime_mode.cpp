@@ -14,6 +14,7 @@
 #include <ctime>
 
 #include "virtual_tissue_slave/command_gate.hpp"
+#include "virtual_tissue_slave/offline.hpp"
 
 namespace tsmh::virtual_tissue_slave::app {
 namespace {
@@ -121,7 +122,6 @@ int run_realtime_mode(const CliOptions& o) {
   std::int64_t overruns = 0, seq = 0;
   const Reroute& rr = setup.reroute;
   bool rerouted = std::isnan(rr.at_s);
-  const JointParams& base = setup.params.joints[static_cast<std::size_t>(setup.joint_index)];
 
   std::int64_t next = bridge::monotonic_now_ns() + period_ns;
   while (!g_stop && (end_ticks < 0 || seq < end_ticks)) {
@@ -149,15 +149,7 @@ int run_realtime_mode(const CliOptions& o) {
     }
     const auto& refs = gate.update(view, dt);
     if (!rerouted && slave.time() >= rr.at_s) {
-      const double f1 =
-          base.tendon1.wrap_rad > 0 ? rr.sheath1_wrap_rad / base.tendon1.wrap_rad : 1.0;
-      const double w2 =
-          std::isnan(rr.sheath2_wrap_rad) ? base.tendon2.wrap_rad * f1 : rr.sheath2_wrap_rad;
-      const double f2 = base.tendon2.wrap_rad > 0 ? w2 / base.tendon2.wrap_rad : 1.0;
-      for (int j = 0; j < kJoints; ++j) {
-        const auto& jp = setup.params.joints[static_cast<std::size_t>(j)];
-        slave.joint(j).set_wraps(jp.tendon1.wrap_rad * f1, jp.tendon2.wrap_rad * f2);
-      }
+      apply_reroute(slave, setup.params, rr, setup.joint_index);
       rerouted = true;
     }
     const SlaveSample& s = slave.tick(refs);

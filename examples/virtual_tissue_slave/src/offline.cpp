@@ -6,6 +6,29 @@
 
 namespace tsmh::virtual_tissue_slave {
 
+void validate(const Reroute& rr) {
+  if (std::isnan(rr.at_s)) return;
+  if (!(std::isfinite(rr.at_s) && rr.at_s >= 0))
+    throw std::invalid_argument("--reroute-at must be >= 0 s");
+  if (!(std::isfinite(rr.sheath1_wrap_rad) && rr.sheath1_wrap_rad >= 0))
+    throw std::invalid_argument("--reroute-wrap must be >= 0 rad");
+  if (!std::isnan(rr.sheath2_wrap_rad) &&
+      !(std::isfinite(rr.sheath2_wrap_rad) && rr.sheath2_wrap_rad >= 0))
+    throw std::invalid_argument("--reroute-wrap: the second wrap must be >= 0 rad");
+}
+
+void apply_reroute(VirtualSlave& slave, const SlaveParams& params, const Reroute& rr, int joint) {
+  const auto& base = params.joints[static_cast<std::size_t>(joint)];
+  const double f1 = base.tendon1.wrap_rad > 0 ? rr.sheath1_wrap_rad / base.tendon1.wrap_rad : 1.0;
+  const double w2 =
+      std::isnan(rr.sheath2_wrap_rad) ? base.tendon2.wrap_rad * f1 : rr.sheath2_wrap_rad;
+  const double f2 = base.tendon2.wrap_rad > 0 ? w2 / base.tendon2.wrap_rad : 1.0;
+  for (int j = 0; j < kJoints; ++j) {
+    const auto& jp = params.joints[static_cast<std::size_t>(j)];
+    slave.joint(j).set_wraps(jp.tendon1.wrap_rad * f1, jp.tendon2.wrap_rad * f2);
+  }
+}
+
 OfflineStats run_offline(const SlaveParams& params, const OfflineOptions& options,
                          const std::function<void(const SlaveSample&)>& sink) {
   if (!(std::isfinite(options.duration_s) && options.duration_s > 0))
@@ -15,16 +38,8 @@ OfflineStats run_offline(const SlaveParams& params, const OfflineOptions& option
   if (options.joint < 0 || options.joint >= kJoints)
     throw std::invalid_argument("--joint must be 0 or 1");
   const Reroute& rr = options.reroute;
+  validate(rr);
   const bool reroute = !std::isnan(rr.at_s);
-  if (reroute) {
-    if (!(std::isfinite(rr.at_s) && rr.at_s >= 0))
-      throw std::invalid_argument("--reroute-at must be >= 0 s");
-    if (!(std::isfinite(rr.sheath1_wrap_rad) && rr.sheath1_wrap_rad >= 0))
-      throw std::invalid_argument("--reroute-wrap must be >= 0 rad");
-    if (!std::isnan(rr.sheath2_wrap_rad) &&
-        !(std::isfinite(rr.sheath2_wrap_rad) && rr.sheath2_wrap_rad >= 0))
-      throw std::invalid_argument("--reroute-wrap: the second wrap must be >= 0 rad");
-  }
 
   SlaveParams p = params;
   TissueParams tissue = options.tissue ? *options.tissue : tissue_preset(options.scenario.tissue);
@@ -48,18 +63,7 @@ OfflineStats run_offline(const SlaveParams& params, const OfflineOptions& option
   for (long k = 0; k < n; ++k) {
     const double t = static_cast<double>(k) * p.control_period_s;
     if (reroute && !rerouted && t >= rr.at_s) {
-      // Absolute wraps for the selected joint; the other joint's sheaths bend
-      // by the same factor.
-      const auto& base = p.joints[static_cast<std::size_t>(options.joint)];
-      const double f1 =
-          base.tendon1.wrap_rad > 0 ? rr.sheath1_wrap_rad / base.tendon1.wrap_rad : 1.0;
-      const double w2 =
-          std::isnan(rr.sheath2_wrap_rad) ? base.tendon2.wrap_rad * f1 : rr.sheath2_wrap_rad;
-      const double f2 = base.tendon2.wrap_rad > 0 ? w2 / base.tendon2.wrap_rad : 1.0;
-      for (int j = 0; j < kJoints; ++j) {
-        const auto& jp = p.joints[static_cast<std::size_t>(j)];
-        slave.joint(j).set_wraps(jp.tendon1.wrap_rad * f1, jp.tendon2.wrap_rad * f2);
-      }
+      apply_reroute(slave, p, rr, options.joint);
       rerouted = true;
     }
     sink(slave.tick(refs_at(t)));

@@ -24,6 +24,15 @@ struct Reroute {
   double sheath2_wrap_rad = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// Throws std::invalid_argument naming the option (--reroute-at, --reroute-wrap).
+void validate(const Reroute& reroute);
+
+/// Re-routes now: the sheaths of joint index `joint` get the reroute's
+/// absolute wraps, the other joint's sheaths bend by the same factors
+/// (relative to their wraps in `params`).
+void apply_reroute(VirtualSlave& slave, const SlaveParams& params, const Reroute& reroute,
+                   int joint);
+
 struct OfflineOptions {
   Scenario scenario = make_scenario("sine");
   double duration_s = 30.0;
