@@ -447,8 +447,15 @@ void ConsoleDevice::set_error(const std::string& text) {
 }
 
 void ConsoleDevice::set_error_fixed(const char* text) noexcept {
+  // "hid /dev/hidraw3: <text>", within the reserved capacity (no allocation).
   std::lock_guard lock(error_mutex_);
-  error_.assign(text, std::min(std::char_traits<char>::length(text), kErrorCapacity - 1));
+  const std::string_view parts[] = {
+      driver_, active_ != nullptr ? " " : "",
+      active_ != nullptr ? std::string_view(active_->info().path) : "", ": ", text};
+  error_.clear();
+  for (std::string_view part : parts) {
+    error_.append(part.substr(0, kErrorCapacity - 1 - std::min(error_.size(), kErrorCapacity - 1)));
+  }
 }
 
 std::string ConsoleDevice::last_error() const {

@@ -367,7 +367,7 @@ TEST(ConsoleDevice, WorkspaceViolationIsAFaultNamingTheJoint) {
   const DeviceReading r = rig.cycle();
   EXPECT_EQ(r.status, DeviceStatus::kFault);
   EXPECT_EQ(r.fault, FaultCode::kWorkspace);
-  EXPECT_NE(rig.device->last_error().find("joint 1 at 1.4"), std::string::npos)
+  EXPECT_EQ(rig.device->last_error().rfind("emulator emu:0: joint 1 at 1.4", 0), 0u)
       << rig.device->last_error();
   rig.device->write_torque(JointArray{0.1, 0.1});
   rig.cycle();
