@@ -14,18 +14,21 @@
 
 namespace tsmh::bridge::test {
 
-/// Tests always use the host-local default (ttl=0), never LCM_DEFAULT_URL:
-/// test traffic must not leave this machine.
-inline std::string test_url() {
-  return std::string(kDefaultLcmUrl);
-}
-
 /// Concatenates with += only: GCC 12's -Wrestrict misfires on "literal" + std::string.
 template <class... Parts>
 std::string cat(const Parts&... parts) {
   std::string out;
   (out += ... += parts);
   return out;
+}
+
+/// Tests always use the host-local default group with ttl=0, never
+/// LCM_DEFAULT_URL: test traffic must not leave this machine. The larger
+/// kernel receive buffer (2 MiB, ~1600 small datagrams) keeps exact-count
+/// assertions from depending on how long a busy 2-core machine stalls LCM's
+/// receive thread.
+inline std::string test_url() {
+  return cat(kDefaultLcmUrl, "&recv_buf_size=2097152");
 }
 
 /// "T<pid>_<n>_<start of the test name>_": unique per process and call, and
