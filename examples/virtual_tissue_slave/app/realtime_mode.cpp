@@ -1,8 +1,10 @@
 #include "realtime_mode.hpp"
 
+#include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
 
+#include <atomic>
 #include <bridge/clock.hpp>
 #include <bridge/latency_histogram.hpp>
 #include <bridge/receiver.hpp>
@@ -12,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <thread>
 
 #include "virtual_tissue_slave/command_gate.hpp"
 #include "virtual_tissue_slave/offline.hpp"
@@ -19,10 +22,35 @@
 namespace tsmh::virtual_tissue_slave::app {
 namespace {
 
-volatile std::sig_atomic_t g_stop = 0;  // the only way a signal handler may talk to the loop
-extern "C" void on_signal(int) {
-  g_stop = 1;
-}
+// SIGINT/SIGTERM are blocked in every thread of the process and taken by a
+// watcher thread with sigwait(): no handler, no global flag; the loop reads
+// an atomic it owns.
+class StopOnSignal {
+ public:
+  StopOnSignal() {
+    sigemptyset(&set_);
+    sigaddset(&set_, SIGINT);
+    sigaddset(&set_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set_, nullptr);  // before any other thread exists
+    watcher_ = std::thread([this] {
+      int sig = 0;
+      sigwait(&set_, &sig);
+      stop_.store(true, std::memory_order_relaxed);
+    });
+  }
+  ~StopOnSignal() {
+    if (!stop_.load(std::memory_order_relaxed)) pthread_kill(watcher_.native_handle(), SIGTERM);
+    watcher_.join();
+  }
+  StopOnSignal(const StopOnSignal&) = delete;
+  StopOnSignal& operator=(const StopOnSignal&) = delete;
+  bool requested() const noexcept { return stop_.load(std::memory_order_relaxed); }
+
+ private:
+  sigset_t set_{};
+  std::atomic<bool> stop_{false};
+  std::thread watcher_;
+};
 
 timespec to_timespec(std::int64_t ns) {
   timespec ts{};
@@ -74,6 +102,7 @@ void fill_truth(bridge::SlaveTruthSample& out, const SlaveSample& s) {
 }  // namespace
 
 int run_realtime_mode(const CliOptions& o) {
+  const StopOnSignal stop;
   const Setup setup = make_setup(o, nullptr);
   CommandGateParams gate_params;
   gate_params.timeout_s = o.command_timeout_s;
@@ -96,8 +125,6 @@ int run_realtime_mode(const CliOptions& o) {
   slave.settle(home, 0.5);
   CommandGate gate(gate_params, home);
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
   try_realtime_priority(o.rt_priority);
   rx.start();
   tx.start();
@@ -124,7 +151,7 @@ int run_realtime_mode(const CliOptions& o) {
   bool rerouted = std::isnan(rr.at_s);
 
   std::int64_t next = bridge::monotonic_now_ns() + period_ns;
-  while (!g_stop && (end_ticks < 0 || seq < end_ticks)) {
+  while (!stop.requested() && (end_ticks < 0 || seq < end_ticks)) {
     const timespec ts = to_timespec(next);
     if (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) continue;
     const std::int64_t woke = bridge::monotonic_now_ns();
