@@ -138,6 +138,7 @@ run_driver_case() {
 
   # The listings a user runs: the console must be found by VID:PID with the
   # driver that can open it.
+  echo "USB_STACK_PHASE ${prefix}_tools uptime=$(cut -d' ' -f1 /proc/uptime)"
   for tool in tsm-devices:--list haptic-server:--list-devices; do
     prog=${tool%%:*}
     command -v "$prog" >/dev/null || continue
@@ -150,8 +151,9 @@ run_driver_case() {
     fi
   done
 
+  echo "USB_STACK_PHASE ${prefix}_host uptime=$(cut -d' ' -f1 /proc/uptime)"
   usb_stack_console_host --driver "$driver" --prefix "$prefix" --udc "$CONFIGFS/console/UDC" \
-    --seconds "${STREAM_S:-3}" --replugs "${REPLUGS:-2}" &
+    --seconds "${STREAM_S:-2}" --replugs "${REPLUGS:-2}" &
   host=$!
   # The host stops itself (SIGSTOP) to play a host that died silently: the
   # firmware's watchdog must zero the torque. Let it judge, then continue.

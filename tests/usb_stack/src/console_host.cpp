@@ -17,9 +17,11 @@
 //             must be picked up again, the device coming back disabled
 //
 // Usage: usb_stack_console_host --driver hid|usb --prefix P --udc FILE
-//          [--udc-name dummy_udc.0] [--seconds 3] [--replugs 2]
+//          [--udc-name dummy_udc.0] [--seconds 2] [--replugs 2]
 //          [--stale-timeout-ms N] [--no-watchdog]
 
+#include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -61,7 +63,7 @@ struct Options {
   std::string prefix;
   std::string udc_file;
   std::string udc_name = "dummy_udc.0";
-  double seconds = 3.0;
+  double seconds = 2.0;
   int replugs = 2;
   long stale_timeout_ms = 0;  // 0: the driver's default
   bool watchdog = true;
@@ -69,7 +71,7 @@ struct Options {
 };
 
 __attribute__((format(printf, 1, 2))) std::string fmt(const char* f, ...) {
-  char b[400];
+  char b[1000];
   va_list args;
   va_start(args, f);
   std::vsnprintf(b, sizeof b, f, args);
@@ -87,6 +89,40 @@ std::string sysfs_of(const std::string& path) {
   if (path.rfind("usb:", 0) == 0) return "/sys/bus/usb/devices/" + path.substr(4);
   return "";
 }
+
+/// Our own file descriptor on the device node the driver uses (the hidraw
+/// node, or the usbfs node of "usb:B-P"): the kernel marks it POLLHUP/POLLERR
+/// the moment it tears the device down, the same wake-up the driver gets.
+/// That moment is what the driver's reaction is measured from.
+class UnplugWatch {
+ public:
+  explicit UnplugWatch(const std::string& path) {
+    std::string node = path;
+    if (path.rfind("usb:", 0) == 0) {
+      const std::string dir = "/sys/bus/usb/devices/" + path.substr(4);
+      int bus = 0, dev = 0;
+      std::ifstream(dir + "/busnum") >> bus;
+      std::ifstream(dir + "/devnum") >> dev;
+      char b[64];
+      std::snprintf(b, sizeof b, "/dev/bus/usb/%03d/%03d", bus, dev);
+      node = b;
+    }
+    fd_ = ::open(node.c_str(), O_RDONLY | O_NONBLOCK);
+  }
+  ~UnplugWatch() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  UnplugWatch(const UnplugWatch&) = delete;
+  UnplugWatch& operator=(const UnplugWatch&) = delete;
+  bool valid() const { return fd_ >= 0; }
+  bool hung_up() const {
+    pollfd p{fd_, 0, 0};
+    return ::poll(&p, 1, 0) > 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0;
+  }
+
+ private:
+  int fd_ = -1;
+};
 
 bool exists(const std::string& p) {
   return !p.empty() && ::access(p.c_str(), F_OK) == 0;
@@ -154,14 +190,14 @@ class Host {
     const md::ConsoleStats before = console_->stats();
     device_->set_enabled(true);
     LoopClock clock(kPeriodNs);
-    const auto ticks = static_cast<int>(o_.seconds * 1000.0);
+    // Wall time, not a tick count: a loaded guest runs fewer, later ticks.
+    const std::int64_t t_end = monotonic_ns() + static_cast<std::int64_t>(o_.seconds * 1e9);
     std::vector<double> lateness_us, age_us;
-    lateness_us.reserve(static_cast<std::size_t>(ticks));
-    age_us.reserve(static_cast<std::size_t>(ticks));
-    int not_ok = 0, fresh = 0, enabled = 0, torque_seen = 0;
+    lateness_us.reserve(static_cast<std::size_t>(o_.seconds * 1000.0) + 1);
+    age_us.reserve(static_cast<std::size_t>(o_.seconds * 1000.0) + 1);
+    int ticks = 0, not_ok = 0, fresh = 0, enabled = 0, torque_seen = 0;
     std::uint64_t last_seq = 0;
-    for (int k = 0; k < ticks; ++k) {
-      const std::int64_t now = clock.wait();
+    for (std::int64_t now = clock.wait(); now < t_end; now = clock.wait(), ++ticks) {
       lateness_us.push_back(static_cast<double>(clock.lateness_ns()) * 1e-3);
       const md::DeviceReading r = device_->read(now);
       device_->write_torque(render(now, r));
@@ -199,7 +235,8 @@ class Host {
            static_cast<double>(s.reports - before.reports) / o_.seconds, "Hz");
     metric(name("lost_reports"), static_cast<double>(s.lost_reports - before.lost_reports),
            "reports");
-    metric(name("fresh_ratio"), static_cast<double>(fresh) / ticks, "of ticks");
+    metric(name("loop_ticks_per_s"), ticks / o_.seconds, "Hz");
+    metric(name("fresh_ratio"), ticks > 0 ? static_cast<double>(fresh) / ticks : 0.0, "of ticks");
     metric(name("ticks_not_ok"), not_ok, "ticks");
     metric(name("lateness_p50"), late.p50, "us");
     metric(name("lateness_p99"), late.p99, "us");
@@ -215,9 +252,26 @@ class Host {
   bool watchdog() {
     device_->set_enabled(true);
     LoopClock clock(kPeriodNs);
-    for (int k = 0; k < 300; ++k) {  // torque flowing before the host "dies"
+    // Torque flowing before the host "dies": the rendered spring first,
+    // then a small constant hold torque (50 mA; a spring near its rest point
+    // may round to 0 mA) until the driver's newest output report carries it,
+    // so the watchdog has a current to cut.
+    for (int k = 0; k < 300; ++k) {
       const std::int64_t now = clock.wait();
       device_->write_torque(render(now, device_->read(now)));
+    }
+    md::JointArray hold{};
+    hold[0] = 0.005;
+    hold[1] = -0.005;
+    for (int k = 0;; ++k) {
+      const std::int64_t now = clock.wait();
+      const md::DeviceReading r = device_->read(now);
+      device_->write_torque(hold);
+      if (r.enabled && r.tau_commanded[0] > 0.0 && r.tau_commanded[1] < 0.0) break;
+      if (k > 5000) {
+        result(name("watchdog_resume"), false, "the hold torque never reached the device");
+        return false;
+      }
     }
     std::printf("HOST_STOPPING\n");
     std::fflush(stdout);
@@ -255,36 +309,57 @@ class Host {
       const std::int64_t now = clock.wait();
       device_->write_torque(render(now, device_->read(now)));
     }
-    // What the loop sees: read() must say "not OK, zero torque" no later
-    // than the cycle after the kernel removed the device (earlier is fine:
-    // the gadget stops sending before the host notices, and stale samples
-    // count), and must keep saying so until the device is back. Separately,
-    // the driver's own link state (status(), no staleness in it) must flip,
-    // which is what starts its reconnection; its latency is reported.
+    // What the loop sees, measured from the moment the kernel hangs up the
+    // device node (the wake-up the driver gets too): read() must say "not
+    // OK, zero torque" within one cycle of the driver learning of it, and
+    // at the latest once the stale-sample timeout has run out (stale_timeout
+    // + one cycle after the hang-up; earlier is fine: the gadget stops
+    // sending before the host notices), and keep saying so until the device
+    // is back. The driver's own link state (status(), no staleness in it)
+    // must flip too: that starts its reconnection. How many cycles the loop
+    // actually needed is reported (METRIC ..._cycles_after_hangup).
+    const UnplugWatch watch(console_->connected_path());
+    if (!watch.valid()) {
+      result(name(tag), false, "cannot open the device node of " + console_->connected_path());
+      return false;
+    }
     const std::int64_t t_start = monotonic_ns();
-    int gone_tick = -1, not_ok_tick = -1, link_tick = -1, ok_again = 0, torque_leaks = 0;
-    std::int64_t gone_ns = 0, link_ns = 0;
+    int hup_tick = -1, not_ok_tick = -1, link_tick = -1, ok_again = 0, torque_leaks = 0;
+    int ok_past_bound = 0, ok_after_link = 0;
+    const std::int64_t bound_ns = stale_timeout_ms() * 1'000'000 + kPeriodNs;
+    const md::ConsoleStats before = console_->stats();
+    std::int64_t hup_ns = 0, gone_ns = 0, link_ns = 0, not_ok_ns = 0;
+    std::string link_why;
     {
       UdcWriter unbind(o_.udc_file, "");
-      for (int tick = 0; tick < 5000 && (gone_tick < 0 || link_tick < 0 || unbind.done_ns() == 0);
+      for (int tick = 0;
+           tick < 5000 && (hup_tick < 0 || gone_ns == 0 || link_tick < 0 || unbind.done_ns() == 0);
            ++tick) {
         const std::int64_t now = clock.wait();
-        if (gone_tick < 0 && !exists(sysfs)) {  // the kernel first, then the driver
-          gone_tick = tick;
-          gone_ns = now;
+        // The kernel first, then the driver: the same tick counts as in time.
+        if (hup_tick < 0 && watch.hung_up()) {
+          hup_tick = tick;
+          hup_ns = monotonic_ns();
         }
+        if (gone_ns == 0 && !exists(sysfs)) gone_ns = monotonic_ns();
         const md::DeviceReading r = device_->read(now);
-        if (link_tick < 0 && device_->status() != md::DeviceStatus::kOk) {
-          link_tick = tick;
-          link_ns = now;
-        }
         if (r.status != md::DeviceStatus::kOk) {
-          if (not_ok_tick < 0) not_ok_tick = tick;
+          if (not_ok_tick < 0) {
+            not_ok_tick = tick;
+            not_ok_ns = now;
+          }
           if (r.enabled || std::any_of(r.tau_commanded.begin(), r.tau_commanded.end(),
                                        [](double t) { return t != 0.0; }))
             ++torque_leaks;
-        } else if (not_ok_tick >= 0 && gone_tick >= 0) {
-          ++ok_again;  // OK again while the device is unplugged
+        } else {
+          if (not_ok_tick >= 0 && hup_tick >= 0) ++ok_again;  // OK again while unplugged
+          if (hup_tick >= 0 && now - hup_ns > bound_ns) ++ok_past_bound;
+          if (link_tick >= 0) ++ok_after_link;  // the driver knew a cycle ago
+        }
+        if (link_tick < 0 && device_->status() != md::DeviceStatus::kOk) {
+          link_tick = tick;
+          link_ns = monotonic_ns();
+          link_why = device_->last_error();
         }
         device_->write_torque(render(now, r));  // the loop keeps asking for torque
       }
@@ -293,17 +368,21 @@ class Host {
         return false;
       }
     }
-    const bool ok = gone_tick >= 0 && not_ok_tick >= 0 && not_ok_tick <= gone_tick + 1 &&
-                    torque_leaks == 0 && ok_again == 0 && link_tick >= 0;
-    result(
-        name(tag), ok,
-        fmt("kernel removed the device %.1f ms after the unbind started (tick %d); read() not OK "
-            "from tick %d (%+d cycles), torque %s, OK again %d times; driver link state lost "
-            "%+.1f ms after the kernel removal",
-            gone_tick >= 0 ? ms(gone_ns - t_start) : -1.0, gone_tick, not_ok_tick,
-            not_ok_tick - gone_tick, torque_leaks == 0 ? "zero" : "NOT zero", ok_again,
-            link_tick >= 0 && gone_tick >= 0 ? ms(link_ns - gone_ns) : -1.0));
-    metric(name(tag + "_link_loss_after_kernel"), ms(link_ns - gone_ns), "ms");
+    const md::ConsoleStats after = console_->stats();
+    const bool ok = hup_tick >= 0 && not_ok_tick >= 0 && link_tick >= 0 && torque_leaks == 0 &&
+                    ok_again == 0 && ok_past_bound == 0 && ok_after_link == 0;
+    result(name(tag), ok,
+           fmt("kernel hung up the device node %.1f ms after the unbind started (tick %d); "
+               "read() not OK from tick %d (%+d cycles, %+.1f ms), torque %s, OK again %d times; "
+               "driver link state lost %+.1f ms after the hang-up (%s), OK after that %d times, OK "
+               "past the stale bound %d times; sysfs entry gone %+.1f ms; malformed reports %llu",
+               hup_tick >= 0 ? ms(hup_ns - t_start) : -1.0, hup_tick, not_ok_tick,
+               not_ok_tick - hup_tick, ms(not_ok_ns - hup_ns),
+               torque_leaks == 0 ? "zero" : "NOT zero", ok_again, ms(link_ns - hup_ns),
+               link_why.c_str(), ok_after_link, ok_past_bound, ms(gone_ns - hup_ns),
+               static_cast<unsigned long long>(after.bad_reports - before.bad_reports)));
+    metric(name(tag + "_cycles_after_hangup"), not_ok_tick - hup_tick, "cycles");
+    metric(name(tag + "_link_loss_after_hangup"), ms(link_ns - hup_ns), "ms");
 
     // Rebind: the supervisor must find the device again by itself.
     const std::int64_t t_bind = monotonic_ns();
@@ -346,6 +425,9 @@ class Host {
 
  private:
   std::string name(const std::string& phase) const { return o_.prefix + "_" + phase; }
+  std::int64_t stale_timeout_ms() const {
+    return o_.stale_timeout_ms > 0 ? o_.stale_timeout_ms : md::ConsoleSettings{}.stale_timeout_ms;
+  }
   // A soft virtual spring-damper the handle follows (joint 0 tracks a slow
   // sine, joint 1 is pushed off centre by a constant bias), as a haptic
   // loop renders: motor current flows all the time, and the handle stays
@@ -412,13 +494,25 @@ int main(int argc, char** argv) {
   md::DriverRegistry registry;
   md::register_builtin_drivers(registry);
   Host host(o, registry);
+  const auto phase = [&](const char* what) {
+    std::printf("USB_STACK_PHASE %s_%s t=%.3f\n", o.prefix.c_str(), what,
+                ms(monotonic_ns()) * 1e-3);
+    std::fflush(stdout);
+  };
+  phase("list");
   host.list();
+  phase("open");
   if (!host.open()) return 1;
+  phase("stream");
   host.stream();
+  phase("watchdog");
   if (o.watchdog) host.watchdog();
   for (int k = 1; k <= o.replugs; ++k) {
+    phase("unplug");
     if (!host.unplug(k)) break;
   }
+  phase("close");
   host.close();
+  phase("end");
   return 0;
 }
