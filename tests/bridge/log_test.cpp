@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <sstream>
 #include <thread>
@@ -27,6 +28,24 @@ fs::path temp_dir() {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
+}
+
+// Keeps the logs of a failed test for inspection.
+void remove_unless_failed(const fs::path& dir) {
+  if (::testing::Test::HasFailure())
+    std::cerr << "kept " << dir << " for inspection\n";
+  else
+    fs::remove_all(dir);
+}
+
+// Events on `channel` in a (possibly still growing) log.
+std::size_t count_events(const fs::path& log, const std::string& channel) {
+  lcm::LogFile in(log.string(), "r");
+  if (!in.good()) return 0;
+  std::size_t n = 0;
+  for (const lcm::LogEvent* ev = in.readNextEvent(); ev != nullptr; ev = in.readNextEvent())
+    n += ev->channel == channel ? 1 : 0;
+  return n;
 }
 
 // Records `count` SLAVE_STATE + SLAVE_TRUTH messages published by the peer
@@ -52,7 +71,21 @@ fs::path record_with_logger(const fs::path& dir, const std::string& prefix, int 
   const auto peer =
       test::run({TSMH_BRIDGE_PEER, "publish", url, prefix, std::to_string(count), "1000", "truth"});
   EXPECT_EQ(peer.exit_code, 0) << peer.output;
-  std::this_thread::sleep_for(200ms);  // > flush interval: everything is on disk
+  // The logger writes behind, and flushes its stdio buffer only when it
+  // writes a later event: keep feeding it probes until every message of the
+  // stream is in the file (stopping it earlier can lose its queued tail).
+  const std::string state = channel_name(prefix, Channel::SlaveState);
+  const std::string truth = channel_name(prefix, Channel::SlaveTruth);
+  const auto n = static_cast<std::size_t>(count);
+  const bool complete = test::wait_until(
+      [&] {
+        const char byte = 0;
+        probe->publish(prefix + "PROBE", &byte, 1);
+        std::this_thread::sleep_for(20ms);
+        return count_events(log, state) >= n && count_events(log, truth) >= n;
+      },
+      10s);
+  EXPECT_TRUE(complete) << "lcm-logger recorded " << count_events(log, state) << " of " << n;
   logger.stop();
   return log;
 }
@@ -93,7 +126,7 @@ TEST(LcmLog, LoggerRoundTripThroughOurReader) {
     EXPECT_NE(std::string(e.what()).find(prefix + "SLAVE_STATE (250)"), std::string::npos)
         << "lists the channels present: " << e.what();
   }
-  fs::remove_all(dir);
+  remove_unless_failed(dir);
 }
 
 #ifdef TSMH_TSM_BIN
@@ -125,7 +158,7 @@ TEST(LcmLog, LoggerRoundTripThroughTsmConvert) {
     EXPECT_NE(test::cat(",", header, ",").find(test::cat(",", col, ",")), std::string::npos)
         << col << " in " << header;
   EXPECT_EQ(rows, 200);
-  fs::remove_all(dir);
+  remove_unless_failed(dir);
 }
 #endif
 
@@ -175,7 +208,7 @@ TEST(LcmLog, LogplayerReplaysIntoOurReceiver) {
   SlaveStateSample s;
   ASSERT_EQ(inbox.latest(s), 100U);
   EXPECT_EQ(s.seq, 99);
-  fs::remove_all(dir);
+  remove_unless_failed(dir);
 }
 
 // LCM's file:// provider as the Receiver's URL: a log replayed straight into
@@ -195,7 +228,7 @@ TEST(LcmLog, FileProviderUrlFeedsAReceiver) {
   EXPECT_EQ(inbox.stats().accepted, 100U);
   EXPECT_LT(rx.transport_errors(), 100U) << "the receive thread spun on a failing descriptor";
   rx.stop();
-  fs::remove_all(dir);
+  remove_unless_failed(dir);
 }
 
 TEST(LcmLog, NotALogIsAClearError) {
@@ -209,7 +242,7 @@ TEST(LcmLog, NotALogIsAClearError) {
   } catch (const LogError& e) {
     EXPECT_NE(std::string(e.what()).find("not an LCM log"), std::string::npos) << e.what();
   }
-  fs::remove_all(dir);
+  remove_unless_failed(dir);
 }
 
 }  // namespace
