@@ -5,7 +5,7 @@
 TSMH_PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libnlopt-cxx-dev
-  liblcm-dev liblcm-bin libglib2.0-dev
+  liblcm-dev liblcm-bin libglib2.0-dev iproute2
   libhidapi-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox python3
