@@ -7,6 +7,7 @@
 // The loop calls latest(): a lock-free copy of the newest accepted sample
 // (~tens of ns, never blocks, never torn) whose receive_ns gives its age.
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
