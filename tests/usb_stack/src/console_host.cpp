@@ -12,16 +12,16 @@
 //             firmware judge its watchdog and continues us; the driver must
 //             come back to OK
 //   unplug    --replugs times: unbind the gadget (write "" to --udc) while the
-//             loop commands torque; the driver must report it within one loop
-//             cycle of the kernel removing the device, with zero torque; rebind
-//             must be picked up again, the device coming back disabled
+//             loop commands torque; measured from the kernel's hang-up of the
+//             device node, read() must say not OK with zero torque within a
+//             cycle of the driver's link state flipping and at the latest
+//             when the stale timeout runs out; rebind must be picked up
+//             again, the device coming back disabled
 //
 // Usage: usb_stack_console_host --driver hid|usb --prefix P --udc FILE
 //          [--udc-name dummy_udc.0] [--seconds 2] [--replugs 2]
 //          [--stale-timeout-ms N] [--no-watchdog]
 
-#include <fcntl.h>
-#include <poll.h>
 #include <signal.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -47,12 +47,17 @@
 #include "master_devices/profile.hpp"
 #include "master_devices/registry.hpp"
 #include "stats.hpp"
+#include "unplug.hpp"
 
 namespace md = tsmh::master_devices;
 using md::monotonic_ns;
+using tsmh::usb_stack::exists;
 using tsmh::usb_stack::LoopClock;
 using tsmh::usb_stack::metric;
 using tsmh::usb_stack::result;
+using tsmh::usb_stack::sysfs_of;
+using tsmh::usb_stack::UdcWriter;
+using tsmh::usb_stack::UnplugWatch;
 
 namespace {
 
@@ -82,73 +87,6 @@ __attribute__((format(printf, 1, 2))) std::string fmt(const char* f, ...) {
 double ms(std::int64_t ns) {
   return static_cast<double>(ns) * 1e-6;
 }
-
-/// sysfs directory that exists exactly while the kernel has the device.
-std::string sysfs_of(const std::string& path) {
-  if (path.rfind("/dev/", 0) == 0) return "/sys/class/hidraw/" + path.substr(5);
-  if (path.rfind("usb:", 0) == 0) return "/sys/bus/usb/devices/" + path.substr(4);
-  return "";
-}
-
-/// Our own file descriptor on the device node the driver uses (the hidraw
-/// node, or the usbfs node of "usb:B-P"): the kernel marks it POLLHUP/POLLERR
-/// the moment it tears the device down, the same wake-up the driver gets.
-/// That moment is what the driver's reaction is measured from.
-class UnplugWatch {
- public:
-  explicit UnplugWatch(const std::string& path) {
-    std::string node = path;
-    if (path.rfind("usb:", 0) == 0) {
-      const std::string dir = "/sys/bus/usb/devices/" + path.substr(4);
-      int bus = 0, dev = 0;
-      std::ifstream(dir + "/busnum") >> bus;
-      std::ifstream(dir + "/devnum") >> dev;
-      char b[64];
-      std::snprintf(b, sizeof b, "/dev/bus/usb/%03d/%03d", bus, dev);
-      node = b;
-    }
-    fd_ = ::open(node.c_str(), O_RDONLY | O_NONBLOCK);
-  }
-  ~UnplugWatch() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  UnplugWatch(const UnplugWatch&) = delete;
-  UnplugWatch& operator=(const UnplugWatch&) = delete;
-  bool valid() const { return fd_ >= 0; }
-  bool hung_up() const {
-    pollfd p{fd_, 0, 0};
-    return ::poll(&p, 1, 0) > 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0;
-  }
-
- private:
-  int fd_ = -1;
-};
-
-bool exists(const std::string& p) {
-  return !p.empty() && ::access(p.c_str(), F_OK) == 0;
-}
-
-/// Writes the UDC file on a helper thread (bind/unbind block for a while)
-/// and records when the write returned.
-class UdcWriter {
- public:
-  UdcWriter(std::string file, std::string value)
-      : thread_([this, file = std::move(file), value = std::move(value)] {
-          std::ofstream f(file);
-          f << value << '\n';
-          f.flush();
-          ok_ = static_cast<bool>(f);
-          done_ns_ = monotonic_ns();
-        }) {}
-  ~UdcWriter() { thread_.join(); }
-  std::int64_t done_ns() const { return done_ns_; }
-  bool ok() const { return ok_; }
-
- private:
-  std::atomic<std::int64_t> done_ns_{0};
-  std::atomic<bool> ok_{false};
-  std::thread thread_;
-};
 
 class Host {
  public:
