@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   ctx.sources.add(lcm_log_source(ctx.lcm_log));
   add_simulate_command(app, ctx);
   add_convert_command(app, ctx);
+  add_fit_command(app, ctx);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -33,6 +33,53 @@ double max_step(double u, const BoucWenShape& s) noexcept {
 
 constexpr int kMaxSubsteps = 256;
 
+// Exact solution of du/da = h(u) over `travel` for n = 1 and n = 2 (any
+// sigma >= 1/2), used when the travel would need several RK4 sub-steps
+// (stiff parameters during identification, dropped samples): its cost does
+// not grow with the travel. Unloading (u < 0) runs until u = 0, then loading.
+//   n = 2: u < 0: u' = 1 + k u^2, k = 2 sigma - 1: u = tan(r a + atan(r u0)) / r, r = sqrt(k)
+//          u >= 0: u' = 1 - u^2: u = tanh(a + atanh(u0)) (coth beyond the fixed point)
+//   n = 1: u < 0: u' = 1 - k u: u = (1 - (1 - k u0) e^(-k a)) / k
+//          u >= 0: u' = 1 - u: u = 1 - (1 - u0) e^(-a)
+bool closed_form(double u0, double travel, const BoucWenShape& s, double& u) {
+  if (s.n != 1.0 && s.n != 2.0) return false;
+  const double k = 2.0 * s.sigma - 1.0;
+  u = u0;
+  double left = travel;
+  if (u < 0.0) {
+    double to_zero = 0.0;  // travel until u = 0
+    if (k <= 1e-12) {
+      to_zero = -u;
+    } else if (s.n == 2.0) {
+      to_zero = std::atan(std::sqrt(k) * -u) / std::sqrt(k);
+    } else {
+      to_zero = std::log1p(k * -u) / k;
+    }
+    if (left < to_zero) {
+      if (k <= 1e-12) {
+        u += left;
+      } else if (s.n == 2.0) {
+        const double r = std::sqrt(k);
+        u = std::tan(r * left + std::atan(r * u)) / r;
+      } else {
+        u = (1.0 - (1.0 - k * u) * std::exp(-k * left)) / k;
+      }
+      u = std::min(u, 0.0);
+      return true;
+    }
+    left -= to_zero;
+    u = 0.0;
+  }
+  if (s.n == 1.0) {
+    u = 1.0 - (1.0 - u) * std::exp(-left);
+  } else if (u < 1.0) {
+    u = std::tanh(left + std::atanh(u));
+  } else if (u > 1.0) {
+    u = 1.0 / std::tanh(left + std::atanh(1.0 / u));
+  }
+  return true;
+}
+
 }  // namespace
 
 double bouc_wen_rate(double z, double ff, double g, const BoucWenShape& s) noexcept {
@@ -51,6 +98,9 @@ double advance_bouc_wen_state(double z, double ff, double g, double dt,
   double travel = s.theta * std::fabs(g) * dt / ff;
   double u = u0;
   int steps = 0;
+  // One RK4 step covers the usual 1 kHz sample; longer travels take the
+  // exact solution where there is one.
+  if (travel > max_step(u0, s) && closed_form(u0, travel, s, u)) travel = 0.0;
   while (travel > 0.0 && steps < kMaxSubsteps) {
     const double da = std::min(travel, max_step(u, s));
     const double k1 = h(u, s);

@@ -1,0 +1,64 @@
+#pragma once
+// `tsm fit` as a library call: prepare the data, identify, score on
+// validation (overall and per regime), estimate the parameters' uncertainty,
+// judge the fit, and build report.json (design.md §4). The CLI adds only
+// file handling, so tests exercise exactly what users run.
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "estimator/fit_data.hpp"
+#include "estimator/fit_metrics.hpp"
+#include "estimator/identification.hpp"
+#include "estimator/uncertainty.hpp"
+
+namespace tsmh::estimator {
+
+struct FitVerdict {
+  std::string grade;   ///< "good", "fair" or "poor"
+  std::string reason;  ///< one sentence with the numbers
+};
+
+/// good: validation fit >= 80 % and validation RMSE within 1.5x train RMSE
+/// (no sign of over-fitting); fair: fit >= 50 %; poor otherwise.
+FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& validation, double noise);
+
+struct FitRun {
+  FitData data;
+  FitResult fit;
+  ErrorMetrics train;
+  ErrorMetrics validation;
+  std::vector<RegimeError> regimes;  ///< on validation samples
+  UncertaintyReport uncertainty;
+  double noise = 0.0;  ///< noise_floor of the measured friction, N
+  FitVerdict verdict;
+  std::vector<std::string> notes;  ///< e.g. a gamma rescale
+  std::string initial_name;        ///< the preset or file the fit started from
+};
+
+struct FitWorkflowOptions {
+  FitOptions fit;
+  SplitConfig split;
+  DataRequirements requirements;
+  DifferentiatorConfig differentiator;
+  bool uncertainty = true;
+};
+
+/// Runs the whole identification. Throws DataError for unusable data.
+FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::string& initial_name,
+               const FitWorkflowOptions& options = {});
+
+nlohmann::json to_json(const ErrorMetrics& m);
+nlohmann::json to_json(const std::vector<RegimeError>& regimes);
+nlohmann::json to_json(const UncertaintyReport& u);
+/// The whole report.json; "seconds" is `seconds`, plots as given.
+nlohmann::json fit_report_json(const FitRun& run, const FitWorkflowOptions& options, double seconds,
+                               const std::vector<std::string>& plots,
+                               const std::string& plot_error);
+
+/// Lines for the top of the params file: source, fit quality, date-free.
+std::vector<std::string> fit_header_lines(const FitRun& run);
+
+}  // namespace tsmh::estimator

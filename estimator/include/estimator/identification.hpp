@@ -1,0 +1,106 @@
+#pragma once
+// Identification of a friction model's parameters from recorded data
+// (`tsm fit`, issue 3): least squares between the measured friction and the
+// model simulated on the deployed motion, on the train samples only.
+//
+// Optimisation uses NLopt, in normalised coordinates (parameter_map.hpp)
+// within the parameters' bounds. Per start: a global stage (MLSL: random
+// points, each followed by a short BOBYQA search, clustered so that one basin
+// is not searched twice) on the data decimated to 5 ms, where an evaluation
+// costs a fifth; a BOBYQA polish on the same data; a final BOBYQA polish on
+// the full-rate data. (MLSL found the best optimum most often among CRS2,
+// ESCH, ISRES and MLSL on synthetic data: docs/identification.md.) Several
+// starts run on worker threads, each with its own model clone, its own
+// seeded NLopt random stream (NLopt's generator is thread-local) and its own
+// evaluation budget, so the result depends on the seed only, never on the
+// thread count or timing.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "estimator/fit_data.hpp"
+#include "estimator/friction_model.hpp"
+
+namespace tsmh::estimator {
+
+struct FitProgress {
+  const char* stage = "";  ///< "global", "local", "done"
+  int starts_done = 0;
+  int starts_total = 0;
+  long evaluations = 0;
+  double best_rmse = 0.0;  ///< on train samples so far, N (NaN before the first)
+  double elapsed_s = 0.0;
+};
+
+struct FitOptions {
+  std::uint64_t seed = 1;
+  int starts = 4;
+  /// Worker threads; 0: std::thread::hardware_concurrency().
+  int threads = 0;
+  /// false: local polish only, from the initial values (start 0) and from
+  /// small perturbations of them (other starts): a warm refit.
+  bool global_stage = true;
+  /// NLopt algorithm of the global stage, by NLopt's name (GN_CRS2_LM,
+  /// GN_ESCH, GN_ISRES, G_MLSL_LDS, ...).
+  std::string global_algorithm = "G_MLSL";
+  int global_population = 0;           ///< 0: NLopt's default
+  int mlsl_local_evaluations = 150;    ///< per local search of an MLSL global stage
+  int global_evaluations = 2000;       ///< per start, decimated data
+  int coarse_local_evaluations = 400;  ///< per start, BOBYQA on the decimated data
+  int local_evaluations = 150;         ///< per start, BOBYQA on the full-rate data
+  /// Sample period of the decimated data the global stage scores, s (0: full rate).
+  double global_sample_period_s = 0.005;
+  /// Spread of the perturbed starts of a warm refit, in normalised units.
+  double warm_perturbation = 0.08;
+  /// Further starting points (full value vectors, as parameters() orders
+  /// them), tried after the initial values; e.g. candidate step times.
+  std::vector<std::vector<double>> extra_starts;
+  /// Called from the calling thread every progress_interval_s while working.
+  std::function<void(const FitProgress&)> progress;
+  double progress_interval_s = 0.25;
+};
+
+struct StartOutcome {
+  int index = 0;
+  double global_rmse = 0.0;  ///< after the global stage (decimated data), N
+  double rmse = 0.0;         ///< after the polish, train samples, N
+  long evaluations = 0;
+  double seconds = 0.0;
+  std::string stop_reason;  ///< of the polish, from NLopt
+};
+
+struct FitResult {
+  std::unique_ptr<FrictionModel> model;  ///< the fitted model
+  std::vector<double> values;            ///< all parameter values (parameters() order)
+  std::vector<double> simulated;         ///< fitted F over the whole record, N
+  double train_rmse = 0.0;               ///< N
+  std::vector<StartOutcome> starts;
+  int best_start = 0;
+  long evaluations = 0;
+  double seconds = 0.0;
+  std::string global_algorithm;  ///< NLopt's name, empty when not used
+  std::string local_algorithm;
+};
+
+/// Fits the free parameters of `initial` (cloned) to `data`. Throws
+/// std::invalid_argument when the model has no free parameters.
+FitResult identify(const FrictionModel& initial, const FitData& data,
+                   const FitOptions& options = {});
+
+/// Mean squared error on the samples with weight 1 (weights 0/1).
+double weighted_mse(std::span<const double> measured, std::span<const double> model,
+                    std::span<const double> weights) noexcept;
+
+/// For the tendon-sheath model: core.gamma is fixed because (gamma c,
+/// theta / c, every level / c) gives exactly the same friction, so its value
+/// only sets the scale of the levels. When the data's friction scale would
+/// need levels outside [0.1, 5] (near their bounds), this sets gamma to that
+/// scale, which multiplies the start model's friction by the same factor
+/// (theta and the levels unchanged). Returns a note for the report, empty
+/// when nothing was done. Other model kinds are left unchanged.
+std::string adapt_scale_to_data(FrictionModel& model, const FitData& data);
+
+}  // namespace tsmh::estimator

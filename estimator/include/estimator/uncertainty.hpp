@@ -1,0 +1,55 @@
+#pragma once
+// How much to trust identified parameters: the Jacobian of the simulated
+// friction with respect to the free parameters at the optimum (central finite
+// differences, one-sided at a bound) gives the linearised covariance
+//   cov = s^2 tau (J^T J)^-1,  s^2 = SSR / (N - p),
+// where tau, the integrated autocorrelation time of the residual, widens it
+// for residuals that are not white (model error is correlated in time, so N
+// samples carry fewer than N independent errors). From it: standard errors,
+// correlations, and warnings for parameters the data do not pin down.
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "estimator/fit_data.hpp"
+#include "estimator/friction_model.hpp"
+
+namespace tsmh::estimator {
+
+struct ParameterEstimate {
+  std::string name;
+  std::string unit;
+  double value = 0.0;
+  double std_error = std::nan("");  ///< NaN for fixed or not estimable parameters
+  double lower = 0.0;
+  double upper = 0.0;
+  bool fixed = false;
+  bool at_bound = false;
+  bool well_identified = false;  ///< free, not at a bound, std small, not degenerate
+};
+
+struct UncertaintyReport {
+  std::vector<ParameterEstimate> parameters;  ///< all, in parameters() order
+  std::vector<std::string> free_names;        ///< rows/columns of `correlation`
+  std::vector<std::vector<double>> correlation;
+  double residual_std = std::nan("");      ///< s, N
+  double correlation_time = std::nan("");  ///< tau, samples
+  double condition_number = std::nan("");  ///< of the column-scaled J^T J
+  std::vector<std::string> warnings;
+  std::vector<std::string> notes;  ///< facts about the model (fixed parameters and why)
+};
+
+struct UncertaintyOptions {
+  double relative_step = 1e-3;    ///< finite-difference step, relative to max(|v|, 1e-3 range)
+  double max_relative_std = 0.5;  ///< std / |value| above this: poorly identified
+  double max_range_std = 0.25;    ///< std / (upper - lower) above this: poorly identified
+  double max_correlation = 0.95;  ///< |r| above this: warned as a pair
+  double bound_margin = 1e-3;     ///< within this fraction of the range: at a bound
+};
+
+/// Evaluates the uncertainty of `fitted` on the train samples of `data`.
+UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitData& data,
+                                       const UncertaintyOptions& options = {});
+
+}  // namespace tsmh::estimator

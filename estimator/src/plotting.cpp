@@ -1,0 +1,234 @@
+#include "estimator/plotting.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace tsmh::estimator {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Runs gnuplot with `args`, stdout and stderr to `log`. Returns the exit
+// status, or -1 when it could not be started.
+int spawn_gnuplot(const std::vector<std::string>& args, const fs::path& log,
+                  const fs::path& cwd = {}) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  // Scripts name their files relative to their own directory, so a copied
+  // report directory can be redrawn.
+  if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  std::vector<char*> argv;
+  for (const auto& a : args)
+    argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// gnuplot string literal (single quotes; a quote is doubled).
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    out += c;
+    if (c == '\'') out += '\'';
+  }
+  return out + "'";
+}
+
+std::string extension(const std::string& terminal) {
+  return terminal == "svg" ? ".svg" : ".png";
+}
+
+std::string terminal_line(const std::string& terminal, int w, int h) {
+  if (terminal == "svg")
+    return "set terminal svg size " + std::to_string(w) + "," + std::to_string(h) +
+           " dynamic background rgb 'white'\n";
+  return "set terminal pngcairo size " + std::to_string(w) + "," + std::to_string(h) +
+         " font ',10'\n";
+}
+
+// The blocks of validation samples as [t_begin, t_end] intervals, for shading.
+std::vector<std::pair<double, double>> validation_spans(const FitData& d) {
+  std::vector<std::pair<double, double>> spans;
+  bool open = false;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const bool v = d.role[i] == SampleRole::validation;
+    if (v && !open) spans.push_back({d.motion[i].t, d.motion[i].t});
+    if (v) spans.back().second = d.motion[i].t;
+    open = v;
+  }
+  return spans;
+}
+
+}  // namespace
+
+std::string plot_terminal() {
+  const fs::path log = fs::temp_directory_path() /
+                       ("tsm-gnuplot-probe-" + std::to_string(static_cast<long>(getpid())));
+  const int rc = spawn_gnuplot({"gnuplot", "-e", "set terminal pngcairo"}, log);
+  std::error_code ec;
+  fs::remove(log, ec);
+  return rc == 0 ? "pngcairo" : "svg";
+}
+
+std::string run_gnuplot(const fs::path& script) {
+  const fs::path abs = fs::absolute(script);
+  const fs::path log = fs::path(abs).replace_extension(".log");
+  const int rc = spawn_gnuplot({"gnuplot", abs.filename().string()}, log, abs.parent_path());
+  std::string err;
+  if (rc == -1) {
+    err = "gnuplot could not be started (install gnuplot-nox: scripts/deps.sh)";
+  } else if (rc != 0) {
+    std::string msg = read_text(log);
+    if (msg.size() > 400) msg = msg.substr(msg.size() - 400);
+    err = "gnuplot failed on " + script.filename().string() + ": " + msg;
+  }
+  std::error_code ec;
+  fs::remove(log, ec);
+  return err;
+}
+
+PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const FitData& data,
+                          const std::vector<PlotCurve>& curves, const std::string& title) {
+  PlotOutcome out;
+  const std::string term = plot_terminal();
+  const std::string ext = extension(term);
+  // The data file: at most ~20000 rows, so a 40 s record keeps 2 ms detail.
+  const std::size_t stride = std::max<std::size_t>(1, data.size() / 20000);
+  const fs::path dat = dir / (prefix + "_plot_data.csv");
+  {
+    std::ofstream f(dat);
+    f << "# t, xd, measured";
+    for (const auto& c : curves)
+      f << ", " << c.title;
+    f << "\n";
+    f.precision(7);
+    for (std::size_t i = 0; i < data.size(); i += stride) {
+      f << data.motion[i].t << "," << data.motion[i].xd << "," << data.measured[i];
+      for (const auto& c : curves)
+        f << "," << c.friction[i];
+      f << "\n";
+    }
+    if (!f) {
+      out.error = dat.string() + ": cannot write plot data";
+      return out;
+    }
+  }
+  std::ostringstream shade;
+  for (const auto& [a, b] : validation_spans(data)) {
+    shade << "set object rect from " << a << ", graph 0 to " << b
+          << ", graph 1 fc rgb '#eeeeee' fs solid 1.0 noborder behind\n";
+  }
+  const std::string common = "set datafile separator ','\nset grid\nset key outside right top\n";
+  const auto image = [&](const std::string& name) { return prefix + "_" + name + ext; };
+
+  std::ostringstream s;
+  s << common;
+  // 1. friction over time
+  s << terminal_line(term, 1400, 600) << "set output " << quoted(image("friction"))
+    << "\nset title " << quoted(title + ": friction over time (validation blocks shaded)")
+    << "\nset xlabel 't (s)'\nset ylabel 'F (N)'\n"
+    << shade.str() << "plot " << quoted(dat.filename().string())
+    << " using 1:3 with lines lw 1 lc rgb '#999999' title 'measured'";
+  for (std::size_t c = 0; c < curves.size(); ++c)
+    s << ", '' using 1:" << 4 + c << " with lines lw 1.5 title " << quoted(curves[c].title);
+  s << "\nunset object\n";
+  // 2. hysteresis loops: friction vs velocity
+  s << terminal_line(term, 900, 700) << "set output " << quoted(image("hysteresis"))
+    << "\nset title " << quoted(title + ": friction vs velocity (hysteresis loops)")
+    << "\nset xlabel 'xd (rad/s)'\nset ylabel 'F (N)'\n"
+    << "plot " << quoted(dat.filename().string())
+    << " using 2:3 with dots lc rgb '#999999' title 'measured'";
+  for (std::size_t c = 0; c < curves.size(); ++c)
+    s << ", '' using 2:" << 4 + c << " with lines lw 1 title " << quoted(curves[c].title);
+  s << "\n";
+  // 3. residuals
+  s << terminal_line(term, 1400, 500) << "set output " << quoted(image("residual"))
+    << "\nset title " << quoted(title + ": residual, measured - model (validation shaded)")
+    << "\nset xlabel 't (s)'\nset ylabel 'error (N)'\n"
+    << shade.str() << "plot ";
+  for (std::size_t c = 0; c < curves.size(); ++c) {
+    s << (c ? ", " : "") << quoted(dat.filename().string()) << " using 1:($3-$" << 4 + c
+      << ") with lines lw 1 title " << quoted(curves[c].title);
+  }
+  s << "\nunset object\n";
+  const fs::path script = dir / (prefix + "_plots.gp");
+  {
+    std::ofstream f(script);
+    f << s.str();
+    if (!f) {
+      out.error = script.string() + ": cannot write the plot script";
+      return out;
+    }
+  }
+  out.error = run_gnuplot(script);
+  if (out.error.empty()) out.files = {image("friction"), image("hysteresis"), image("residual")};
+  return out;
+}
+
+PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const RegimeBars& bars,
+                         const std::string& title) {
+  PlotOutcome out;
+  const std::string term = plot_terminal();
+  const std::string ext = extension(term);
+  const fs::path dat = dir / (prefix + "_regimes.csv");
+  {
+    std::ofstream f(dat);
+    f << "regime";
+    for (const auto& s : bars.series)
+      f << "," << s;
+    f << "\n";
+    for (std::size_t r = 0; r < bars.regimes.size(); ++r) {
+      f << bars.regimes[r];
+      for (std::size_t s = 0; s < bars.series.size(); ++s)
+        f << "," << bars.rmse[s][r];
+      f << "\n";
+    }
+  }
+  std::ostringstream s;
+  s << "set datafile separator ','\n"
+    << terminal_line(term, 1200, 500) << "set output " << quoted(prefix + "_regimes" + ext)
+    << "\nset title " << quoted(title)
+    << "\nset style data histograms\nset style histogram clustered gap 1\n"
+    << "set style fill solid 0.8 border -1\nset ylabel 'validation RMSE (N)'\n"
+    << "set xtics rotate by -35\nset grid ytics\nset key outside right top\n"
+    << "plot " << quoted(dat.filename().string()) << " using 2:xtic(1) title columnhead";
+  for (std::size_t k = 1; k < bars.series.size(); ++k)
+    s << ", '' using " << 2 + k << " title columnhead";
+  s << "\n";
+  const fs::path script = dir / (prefix + "_regimes.gp");
+  {
+    std::ofstream f(script);
+    f << s.str();
+  }
+  out.error = run_gnuplot(script);
+  if (out.error.empty()) out.files = {prefix + "_regimes" + ext};
+  return out;
+}
+
+}  // namespace tsmh::estimator

@@ -1,0 +1,213 @@
+#include "estimator/uncertainty.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+
+#include "estimator/parameter_map.hpp"
+#include "estimator/simulate.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+// A number with `digits` significant digits, for messages.
+std::string num(double v, int digits = 3) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Integrated autocorrelation time of a sequence, summing the autocorrelation
+// while it stays above 0.05 (the initial positive part, as is usual for
+// correlated noise); 1 for white noise.
+double correlation_time(const std::vector<double>& r) {
+  const std::size_t n = r.size();
+  if (n < 10) return 1.0;
+  double mean = 0.0;
+  for (double v : r)
+    mean += v;
+  mean /= static_cast<double>(n);
+  double c0 = 0.0;
+  for (double v : r)
+    c0 += (v - mean) * (v - mean);
+  if (!(c0 > 0.0)) return 1.0;
+  double tau = 1.0;
+  const std::size_t max_lag = std::min<std::size_t>(n / 4, 2000);
+  for (std::size_t k = 1; k < max_lag; ++k) {
+    double ck = 0.0;
+    for (std::size_t i = k; i < n; ++i)
+      ck += (r[i] - mean) * (r[i - k] - mean);
+    const double rho = ck / c0;
+    if (rho < 0.05) break;
+    tau += 2.0 * rho;
+  }
+  return tau;
+}
+
+}  // namespace
+
+UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitData& data,
+                                       const UncertaintyOptions& o) {
+  UncertaintyReport rep;
+  const auto params = fitted.parameters();
+  const ParameterMap map(params);
+  for (const auto& p : params) {
+    ParameterEstimate e;
+    e.name = p.name;
+    e.unit = p.unit;
+    e.value = p.value;
+    e.lower = p.lower;
+    e.upper = p.upper;
+    e.fixed = p.fixed;
+    const double range = p.upper - p.lower;
+    e.at_bound = !p.fixed && range > 0.0 &&
+                 (p.value - p.lower <= o.bound_margin * range ||
+                  p.upper - p.value <= o.bound_margin * range);
+    rep.parameters.push_back(e);
+  }
+  if (dynamic_cast<const TsmFrictionModel*>(&fitted) != nullptr) {
+    rep.notes.push_back(
+        "core.gamma is fixed: it is not identifiable, because (gamma c, theta / c, every level "
+        "/ c) gives exactly the same friction for any c > 0");
+    rep.notes.push_back("core.n is fixed: an integer shape exponent, chosen, not fitted");
+  }
+
+  std::vector<std::size_t> train;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    if (data.role[i] == SampleRole::train) train.push_back(i);
+  }
+  const std::size_t n = train.size();
+  const std::size_t p = map.size();
+  if (p == 0 || n <= p) {
+    rep.warnings.push_back("no uncertainty: too few train samples or no free parameters");
+    return rep;
+  }
+
+  auto model = fitted.clone();
+  std::vector<double> values = map.template_values();
+  const std::vector<double> base = simulate_friction(*model, data.motion);
+
+  std::vector<double> resid(n);
+  double ssr = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    resid[k] = data.measured[train[k]] - base[train[k]];
+    ssr += resid[k] * resid[k];
+  }
+  rep.residual_std = std::sqrt(ssr / static_cast<double>(n - p));
+  rep.correlation_time = correlation_time(resid);
+
+  Eigen::MatrixXd jac(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(p));
+  std::vector<double> plus(data.size()), minus(data.size());
+  for (std::size_t j = 0; j < p; ++j) {
+    const auto& fp = map.free()[j];
+    const double v = values[fp.index];
+    const double range = fp.upper - fp.lower;
+    const double h = o.relative_step * std::max(std::fabs(v), 1e-3 * range);
+    const double hi = std::min(v + h, fp.upper);
+    const double lo = std::max(v - h, fp.lower);
+    std::vector<double> trial = values;
+    trial[fp.index] = hi;
+    model->set_values(trial);
+    simulate_friction_into(*model, data.motion, plus);
+    trial[fp.index] = lo;
+    model->set_values(trial);
+    simulate_friction_into(*model, data.motion, minus);
+    const double span = hi - lo;
+    for (std::size_t k = 0; k < n; ++k) {
+      jac(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j)) =
+          span > 0.0 ? (plus[train[k]] - minus[train[k]]) / span : 0.0;
+    }
+  }
+
+  // Scale columns to unit norm so the conditioning reflects redundancy, not units.
+  Eigen::VectorXd norms = jac.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < norms.size(); ++j) {
+    if (norms(j) > 0.0) jac.col(j) /= norms(j);
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(jac, Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const double smax = sv.size() > 0 ? sv(0) : 0.0;
+  const double smin = sv.size() > 0 ? sv(sv.size() - 1) : 0.0;
+  rep.condition_number = smin > 0.0 ? (smax / smin) * (smax / smin) : kInf;
+  // Pseudo-inverse of the scaled J^T J: directions with singular values below
+  // 1e-6 smax (condition 1e12) are treated as undetermined.
+  const double tol = 1e-6 * smax;
+  Eigen::MatrixXd cov_s =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
+  std::vector<bool> degenerate(p, false);
+  for (Eigen::Index k = 0; k < sv.size(); ++k) {
+    const Eigen::VectorXd vk = svd.matrixV().col(k);
+    if (sv(k) > tol) {
+      cov_s += vk * vk.transpose() / (sv(k) * sv(k));
+    } else {
+      for (std::size_t j = 0; j < p; ++j) {
+        if (std::fabs(vk(static_cast<Eigen::Index>(j))) > 0.3) degenerate[j] = true;
+      }
+    }
+  }
+  const double scale2 = rep.residual_std * rep.residual_std * rep.correlation_time;
+
+  rep.correlation.assign(p, std::vector<double>(p, 0.0));
+  std::vector<double> stds(p);
+  for (std::size_t j = 0; j < p; ++j) {
+    const auto jj = static_cast<Eigen::Index>(j);
+    stds[j] = norms(jj) > 0.0 && !degenerate[j]
+                  ? std::sqrt(std::max(0.0, cov_s(jj, jj) * scale2)) / norms(jj)
+                  : kInf;
+    rep.free_names.push_back(map.free()[j].name);
+  }
+  for (std::size_t a = 0; a < p; ++a) {
+    for (std::size_t b = 0; b < p; ++b) {
+      const auto ia = static_cast<Eigen::Index>(a), ib = static_cast<Eigen::Index>(b);
+      const double d = std::sqrt(cov_s(ia, ia) * cov_s(ib, ib));
+      rep.correlation[a][b] = d > 0.0 ? cov_s(ia, ib) / d : (a == b ? 1.0 : 0.0);
+    }
+  }
+
+  for (std::size_t j = 0; j < p; ++j) {
+    const auto& fp = map.free()[j];
+    auto& e = rep.parameters[fp.index];
+    e.std_error = stds[j];
+    const double range = fp.upper - fp.lower;
+    bool poor = false;
+    if (!std::isfinite(stds[j])) {
+      rep.warnings.push_back(e.name +
+                             ": not identifiable from this data (the friction does not "
+                             "depend on it, or only through other parameters)");
+      poor = true;
+    } else if (stds[j] > o.max_range_std * range) {
+      rep.warnings.push_back(e.name + ": poorly identified (standard error " + num(stds[j]) + ", " +
+                             num(100.0 * stds[j] / range, 2) + " % of its search range)");
+      poor = true;
+    } else if (std::fabs(e.value) > 0.0 && stds[j] > o.max_relative_std * std::fabs(e.value)) {
+      rep.warnings.push_back(e.name + ": poorly identified (standard error " + num(stds[j]) + ", " +
+                             num(100.0 * stds[j] / std::fabs(e.value), 2) + " % of its value)");
+      poor = true;
+    }
+    if (e.at_bound) {
+      rep.warnings.push_back(e.name +
+                             (e.value - fp.lower <= fp.upper - e.value ? ": at its lower bound"
+                                                                       : ": at its upper bound") +
+                             " (" + num(e.value, 4) +
+                             "); the data may want a value outside the search range");
+    }
+    e.well_identified = !poor && !e.at_bound;
+  }
+  for (std::size_t a = 0; a < p; ++a) {
+    for (std::size_t b = a + 1; b < p; ++b) {
+      const double r = rep.correlation[a][b];
+      if (std::fabs(r) > o.max_correlation) {
+        rep.warnings.push_back(rep.free_names[a] + " and " + rep.free_names[b] +
+                               " strongly correlated (r = " + num(r, 3) +
+                               "): the data determine mainly a combination of them");
+      }
+    }
+  }
+  return rep;
+}
+
+}  // namespace tsmh::estimator

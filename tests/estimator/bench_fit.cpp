@@ -1,0 +1,56 @@
+// The whole identification of `tsm fit` on 40 s of 1 kHz data (the paper's
+// model through realistic sensors): data preparation, the multi-start
+// NLopt fit, validation scoring, uncertainty, plots and report.json, as the
+// CLI does it. Target: <= 10 s wall on the project's 2-core machine.
+// Run: build/bin/bench_fit [repetitions]   (prints wall and CPU seconds)
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "estimator/atomic_file.hpp"
+#include "estimator/fit_workflow.hpp"
+#include "estimator/plotting.hpp"
+#include "estimator/synthetic.hpp"
+#include "estimator/tsm_model.hpp"
+
+int main(int argc, char** argv) {
+  using namespace tsmh::estimator;
+  const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
+  const auto dir = std::filesystem::temp_directory_path() / "tsmh_bench_fit";
+  std::filesystem::create_directories(dir);
+  std::printf("bench_fit: tsm fit on 40 s at 1 kHz, %u hardware threads\n",
+              std::thread::hardware_concurrency());
+  std::vector<double> walls;
+  for (int r = 0; r < reps; ++r) {
+    SyntheticConfig c;
+    c.seed = 1000 + static_cast<std::uint64_t>(r);
+    const auto syn = make_synthetic(TsmFrictionModel(paper_spec()), c);
+    const auto w0 = std::chrono::steady_clock::now();
+    const std::clock_t c0 = std::clock();
+    FitWorkflowOptions o;
+    const FitRun run = run_fit(syn.recording, TsmFrictionModel(paper_spec()), "paper", o);
+    const auto plots =
+        plot_friction(dir, "fit", run.data, {{"fitted", run.fit.simulated}}, "bench");
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+    write_text_atomically(dir / "report.json",
+                          fit_report_json(run, o, wall, plots.files, plots.error).dump(2));
+    const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+    walls.push_back(wall);
+    std::printf(
+        "  run %d: wall %.2f s, cpu %.2f s (fit %.2f s, %ld model runs), validation RMSE "
+        "%.3f N, fit %.1f %%\n",
+        r + 1, wall, cpu, run.fit.seconds, run.fit.evaluations, run.validation.rmse,
+        run.validation.fit_percent);
+  }
+  std::sort(walls.begin(), walls.end());
+  std::printf("bench_fit: wall median %.2f s, max %.2f s (target <= 10 s)\n",
+              walls[walls.size() / 2], walls.back());
+  std::filesystem::remove_all(dir);
+  return 0;
+}
