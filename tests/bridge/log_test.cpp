@@ -3,11 +3,14 @@
 // replays a log into our Receiver.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <lcm/lcm-cpp.hpp>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -38,19 +41,50 @@ void remove_unless_failed(const fs::path& dir) {
     fs::remove_all(dir);
 }
 
-// Events on `channel` in a (possibly still growing) log.
-std::size_t count_events(const fs::path& log, const std::string& channel) {
+// What lcm-logger actually wrote, read independently of read_joint_series.
+struct Recorded {
+  fs::path log;
+  std::set<std::int64_t> state_seqs, truth_seqs;
+  std::size_t state_events = 0, truth_events = 0;
+  std::set<std::int64_t> both() const {
+    std::set<std::int64_t> out;
+    std::set_intersection(state_seqs.begin(), state_seqs.end(), truth_seqs.begin(),
+                          truth_seqs.end(), std::inserter(out, out.end()));
+    return out;
+  }
+};
+
+Recorded read_back(const fs::path& log, const std::string& prefix) {
+  Recorded r;
+  r.log = log;
+  const std::string state = channel_name(prefix, Channel::SlaveState);
+  const std::string truth = channel_name(prefix, Channel::SlaveTruth);
   lcm::LogFile in(log.string(), "r");
-  if (!in.good()) return 0;
-  std::size_t n = 0;
-  for (const lcm::LogEvent* ev = in.readNextEvent(); ev != nullptr; ev = in.readNextEvent())
-    n += ev->channel == channel ? 1 : 0;
-  return n;
+  Decoder<SlaveStateSample> sd;
+  Decoder<SlaveTruthSample> td;
+  SlaveStateSample s;
+  SlaveTruthSample t;
+  for (const lcm::LogEvent* ev = in.readNextEvent(); ev != nullptr; ev = in.readNextEvent()) {
+    const auto n = static_cast<std::size_t>(ev->datalen);
+    if (ev->channel == state) {
+      ++r.state_events;
+      if (!sd.decode(ev->data, n, s)) r.state_seqs.insert(s.seq);
+    } else if (ev->channel == truth) {
+      ++r.truth_events;
+      if (!td.decode(ev->data, n, t)) r.truth_seqs.insert(t.seq);
+    }
+  }
+  return r;
 }
 
-// Records `count` SLAVE_STATE + SLAVE_TRUTH messages published by the peer
-// process with lcm-logger, returns the log path.
-fs::path record_with_logger(const fs::path& dir, const std::string& prefix, int count) {
+// Publishes `count` SLAVE_STATE + SLAVE_TRUTH messages from the peer process
+// while lcm-logger records the prefix's channels.
+//
+// lcm-logger is best effort: its subscription queue holds 30 messages, so a
+// stall of the logger on a busy machine loses some. The tests therefore check
+// the conversion against what the log really holds (read back independently)
+// and only require that most of the stream was recorded.
+Recorded record_with_logger(const fs::path& dir, const std::string& prefix, int count) {
   const fs::path log = dir / "slave.lcmlog";
   const std::string url = test::test_url();
   test::Background logger({TSMH_LCM_LOGGER, "-q", "-f", "--flush-interval=10",
@@ -59,71 +93,91 @@ fs::path record_with_logger(const fs::path& dir, const std::string& prefix, int 
   EXPECT_TRUE(logger.started());
   // Wait until the logger is listening: publish a probe until it lands in the file.
   auto probe = open_lcm(url);
+  auto poke = [&] {
+    const char byte = 0;
+    probe->publish(prefix + "PROBE", &byte, 1);
+    std::this_thread::sleep_for(20ms);
+  };
   const bool listening = test::wait_until(
       [&] {
-        const char byte = 0;
-        probe->publish(prefix + "PROBE", &byte, 1);
-        std::this_thread::sleep_for(20ms);
+        poke();
         return fs::exists(log) && fs::file_size(log) > 0;
       },
       10s);
   EXPECT_TRUE(listening) << "lcm-logger never recorded the probe";
-  const auto peer =
-      test::run({TSMH_BRIDGE_PEER, "publish", url, prefix, std::to_string(count), "1000", "truth"});
+  // Synchronous publishing without catch-up bursts, easy on the logger's queue.
+  const auto peer = test::run(
+      {TSMH_BRIDGE_PEER, "publish-direct", url, prefix, std::to_string(count), "1000", "truth"});
   EXPECT_EQ(peer.exit_code, 0) << peer.output;
-  // The logger writes behind, and flushes its stdio buffer only when it
-  // writes a later event: keep feeding it probes until every message of the
-  // stream is in the file (stopping it earlier can lose its queued tail).
-  const std::string state = channel_name(prefix, Channel::SlaveState);
-  const std::string truth = channel_name(prefix, Channel::SlaveTruth);
-  const auto n = static_cast<std::size_t>(count);
-  const bool complete = test::wait_until(
+  // The logger writes behind and flushes its stdio buffer only when it writes
+  // a later event: keep feeding it probes until the last message is on disk.
+  test::wait_until(
       [&] {
-        const char byte = 0;
-        probe->publish(prefix + "PROBE", &byte, 1);
-        std::this_thread::sleep_for(20ms);
-        return count_events(log, state) >= n && count_events(log, truth) >= n;
+        poke();
+        return read_back(log, prefix).state_seqs.count(count - 1) == 1;
       },
-      10s);
-  EXPECT_TRUE(complete) << "lcm-logger recorded " << count_events(log, state) << " of " << n;
+      5s);
+  poke();
+  poke();
   logger.stop();
-  return log;
+  Recorded r = read_back(log, prefix);
+  EXPECT_GE(r.both().size(), static_cast<std::size_t>(count) / 2)
+      << "lcm-logger recorded only " << r.state_seqs.size() << " SLAVE_STATE and "
+      << r.truth_seqs.size() << " SLAVE_TRUTH of " << count;
+  if (r.both().size() < static_cast<std::size_t>(count))
+    std::cerr << "note: lcm-logger recorded " << r.both().size() << " of " << count
+              << " state/truth pairs (best effort on a busy machine)\n";
+  return r;
+}
+
+// The seq a make_state() row of joint `joint` was built from (x_in = 0.001 seq + joint).
+std::int64_t seq_of_row(double x_in, int joint) {
+  return std::llround((x_in - joint) / 0.001);
 }
 
 TEST(LcmLog, LoggerRoundTripThroughOurReader) {
   const fs::path dir = temp_dir();
   const std::string prefix = test::unique_prefix();
-  const fs::path log = record_with_logger(dir, prefix, 250);
-  ASSERT_TRUE(is_lcm_log(log));
+  const Recorded rec = record_with_logger(dir, prefix, 250);
+  ASSERT_TRUE(is_lcm_log(rec.log));
 
-  const JointSeries js = read_joint_series(log, 1, prefix);
-  EXPECT_EQ(js.state_messages, 250U);
-  EXPECT_EQ(js.truth_messages, 250U);
-  ASSERT_EQ(js.rows(), 250U);
+  const JointSeries js = read_joint_series(rec.log, 1, prefix);
+  EXPECT_EQ(js.state_messages, rec.state_events);
+  EXPECT_EQ(js.truth_messages, rec.truth_events);
+  const std::set<std::int64_t> both = rec.both();
+  ASSERT_EQ(js.rows(), both.size()) << "one row per seq with both SLAVE_STATE and SLAVE_TRUTH";
+  EXPECT_EQ(js.rows_without_truth, rec.state_seqs.size() - both.size());
   EXPECT_EQ(js.radius_m, 0.01);
   EXPECT_EQ(js.t.front(), 0.0);
-  for (std::size_t i = 1; i < js.rows(); ++i)
-    ASSERT_GT(js.t[i], js.t[i - 1]) << "row " << i;
-  // Row i carries seq i (values built by make_state/make_truth).
+  // Each row is the right message: values built by make_state/make_truth from its seq.
+  std::int64_t last_seq = -1;
   for (std::size_t i = 0; i < js.rows(); ++i) {
-    const auto seq = static_cast<std::int64_t>(i);
+    const std::int64_t seq = seq_of_row(js.x_in[i], 1);
+    ASSERT_EQ(both.count(seq), 1U) << "row " << i;
+    ASSERT_GT(seq, last_seq) << "rows in seq order";
+    if (i > 0) {
+      ASSERT_GT(js.t[i], js.t[i - 1]) << "row " << i;
+    }
     ASSERT_EQ(js.x_in[i], test::make_state(seq, 0).x_in[1]) << "row " << i;
     ASSERT_EQ(js.T1[i], test::make_state(seq, 0).T1[1]);
     ASSERT_EQ(js.tau_out[i], test::make_truth(seq, 0).tau_out[1]) << "matched by seq";
+    last_seq = seq;
   }
-  EXPECT_EQ(js.x_out.size(), 250U);
+  EXPECT_EQ(js.x_out.size(), js.rows());
 
   try {
-    read_joint_series(log, 5, prefix);
+    read_joint_series(rec.log, 5, prefix);
     FAIL() << "joint 5 does not exist";
   } catch (const LogError& e) {
     EXPECT_NE(std::string(e.what()).find("has 2 joint(s)"), std::string::npos) << e.what();
   }
   try {
-    read_joint_series(log, 0, "NOPE_");
+    read_joint_series(rec.log, 0, "NOPE_");
     FAIL() << "no such prefix";
   } catch (const LogError& e) {
-    EXPECT_NE(std::string(e.what()).find(prefix + "SLAVE_STATE (250)"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find(
+                  test::cat(prefix, "SLAVE_STATE (", std::to_string(rec.state_events), ")")),
+              std::string::npos)
         << "lists the channels present: " << e.what();
   }
   remove_unless_failed(dir);
@@ -133,14 +187,14 @@ TEST(LcmLog, LoggerRoundTripThroughOurReader) {
 TEST(LcmLog, LoggerRoundTripThroughTsmConvert) {
   const fs::path dir = temp_dir();
   const std::string prefix = test::unique_prefix();
-  const fs::path log = record_with_logger(dir, prefix, 200);
+  const Recorded rec = record_with_logger(dir, prefix, 200);
   const fs::path csv = dir / "out.csv";
-  const auto r = test::run({TSMH_TSM_BIN, "convert", log.string(), "--output", csv.string(),
+  const auto r = test::run({TSMH_TSM_BIN, "convert", rec.log.string(), "--output", csv.string(),
                             "--joint", "0", "--prefix", prefix});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(csv);
   std::string line, header;
-  int rows = 0;
+  std::vector<std::string> rows;
   bool radius = false;
   while (std::getline(in, line)) {
     if (line.rfind('#', 0) == 0) {
@@ -151,13 +205,27 @@ TEST(LcmLog, LoggerRoundTripThroughTsmConvert) {
       header = line;
       continue;
     }
-    ++rows;
+    rows.push_back(line);
   }
   EXPECT_TRUE(radius) << "'# radius_m:' comment";
-  for (const char* col : {"t", "x_in", "tau_in", "tau_out", "x_out", "T1", "T3"})
-    EXPECT_NE(test::cat(",", header, ",").find(test::cat(",", col, ",")), std::string::npos)
-        << col << " in " << header;
-  EXPECT_EQ(rows, 200);
+  EXPECT_EQ(header, "t,x_in,tau_in,tau_out,x_out,T1,T3");
+  const std::set<std::int64_t> both = rec.both();
+  ASSERT_EQ(rows.size(), both.size());
+  // Every row is the message of its seq: x_in, tau_in = R (T1 - T3), tau_out.
+  for (const std::string& row : rows) {
+    std::istringstream cells(row);
+    std::vector<double> v;
+    for (std::string cell; std::getline(cells, cell, ',');)
+      v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 7U) << row;
+    const std::int64_t seq = seq_of_row(v[1], 0);
+    ASSERT_EQ(both.count(seq), 1U) << row;
+    const SlaveStateSample s = test::make_state(seq, 0);
+    EXPECT_DOUBLE_EQ(v[1], s.x_in[0]) << row;
+    EXPECT_NEAR(v[2], 0.01 * (s.T1[0] - s.T3[0]), 1e-12) << row;
+    EXPECT_DOUBLE_EQ(v[3], test::make_truth(seq, 0).tau_out[0]) << row;
+    EXPECT_DOUBLE_EQ(v[5], s.T1[0]) << row;
+  }
   remove_unless_failed(dir);
 }
 #endif

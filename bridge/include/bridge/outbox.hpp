@@ -84,8 +84,9 @@ class OutboxBase {
 template <class Sample>
 class Outbox final : public OutboxBase {
  public:
-  /// 64 samples: 64 ms of backlog at 1 kHz before anything is dropped.
-  static constexpr std::size_t kCapacity = 64;
+  /// 256 samples: at 1 kHz the publish thread may stall for 256 ms before
+  /// anything is dropped (stalls of 64+ ms were seen on a loaded 2-core VM).
+  static constexpr std::size_t kCapacity = 256;
 
   using OutboxBase::OutboxBase;
 
