@@ -188,6 +188,11 @@ void HapticLoop::record_compute(std::int64_t compute_ns, std::int64_t skipped) n
 void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
   const auto lat = window_lateness_.summary();
   const auto cmp = window_compute_.summary();
+  // Percentiles in HAPTIC_STATUS cover the last second, not the whole run.
+  if ((status_seq_ + 1) % 100 == 0) {
+    window_lateness_.reset();
+    window_compute_.reset();
+  }
   const auto link = link_.stats();
   const auto& out = safety_.last();
   status_.utime = now_ns / 1000;

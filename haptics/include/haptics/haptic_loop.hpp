@@ -119,7 +119,7 @@ class HapticLoop {
   LoopCounters counters_;
   TimingHistogram lateness_;
   TimingHistogram compute_;
-  bridge::LatencyHistogram window_lateness_;  // coarse, cheap to summarise at 100 Hz
+  bridge::LatencyHistogram window_lateness_;  // coarse, cheap to summarise at 100 Hz; 1 s windows
   bridge::LatencyHistogram window_compute_;
 };
 
