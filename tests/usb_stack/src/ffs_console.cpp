@@ -46,7 +46,7 @@ constexpr unsigned kWireFeature = 3;
 
 struct Ep0Stats {
   std::atomic<std::uint64_t> get_feature{0}, set_feature{0}, get_descriptor{0}, stalled{0},
-      enables{0}, disables{0};
+      enables{0};
 };
 
 bool write_all(int fd, const std::vector<std::uint8_t>& b, const char* what) {
@@ -87,10 +87,7 @@ class Ep0 {
       case FUNCTIONFS_DISABLE:
       case FUNCTIONFS_UNBIND:
       case FUNCTIONFS_SUSPEND:
-        if (enabled_.exchange(false)) {
-          ++stats_.disables;
-          fw_.on_link_lost();
-        }
+        if (enabled_.exchange(false)) fw_.on_link_lost();
         break;
       case FUNCTIONFS_SETUP:
         setup(e.u.setup);
@@ -337,6 +334,9 @@ int main(int argc, char** argv) {
            "requests");
     metric(prefix + "_fw_set_feature", static_cast<double>(ep0_stats.set_feature.load()),
            "requests");
+    metric(prefix + "_fw_get_descriptor", static_cast<double>(ep0_stats.get_descriptor.load()),
+           "requests");
+    metric(prefix + "_fw_ep0_stalled", static_cast<double>(ep0_stats.stalled.load()), "requests");
     // Endpoint threads may sit in blocking I/O: leave without joining.
     std::fflush(stdout);
     _exit(0);
