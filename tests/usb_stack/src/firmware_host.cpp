@@ -28,7 +28,8 @@ double max_abs_current_ma(const md::Firmware& f) {
   return m;
 }
 
-FirmwareHost::FirmwareHost(const md::FirmwareConfig& config) : firmware_(config) {}
+FirmwareHost::FirmwareHost(const md::FirmwareConfig& config)
+    : firmware_(config), stepped_to_ns_(md::monotonic_ns()) {}
 
 FirmwareHost::~FirmwareHost() {
   running_ = false;
@@ -59,10 +60,6 @@ void FirmwareHost::advance_locked(std::int64_t now) {
 
 void FirmwareHost::run_clock() {
   std::int64_t deadline = md::monotonic_ns();
-  {
-    std::lock_guard lock(mutex_);
-    stepped_to_ns_ = deadline;
-  }
   while (running_) {
     deadline += kPeriodNs;
     const timespec ts = to_timespec(deadline);
