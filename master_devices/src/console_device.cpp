@@ -37,8 +37,17 @@ ConsoleSettings parse_console_settings(FieldReader& r) {
   if (s.reconnect_interval_ms < 1) r.fail("reconnect_interval_ms", "must be >= 1");
   s.command_timeout_ms = r.get_int("command_timeout_ms", s.command_timeout_ms);
   if (s.command_timeout_ms < 1) r.fail("command_timeout_ms", "must be >= 1");
-  s.stale_timeout_ms = r.get_int("stale_timeout_ms", s.stale_timeout_ms);
-  if (s.stale_timeout_ms < 1) r.fail("stale_timeout_ms", "must be >= 1");
+  if (r.has("stale_timeout_ms") && r.has("stale_periods"))
+    r.fail("stale_periods", "give stale_timeout_ms or stale_periods, not both");
+  if (r.has("stale_timeout_ms")) {
+    s.stale_timeout_ms = r.get_int("stale_timeout_ms");
+    if (s.stale_timeout_ms < 1) r.fail("stale_timeout_ms", "must be >= 1");
+  }
+  s.stale_periods = r.get_double("stale_periods", s.stale_periods);
+  if (!(s.stale_periods >= 1.0)) r.fail("stale_periods", "must be >= 1");
+  s.clock_tolerance_ppm = r.get_double("clock_tolerance_ppm", s.clock_tolerance_ppm);
+  if (!(s.clock_tolerance_ppm >= 0.0 && s.clock_tolerance_ppm <= 100000.0))
+    r.fail("clock_tolerance_ppm", "must be 0 .. 100000");
   s.velocity_cutoff_hz = r.get_double("velocity_cutoff_hz", s.velocity_cutoff_hz);
   if (!(s.velocity_cutoff_hz > 0.0)) r.fail("velocity_cutoff_hz", "must be > 0");
   s.workspace_margin_rad = r.get_double("workspace_margin_rad", s.workspace_margin_rad);
@@ -55,7 +64,12 @@ ConsoleDevice::ConsoleDevice(std::string driver, DeviceProfile profile, ConsoleS
       profile_(std::move(profile)),
       settings_(std::move(settings)),
       provider_(std::move(provider)),
-      spec_(spec_from_profile(profile_, driver_)) {
+      spec_(spec_from_profile(profile_, driver_)),
+      fresh_bound_ns_(
+          settings_.stale_timeout_ms > 0
+              ? settings_.stale_timeout_ms * 1'000'000LL
+              : std::llround(settings_.stale_periods * 1e9 / std::max(1.0, spec_.nominal_rate_hz))),
+      clock_(settings_.clock_tolerance_ppm) {
   if (profile_.joints.size() > protocol::kJoints) {
     throw DeviceError(profile_.source + ": profile '" + profile_.name + "' has " +
                       std::to_string(profile_.joints.size()) +
@@ -137,6 +151,10 @@ void ConsoleDevice::connect() {
     }
   }
   spec_.nominal_rate_hz = info.nominal_rate_hz;
+  // Freshness bound: a few of the device's own periods (it streams at the
+  // rate it announces), unless given in ms.
+  if (settings_.stale_timeout_ms <= 0)
+    fresh_bound_ns_ = std::llround(settings_.stale_periods * 1e9 / info.nominal_rate_hz);
 
   // CALIBRATION: the firmware enforces our current limits and watchdog too.
   protocol::Calibration cal;
@@ -168,6 +186,7 @@ void ConsoleDevice::connect() {
   // A new session: the device comes back disabled, the I/O state starts over.
   enable_requested_ = false;
   have_previous_ = false;
+  clock_.reset();
   bad_in_a_row_ = 0;
   for (auto& v : velocity_)
     v.reset();
@@ -299,8 +318,16 @@ void ConsoleDevice::on_input_report(std::span<const std::uint8_t> report,
   previous_sequence_ = in.sequence;
   previous_device_us_ = in.device_time_us;
 
+  // Dated on the device's clock: a report read late (queued by the kernel
+  // while this thread was starved, or the last ones before an unplug) is as
+  // old as the device says, and one later than the freshness bound carries
+  // no torque: read() tells the loop it is stale, so it must not drive.
+  const DeviceClock::Sample when = clock_.map(in.device_time_us, t_ns);
+  const bool late = when.late_ns > fresh_bound_ns_.load(std::memory_order_relaxed);
+  if (late) n_late_++;
+
   DeviceReading r;
-  r.t_ns = t_ns;
+  r.t_ns = when.t_ns;
   r.sequence = ++reading_count_;
   r.dof = static_cast<std::uint32_t>(profile_.joints.size());
   for (std::size_t j = 0; j < profile_.joints.size(); ++j) {
@@ -326,7 +353,7 @@ void ConsoleDevice::on_input_report(std::span<const std::uint8_t> report,
   r.enabled = in.status.torque_enabled;
   r.status = DeviceStatus::kOk;  // read() overrides with link and fault state
 
-  send_output(t_ns, dt_s, true);
+  send_output(t_ns, dt_s, !late);
   r.tau_commanded = last_sent_;
   readings_.publish(r);
 }
@@ -382,8 +409,14 @@ DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
   const DeviceStatus s = status();
   r.status = s;
   r.fault = fault_.load();
-  const bool stale = r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL;
-  if (s == DeviceStatus::kOk && stale) r.status = DeviceStatus::kDisconnected;
+  // Silence or a late sample: not OK at once, OK again with the next fresh
+  // sample (link up, so nothing to reconnect and torque stays enabled).
+  const bool stale =
+      r.sequence == 0 || now_ns - r.t_ns > fresh_bound_ns_.load(std::memory_order_relaxed);
+  if (s == DeviceStatus::kOk && stale) {
+    r.status = DeviceStatus::kDisconnected;
+    r.stale = true;
+  }
   if (r.status != DeviceStatus::kOk) {
     r.enabled = false;
     r.tau_commanded = {};
@@ -465,8 +498,8 @@ std::string ConsoleDevice::last_error() const {
 }
 
 ConsoleStats ConsoleDevice::stats() const {
-  return ConsoleStats{n_reports_, n_bad_,         n_lost_,      n_sent_,
-                      n_failed_,  n_disconnects_, n_reconnects_};
+  return ConsoleStats{n_reports_, n_bad_,    n_lost_,        n_late_,
+                      n_sent_,    n_failed_, n_disconnects_, n_reconnects_};
 }
 
 std::string ConsoleDevice::connected_path() const {

@@ -2,6 +2,7 @@
 
 #include <hidapi/hidapi.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <thread>
@@ -81,27 +82,68 @@ class HidapiTransport final : public Transport {
   }
 
   bool write_output(std::span<const std::uint8_t> report) noexcept override {
-    // hidraw sends it on the interrupt OUT endpoint (or SET_REPORT(Output)
-    // when the device has none); bounded by one USB frame or two.
-    return hid_write(dev_, report.data(), report.size()) == static_cast<int>(report.size());
+    // Runs on the reader thread (inside on_input_report). While newer input
+    // reports are already queued, the answer is kept and superseded by the
+    // next one's: newest wins, as over libusb.
+    if (report.size() > pending_.size()) return false;
+    if (more_queued_) {
+      std::copy(report.begin(), report.end(), pending_.begin());
+      pending_size_ = report.size();
+      return true;
+    }
+    pending_size_ = 0;
+    return send(report);
   }
 
  private:
+  // hidraw queues up to 64 reports while this thread is not running.
+  static constexpr std::size_t kMaxBatch = 64;
+
+  bool send(std::span<const std::uint8_t> report) noexcept {
+    // hidraw sends it on the interrupt OUT endpoint (or SET_REPORT(Output)
+    // when the device has none) and waits for it: up to a frame at full speed.
+    return hid_write(dev_, report.data(), report.size()) == static_cast<int>(report.size());
+  }
+
+  void lost(TransportListener& listener) {
+    // The hidraw node is gone (unplug) or broken: one notification, then stop.
+    std::array<char, 160> why{};
+    const std::string text = hid_error_text(dev_);
+    text.copy(why.data(), why.size() - 1);
+    listener.on_link_lost(why.data());
+  }
+
   void read_loop(TransportListener& listener) {
-    std::array<std::uint8_t, 64> buf{};
+    std::array<std::array<std::uint8_t, 64>, kMaxBatch> bufs{};
+    std::array<std::size_t, kMaxBatch> sizes{};
     while (!stopping_) {
-      const int n = hid_read_timeout(dev_, buf.data(), buf.size(), read_timeout_ms_);
-      if (n < 0) {
-        // The hidraw node is gone (unplug) or broken: one notification, then stop.
-        std::array<char, 160> why{};
-        const std::string text = hid_error_text(dev_);
-        text.copy(why.data(), why.size() - 1);
-        listener.on_link_lost(why.data());
-        return;
-      }
+      const int n = hid_read_timeout(dev_, bufs[0].data(), bufs[0].size(), read_timeout_ms_);
+      if (n < 0) return lost(listener);
       if (n == 0) continue;  // timeout: staleness is judged by the driver's read()
-      listener.on_input_report(
-          std::span<const std::uint8_t>(buf.data(), static_cast<std::size_t>(n)), monotonic_ns());
+      const std::int64_t arrival = monotonic_ns();
+      // Take everything already queued (a starved thread finds a backlog):
+      // each report still reaches the driver, which dates it on the device
+      // clock, but only the newest is answered. Answering each with a write
+      // that waits for the bus would never drain a backlog at full speed.
+      sizes[0] = static_cast<std::size_t>(n);
+      std::size_t count = 1;
+      bool gone = false;
+      while (count < kMaxBatch) {
+        const int m = hid_read_timeout(dev_, bufs[count].data(), bufs[count].size(), 0);
+        if (m < 0) gone = true;
+        if (m <= 0) break;
+        sizes[count++] = static_cast<std::size_t>(m);
+      }
+      for (std::size_t i = 0; i < count; ++i) {
+        more_queued_ = i + 1 < count;
+        listener.on_input_report(std::span<const std::uint8_t>(bufs[i].data(), sizes[i]), arrival);
+      }
+      more_queued_ = false;
+      if (pending_size_ > 0) {  // the newest report was not answered: send the last answer
+        send(std::span<const std::uint8_t>(pending_.data(), pending_size_));
+        pending_size_ = 0;
+      }
+      if (gone) return lost(listener);
     }
   }
 
@@ -110,6 +152,10 @@ class HidapiTransport final : public Transport {
   int read_timeout_ms_;
   std::atomic<bool> stopping_{false};
   std::thread reader_;
+  // Reader thread only.
+  bool more_queued_ = false;
+  std::array<std::uint8_t, protocol::kMaxReportSize> pending_{};
+  std::size_t pending_size_ = 0;
 };
 
 }  // namespace

@@ -226,6 +226,7 @@ DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
   if (r.status == DeviceStatus::kOk &&
       (r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL)) {
     r.status = DeviceStatus::kDisconnected;
+    r.stale = true;
   }
   if (r.status != DeviceStatus::kOk) {
     r.enabled = false;

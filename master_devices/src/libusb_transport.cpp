@@ -1,14 +1,22 @@
 #include "master_devices/libusb_transport.hpp"
 
+#include <fcntl.h>
 #include <libusb.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cerrno>
+#include <charconv>
 #include <condition_variable>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "master_devices/clock.hpp"
@@ -54,6 +62,7 @@ struct LibusbProvider::Impl {
   std::mutex mutex;  // arrival, open
   std::function<void()> arrival;
   std::vector<LibusbTransport*> open;
+  std::atomic<std::uint64_t> fallback_opens{0};
 
   void add(LibusbTransport* t) {
     std::lock_guard lock(mutex);
@@ -75,10 +84,12 @@ std::string path_of(libusb_device* dev) {
 
 class LibusbTransport final : public Transport {
  public:
-  LibusbTransport(LibusbProvider::Impl& provider, libusb_device_handle* handle, int interface,
-                  std::uint8_t ep_in, std::uint8_t ep_out, int in_size, TransportDeviceInfo info)
+  LibusbTransport(LibusbProvider::Impl& provider, libusb_device_handle* handle, int wrapped_fd,
+                  int interface, std::uint8_t ep_in, std::uint8_t ep_out, int in_size,
+                  TransportDeviceInfo info)
       : provider_(provider),
         handle_(handle),
+        wrapped_fd_(wrapped_fd),
         device_(libusb_get_device(handle)),
         interface_(interface),
         ep_in_(ep_in),
@@ -110,6 +121,7 @@ class LibusbTransport final : public Transport {
     libusb_free_transfer(out_);
     libusb_release_interface(handle_, interface_);
     libusb_close(handle_);
+    if (wrapped_fd_ >= 0) ::close(wrapped_fd_);  // libusb leaves a wrapped fd to us
   }
 
   const TransportDeviceInfo& info() const override { return info_; }
@@ -265,6 +277,7 @@ class LibusbTransport final : public Transport {
 
   LibusbProvider::Impl& provider_;
   libusb_device_handle* handle_;
+  int wrapped_fd_;  // usbfs fd we opened (sysfs fallback), else -1
   libusb_device* device_;
   int interface_;
   std::uint8_t ep_in_;
@@ -305,6 +318,21 @@ int LIBUSB_CALL on_hotplug(libusb_context*, libusb_device* dev, libusb_hotplug_e
   return 0;  // stay registered
 }
 
+// One line of a sysfs attribute, without the newline; nullopt-like "" + false when unreadable.
+bool read_attribute(const std::filesystem::path& file, std::string& out) {
+  std::ifstream f(file);
+  if (!f) return false;
+  std::getline(f, out);
+  return !f.bad();
+}
+
+template <class T>
+bool parse_number(const std::string& text, int base, T& out) {
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, out, base);
+  return ec == std::errc() && ptr == end && !text.empty();
+}
+
 std::string ascii_string(libusb_device_handle* h, std::uint8_t index) {
   if (index == 0) return "";
   std::array<unsigned char, 128> buf{};
@@ -314,6 +342,39 @@ std::string ascii_string(libusb_device_handle* h, std::uint8_t index) {
 }
 
 }  // namespace
+
+std::vector<SysfsUsbDevice> scan_sysfs_usb(const std::string& root, std::uint16_t vendor_id,
+                                           std::uint16_t product_id) {
+  std::vector<SysfsUsbDevice> out;
+  std::error_code ec;
+  std::filesystem::directory_iterator it(root, ec);
+  if (ec) return out;
+  for (; it != std::filesystem::directory_iterator(); it.increment(ec)) {
+    if (ec) break;
+    SysfsUsbDevice d;
+    d.name = it->path().filename().string();
+    // Devices are "<bus>-<port>[.<port>...]"; root hubs are "usbN", interfaces contain ':'.
+    if (d.name.empty() || d.name.find(':') != std::string::npos ||
+        d.name.find('-') == std::string::npos || d.name.rfind("usb", 0) == 0)
+      continue;
+    const std::filesystem::path dir = it->path();
+    std::string vid, pid, bus, dev;
+    if (!read_attribute(dir / "idVendor", vid) || !read_attribute(dir / "idProduct", pid) ||
+        !read_attribute(dir / "busnum", bus) || !read_attribute(dir / "devnum", dev))
+      continue;
+    if (!parse_number(vid, 16, d.vendor_id) || !parse_number(pid, 16, d.product_id) ||
+        !parse_number(bus, 10, d.busnum) || !parse_number(dev, 10, d.devnum))
+      continue;
+    if (d.vendor_id != vendor_id || d.product_id != product_id) continue;
+    read_attribute(dir / "serial", d.serial);  // optional strings
+    read_attribute(dir / "manufacturer", d.manufacturer);
+    read_attribute(dir / "product", d.product);
+    out.push_back(std::move(d));
+  }
+  std::sort(out.begin(), out.end(),
+            [](const SysfsUsbDevice& a, const SysfsUsbDevice& b) { return a.name < b.name; });
+  return out;
+}
 
 LibusbProvider::LibusbProvider() : LibusbProvider(Options{}) {}
 
@@ -359,6 +420,9 @@ const std::string& LibusbProvider::init_error() const {
 bool LibusbProvider::hotplug_supported() const {
   return impl_->hotplug;
 }
+std::uint64_t LibusbProvider::fallback_opens() const {
+  return impl_->fallback_opens.load();
+}
 
 void LibusbProvider::set_arrival_callback(std::function<void()> callback) {
   std::lock_guard lock(impl_->mutex);
@@ -369,6 +433,7 @@ std::vector<TransportDeviceInfo> LibusbProvider::enumerate(std::uint16_t vendor_
                                                            std::uint16_t product_id) {
   std::vector<TransportDeviceInfo> out;
   if (impl_->ctx == nullptr) return out;
+  std::vector<std::pair<int, int>> bus_address;  // per entry of `out`, from libusb
   libusb_device** list = nullptr;
   const ssize_t n = libusb_get_device_list(impl_->ctx, &list);
   for (ssize_t i = 0; i < n; ++i) {
@@ -384,28 +449,83 @@ std::vector<TransportDeviceInfo> LibusbProvider::enumerate(std::uint16_t vendor_
       libusb_close(h);
     }
     out.push_back(std::move(info));
+    bus_address.emplace_back(libusb_get_bus_number(list[i]), libusb_get_device_address(list[i]));
   }
   if (list != nullptr) libusb_free_device_list(list, 1);
+  // Consoles libusb does not list (no udevd to announce them), from sysfs;
+  // at a port where libusb still lists a device that has left, sysfs's wins.
+  if (!impl_->options.sysfs_root.empty()) {
+    for (SysfsUsbDevice& d : scan_sysfs_usb(impl_->options.sysfs_root, vendor_id, product_id)) {
+      TransportDeviceInfo info{
+          "usb:" + d.name,           d.vendor_id,         d.product_id, std::move(d.serial),
+          std::move(d.manufacturer), std::move(d.product)};
+      const auto same_port =
+          std::find_if(out.begin(), out.end(),
+                       [&](const TransportDeviceInfo& i) { return i.path == info.path; });
+      if (same_port == out.end()) {
+        out.push_back(std::move(info));
+        bus_address.emplace_back(d.busnum, d.devnum);
+      } else if (bus_address[static_cast<std::size_t>(same_port - out.begin())] !=
+                 std::pair<int, int>(d.busnum, d.devnum)) {
+        *same_port = std::move(info);
+      }
+    }
+  }
   return out;
 }
 
 std::unique_ptr<Transport> LibusbProvider::open(const TransportDeviceInfo& device) {
   if (impl_->ctx == nullptr) throw TransportError(device.path + ": " + impl_->init_error);
+  // What the kernel has at this port now (the sysfs fallback's view).
+  const SysfsUsbDevice* now = nullptr;
+  std::vector<SysfsUsbDevice> sysfs;
+  if (!impl_->options.sysfs_root.empty() && device.path.rfind("usb:", 0) == 0) {
+    sysfs = scan_sysfs_usb(impl_->options.sysfs_root, device.vendor_id, device.product_id);
+    for (const SysfsUsbDevice& d : sysfs)
+      if ("usb:" + d.name == device.path) now = &d;
+  }
   libusb_device** list = nullptr;
   const ssize_t n = libusb_get_device_list(impl_->ctx, &list);
   libusb_device* found = nullptr;
   for (ssize_t i = 0; i < n; ++i) {
-    if (path_of(list[i]) == device.path) found = list[i];
+    // Same port, and the same device there (not one that has left since).
+    if (path_of(list[i]) == device.path &&
+        (now == nullptr || (libusb_get_bus_number(list[i]) == now->busnum &&
+                            libusb_get_device_address(list[i]) == now->devnum)))
+      found = list[i];
   }
   libusb_device_handle* h = nullptr;
-  const int orc = found != nullptr ? libusb_open(found, &h) : LIBUSB_ERROR_NO_DEVICE;
+  int wrapped_fd = -1;
+  int orc = found != nullptr ? libusb_open(found, &h) : LIBUSB_ERROR_NO_DEVICE;
   if (list != nullptr) libusb_free_device_list(list, 1);
+  std::string how = "libusb_open";
+  if (found == nullptr && now != nullptr) {
+    // Fallback: libusb never heard of it; open its usbfs node ourselves.
+    char node[64];
+    std::snprintf(node, sizeof node, "/%03d/%03d", now->busnum, now->devnum);
+    const std::string file = impl_->options.usbfs_root + node;
+    how = "opening " + file;
+    wrapped_fd = ::open(file.c_str(), O_RDWR | O_CLOEXEC);
+    if (wrapped_fd < 0) {
+      const int e = errno;
+      throw TransportError(
+          device.path + ": " + how + ": " + std::strerror(e) +
+          (e == EACCES ? " (install the udev rules, see docs/master-devices.md)" : ""));
+    }
+    how = "libusb_wrap_sys_device(" + file + ")";
+    orc = libusb_wrap_sys_device(impl_->ctx, wrapped_fd, &h);
+    if (orc != 0) ::close(wrapped_fd);
+  }
   if (orc != 0) {
-    throw TransportError(device.path + ": libusb_open: " + usb_error(orc) +
+    throw TransportError(device.path + ": " + how + ": " + usb_error(orc) +
                          (orc == LIBUSB_ERROR_ACCESS
                               ? " (install the udev rules, see docs/master-devices.md)"
                               : ""));
   }
+  const auto close_handle = [&] {
+    libusb_close(h);
+    if (wrapped_fd >= 0) ::close(wrapped_fd);
+  };
 
   // The vendor interface with an interrupt IN and OUT endpoint.
   libusb_config_descriptor* config = nullptr;
@@ -444,18 +564,20 @@ std::unique_ptr<Transport> LibusbProvider::open(const TransportDeviceInfo& devic
     libusb_free_config_descriptor(config);
   }
   if (interface < 0) {
-    libusb_close(h);
+    close_handle();
     throw TransportError(device.path +
                          ": no vendor-class interface with interrupt IN and OUT endpoints");
   }
   libusb_set_auto_detach_kernel_driver(h, 1);
   const int crc = libusb_claim_interface(h, interface);
   if (crc != 0) {
-    libusb_close(h);
+    close_handle();
     throw TransportError(device.path + ": claiming interface " + std::to_string(interface) + ": " +
                          usb_error(crc));
   }
-  return std::make_unique<LibusbTransport>(*impl_, h, interface, ep_in, ep_out, in_size, device);
+  if (wrapped_fd >= 0) impl_->fallback_opens++;
+  return std::make_unique<LibusbTransport>(*impl_, h, wrapped_fd, interface, ep_in, ep_out, in_size,
+                                           device);
 }
 
 }  // namespace tsmh::master_devices

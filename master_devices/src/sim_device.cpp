@@ -223,6 +223,7 @@ DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
   if (r.status == DeviceStatus::kOk && !settings_.simulated_time &&
       (r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL)) {
     r.status = DeviceStatus::kDisconnected;
+    r.stale = true;
   }
   if (r.status != DeviceStatus::kOk) {
     r.enabled = false;

@@ -465,5 +465,158 @@ TEST(ConsoleDevice, RealTimeEmulatorStreamsToAOneKilohertzLoop) {
   EXPECT_NEAR(rig.applied_torque(0), 0.05, 1e-6);
 }
 
+// ---- freshness: silence and late reports (docs/usb-stack-tests.md findings) ----
+
+// The driver's own freshness settings (a bound of 2 device periods), the
+// other timeouts relaxed.
+ConsoleSettings fresh_by_periods() {
+  ConsoleSettings s = relaxed();
+  s.stale_timeout_ms = 0;
+  s.stale_periods = 2.0;
+  return s;
+}
+
+TEST(ConsoleDevice, FreshnessBoundIsAFewDevicePeriodsUnlessGivenInMilliseconds) {
+  Rig a(fresh_by_periods());
+  EXPECT_EQ(a.device->freshness_bound_ns(), 2'000'000);  // 2 periods at the profile's 1 kHz
+  a.device->open();
+  EXPECT_EQ(a.device->freshness_bound_ns(), 2'000'000);  // DEVICE_INFO: 1000 Hz
+
+  EmulatorBus::Options slow = Rig::manual_options();
+  slow.firmware.info.nominal_rate_hz = 250;  // the device announces 250 Hz
+  ConsoleSettings s = fresh_by_periods();
+  s.stale_periods = 1.5;
+  Rig b(s, builtin_console_profile(), slow);
+  b.device->open();
+  EXPECT_EQ(b.device->freshness_bound_ns(), 6'000'000) << "1.5 periods of the device's own rate";
+  EXPECT_EQ(b.device->spec().nominal_rate_hz, 250.0);
+
+  ConsoleSettings ms = relaxed();
+  ms.stale_timeout_ms = 7;
+  Rig c(ms);
+  c.device->open();
+  EXPECT_EQ(c.device->freshness_bound_ns(), 7'000'000);
+}
+
+TEST(ConsoleDevice, SilenceIsNotOkOnceTheBoundPassesAndOkAgainWithTheNextReport) {
+  Rig rig(fresh_by_periods());
+  rig.device->open();
+  rig.device->set_enabled(true);
+  DeviceReading r;
+  for (int k = 0; k < 50; ++k) {
+    r = rig.cycle();
+    rig.device->write_torque(JointArray{0.1, -0.1});
+  }
+  ASSERT_EQ(r.status, DeviceStatus::kOk);
+  ASSERT_TRUE(r.enabled);
+  // The device goes silent (no tick). The loop passes its own clock: the
+  // verdict depends only on the newest sample's age, so it is exact here.
+  const std::int64_t t = r.t_ns;
+  DeviceReading inside = rig.device->read(t + 1'999'000);
+  EXPECT_EQ(inside.status, DeviceStatus::kOk);
+  EXPECT_FALSE(inside.stale);
+  DeviceReading past = rig.device->read(t + 2'001'000);
+  EXPECT_EQ(past.status, DeviceStatus::kDisconnected) << "one cycle after the bound at most";
+  EXPECT_TRUE(past.stale);
+  EXPECT_FALSE(past.enabled);
+  EXPECT_EQ(past.tau_commanded[0], 0.0);
+  EXPECT_EQ(past.tau_commanded[1], 0.0);
+  EXPECT_EQ(rig.device->status(), DeviceStatus::kOk) << "the link itself is up: nothing latched";
+
+  // Reports resume: OK at once, torque still enabled (no reconnect happened).
+  r = rig.cycle();
+  EXPECT_EQ(r.status, DeviceStatus::kOk);
+  EXPECT_FALSE(r.stale);
+  EXPECT_TRUE(r.enabled);
+  rig.device->write_torque(JointArray{0.1, -0.1});
+  rig.cycle();
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+  EXPECT_EQ(rig.device->stats().disconnects, 0u);
+  EXPECT_EQ(rig.device->stats().reconnects, 0u);
+  EXPECT_EQ(rig.device->stats().late_reports, 0u);
+}
+
+TEST(ConsoleDevice, AReportReadLateIsStaleAndCarriesNoTorque) {
+  Rig rig(fresh_by_periods());
+  rig.device->open();
+  rig.device->set_enabled(true);
+  for (int k = 0; k < 50; ++k) {
+    rig.cycle();
+    rig.device->write_torque(JointArray{0.1, -0.1});
+  }
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+  // The host is starved for 10 ms while the device takes one sample: the
+  // report is read 9+ ms after the device's clock says it was taken (what
+  // the QEMU guest showed with reports queued before an unplug).
+  std::this_thread::sleep_for(10ms);
+  rig.bus->tick();
+  const std::int64_t now = monotonic_ns();
+  const DeviceReading late = rig.device->read(now);
+  EXPECT_TRUE(late.fresh);
+  EXPECT_EQ(late.status, DeviceStatus::kDisconnected);
+  EXPECT_TRUE(late.stale);
+  EXPECT_GT(now - late.t_ns, 8'000'000) << "dated on the device clock, not on arrival";
+  EXPECT_EQ(late.tau_commanded[0], 0.0);
+  EXPECT_EQ(rig.applied_torque(0), 0.0) << "its answer carried no torque";
+  EXPECT_EQ(rig.device->stats().late_reports, 1u);
+
+  // Reports on time again (the device clock catches up with the host's):
+  // OK with torque, without re-enabling.
+  bool back = false;
+  for (int k = 0; k < 30 && !back; ++k) {
+    rig.device->write_torque(JointArray{0.1, -0.1});
+    const DeviceReading r = rig.cycle();
+    back = r.status == DeviceStatus::kOk && r.enabled;
+  }
+  EXPECT_TRUE(back);
+  rig.device->write_torque(JointArray{0.1, -0.1});
+  rig.cycle();
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+  EXPECT_EQ(rig.device->stats().disconnects, 0u);
+}
+
+TEST(ConsoleDevice, UnplugIsNotOkFromTheBoundEvenBeforeTheLinkLossPathFires) {
+  Rig rig(fresh_by_periods());
+  rig.device->open();
+  rig.device->set_enabled(true);
+  DeviceReading r;
+  for (int k = 0; k < 20; ++k) {
+    r = rig.cycle();
+    rig.device->write_torque(JointArray{0.1, -0.1});
+  }
+  rig.bus->unplug();  // the transport notices only on its next tick (like a slow kernel)
+  const DeviceReading before_link = rig.device->read(r.t_ns + 2'500'000);
+  EXPECT_EQ(before_link.status, DeviceStatus::kDisconnected);
+  EXPECT_TRUE(before_link.stale);
+  EXPECT_FALSE(before_link.enabled);
+  EXPECT_EQ(rig.device->stats().disconnects, 0u);
+  rig.bus->tick();  // the link-loss path
+  const DeviceReading after_link = rig.device->read(monotonic_ns());
+  EXPECT_EQ(after_link.status, DeviceStatus::kDisconnected);
+  EXPECT_FALSE(after_link.stale) << "a lost link, not a silence";
+  EXPECT_EQ(rig.device->stats().disconnects, 1u);
+}
+
+TEST(ConsoleDevice, FreshnessSettingsAreValidated) {
+  const auto error_of = [](const char* yaml) {
+    YAML::Node node = YAML::Load(yaml);
+    FieldReader r(node, "server.yaml", "device.settings");
+    try {
+      parse_console_settings(r);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of("stale_periods: 0.5").find("device.settings.stale_periods: must be >= 1"),
+            std::string::npos);
+  EXPECT_NE(error_of("stale_periods: 3\nstale_timeout_ms: 5")
+                .find("device.settings.stale_periods: give stale_timeout_ms or stale_periods"),
+            std::string::npos);
+  EXPECT_NE(error_of("clock_tolerance_ppm: -1").find("device.settings.clock_tolerance_ppm"),
+            std::string::npos);
+  EXPECT_EQ(error_of("stale_periods: 3\nclock_tolerance_ppm: 1000"), "");
+}
+
 }  // namespace
 }  // namespace tsmh::master_devices

@@ -7,11 +7,17 @@
 // - open(): find the device (path / serial / first with the profile's
 //   VID/PID), read DEVICE_INFO and check it against the profile, program
 //   CALIBRATION (watchdog, current limits) and read it back.
-// - I/O context (per input report): decode, calibrate to rad, estimate
-//   velocity on the device clock, check workspace and device faults, publish
-//   the reading; then answer with one output report carrying the newest
-//   torque command (clamped, I^2 t limited, zero when disabled, faulted or
-//   when the loop stopped writing for command_timeout_ms).
+// - I/O context (per input report): decode, date the sample on the device's
+//   own clock (DeviceClock), calibrate to rad, estimate velocity on the
+//   device clock, check workspace and device faults, publish the reading;
+//   then answer with one output report carrying the newest torque command
+//   (clamped, I^2 t limited, zero when disabled, faulted, when the loop
+//   stopped writing for command_timeout_ms, or when the report itself
+//   arrived later than the freshness bound).
+// - read() (the loop): kDisconnected, torque zero, as soon as the newest
+//   sample is older than the freshness bound (a few device periods), and OK
+//   again as soon as fresh samples arrive: silence is noticed within a loop
+//   cycle of the bound, whatever the kernel's or library's unplug path takes.
 // - Supervisor thread: on link loss, tears the transport down and reconnects
 //   every reconnect_interval_ms (or at once on a hotplug arrival). The device
 //   comes back disabled.
@@ -25,6 +31,7 @@
 #include <thread>
 
 #include "master_devices/device.hpp"
+#include "master_devices/device_clock.hpp"
 #include "master_devices/joint_calibration.hpp"
 #include "master_devices/latest_value.hpp"
 #include "master_devices/profile.hpp"
@@ -39,7 +46,13 @@ struct ConsoleSettings {
   std::string serial;  ///< only a device with this serial; "" = any
   std::int64_t reconnect_interval_ms = 200;
   std::int64_t command_timeout_ms = 20;  ///< zero torque when write_torque() calls stop this long
-  std::int64_t stale_timeout_ms = 20;    ///< read(): kDisconnected when the newest sample is older
+  /// The freshness bound: read() says kDisconnected (stale) when the newest
+  /// sample is older, and a report arriving later than this carries no
+  /// torque. 0: stale_periods device periods (1 / DEVICE_INFO nominal rate).
+  std::int64_t stale_timeout_ms = 0;
+  double stale_periods = 2.0;
+  /// DeviceClock: largest device-vs-host clock rate difference followed.
+  double clock_tolerance_ppm = DeviceClock::kDefaultTolerancePpm;
   double velocity_cutoff_hz = 150.0;
   double workspace_margin_rad = 0.2;  ///< kFault when a joint is this far outside its workspace
   int max_bad_reports = 10;           ///< consecutive malformed reports before kFault
@@ -54,6 +67,8 @@ struct ConsoleStats {
   std::uint64_t reports = 0;       ///< valid input reports
   std::uint64_t bad_reports = 0;   ///< malformed input reports (dropped)
   std::uint64_t lost_reports = 0;  ///< gaps in the input sequence
+  std::uint64_t late_reports =
+      0;  ///< arrived later than the freshness bound (answered without torque)
   std::uint64_t outputs_sent = 0;
   std::uint64_t outputs_failed = 0;
   std::uint64_t disconnects = 0;
@@ -82,6 +97,9 @@ class ConsoleDevice final : public Device, private TransportListener {
   const DeviceProfile& profile() const { return profile_; }
   /// Path of the connected device ("" when disconnected).
   std::string connected_path() const;
+  /// read() says kDisconnected (stale) when the newest sample is older than
+  /// this: stale_timeout_ms, or stale_periods / nominal rate once connected.
+  std::int64_t freshness_bound_ns() const noexcept { return fresh_bound_ns_.load(); }
 
  private:
   struct Command {
@@ -115,12 +133,14 @@ class ConsoleDevice final : public Device, private TransportListener {
   std::atomic<bool> opened_{false};
   std::atomic<FaultCode> fault_{FaultCode::kNone};
   std::atomic<bool> clear_device_fault_{false};
+  std::atomic<std::int64_t> fresh_bound_ns_{0};
 
   // I/O context state (one session at a time; reset in connect()).
   Transport* active_ = nullptr;
   bool have_previous_ = false;
   std::uint16_t previous_sequence_ = 0;
   std::uint32_t previous_device_us_ = 0;
+  DeviceClock clock_;
   int bad_in_a_row_ = 0;
   std::uint64_t reading_count_ = 0;
   std::array<VelocityEstimator, kMaxDof> velocity_{};
@@ -129,8 +149,8 @@ class ConsoleDevice final : public Device, private TransportListener {
   JointArray last_sent_{};
 
   // Counters (I/O context writes, anyone reads).
-  std::atomic<std::uint64_t> n_reports_{0}, n_bad_{0}, n_lost_{0}, n_sent_{0}, n_failed_{0},
-      n_disconnects_{0}, n_reconnects_{0};
+  std::atomic<std::uint64_t> n_reports_{0}, n_bad_{0}, n_lost_{0}, n_late_{0}, n_sent_{0},
+      n_failed_{0}, n_disconnects_{0}, n_reconnects_{0};
 
   // Supervisor.
   mutable std::mutex mutex_;  // guards the fields below and error_

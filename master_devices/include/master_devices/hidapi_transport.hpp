@@ -5,7 +5,9 @@
 // hid_{get,send}_feature_report(). All our reports are numbered, so the
 // report-ID byte is always the first byte in both directions, as hidapi
 // expects. hid_read_timeout() returning -1 (the hidraw node went away) is
-// reported as a lost link.
+// reported as a lost link at once. After each wake-up the reader takes every
+// report hidraw has queued meanwhile and answers only the newest, so a
+// backlog left by a stall drains at once instead of persisting.
 
 #include <memory>
 

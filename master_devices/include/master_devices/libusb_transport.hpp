@@ -5,9 +5,19 @@
 // Asynchronous transfers (several IN transfers in flight, so no
 // microframe is missed at high-speed rates of up to 8 kHz) complete on one
 // event thread per provider, which also receives hotplug arrive/leave.
+//
+// libusb's device list (Linux, Debian's udev build) is kept up to date only by
+// udevd's announcements: without udevd (a container, an initramfs) a console
+// plugged in after libusb_init() never appears in it, and no hotplug event
+// comes. So enumerate() also scans sysfs, which the kernel keeps itself, and
+// open() opens a console libusb does not know through its usbfs node
+// (libusb_wrap_sys_device). The driver's periodic reconnect poll then finds a
+// replugged console with or without udevd.
 
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "master_devices/transport.hpp"
 
@@ -19,6 +29,10 @@ class LibusbProvider final : public TransportProvider {
     int interface_class = 0xFF;  ///< the vendor-specific interface carrying the protocol
     unsigned control_timeout_ms = 500;
     int in_transfers = 4;  ///< IN transfers kept in flight
+    /// Where the kernel lists USB devices ("" disables the sysfs fallback).
+    std::string sysfs_root = "/sys/bus/usb/devices";
+    /// usbfs device nodes, <root>/BBB/DDD.
+    std::string usbfs_root = "/dev/bus/usb";
   };
   LibusbProvider();
   explicit LibusbProvider(Options options);
@@ -34,6 +48,8 @@ class LibusbProvider final : public TransportProvider {
   const std::string& init_error() const;
   /// Whether this libusb build delivers hotplug events.
   bool hotplug_supported() const;
+  /// How many opens went through the sysfs fallback (libusb did not list the device).
+  std::uint64_t fallback_opens() const;
 
   struct Impl;
 
@@ -43,5 +59,24 @@ class LibusbProvider final : public TransportProvider {
 
 /// The path we give a USB device: "usb:<bus>-<port>[.<port>...]" (as in sysfs).
 std::string usb_port_path(int bus, const std::uint8_t* ports, int count);
+
+/// A USB device as sysfs describes it: no udev, no libusb, no opening needed.
+struct SysfsUsbDevice {
+  std::string name;  ///< the sysfs directory, "1-4.2"; our path is "usb:" + name
+  int busnum = 0;
+  int devnum = 0;
+  std::uint16_t vendor_id = 0;
+  std::uint16_t product_id = 0;
+  std::string serial;
+  std::string manufacturer;
+  std::string product;
+};
+
+/// The devices under `root` (normally /sys/bus/usb/devices) with this
+/// VID/PID; empty when the directory cannot be read. Root hubs ("usb1") and
+/// interfaces ("1-1:1.0") are skipped, and so is an entry whose attributes
+/// cannot be read or parsed (a device going away).
+std::vector<SysfsUsbDevice> scan_sysfs_usb(const std::string& root, std::uint16_t vendor_id,
+                                           std::uint16_t product_id);
 
 }  // namespace tsmh::master_devices

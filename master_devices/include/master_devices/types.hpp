@@ -59,6 +59,13 @@ struct DeviceReading {
   FaultCode fault = FaultCode::kNone;
   bool enabled = false;  ///< torque output enabled (host request, and the device agrees)
   bool fresh = false;    ///< a new sample arrived since the previous read()
+  /// kDisconnected only because the newest sample is older than the device's
+  /// freshness bound while its link is up (a silent or late device, or the
+  /// first cycles of an unplug before the link-loss path fires). Torque is
+  /// zero as for any kDisconnected; unlike a lost link it ends by itself, with
+  /// torque still enabled, as soon as fresh samples arrive. A loop may treat
+  /// it more leniently than a lost link (e.g. not latch its own fault).
+  bool stale = false;
 };
 
 /// What a device can do, CHAI3D-style. Filled from the device profile / settings.
