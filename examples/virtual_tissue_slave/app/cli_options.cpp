@@ -15,7 +15,7 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--duration", o.duration_s,
                  "seconds to run (offline: default per scenario; real time: 0 = until SIGINT)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--scenario", o.scenario, "offline scenario: sine, multisine, palpate, chirp");
+  app.add_option("--scenario", o.scenario, "offline scenario: sine, multisine, palpate, chirp, excite");
   app.add_option("--output", o.output, "offline: CSV file to write (data contract, design.md §4)");
   app.add_option(
          "--joint", o.joint,

@@ -34,7 +34,7 @@ double palpation(double t, double surface) {
 }  // namespace
 
 std::vector<std::string> scenario_names() {
-  return {"sine", "multisine", "palpate", "chirp"};
+  return {"sine", "multisine", "palpate", "chirp", "excite"};
 }
 
 Scenario make_scenario(std::string_view name) {
@@ -70,9 +70,17 @@ Scenario make_scenario(std::string_view name) {
     s.default_duration_s = 60.0;
     s.tissue = "none";
     s.surface_rad = 0.6;
+  } else if (name == "excite") {
+    s.kind = ScenarioKind::excite;
+    s.description =
+        "identification: a three-sine mix (0.23-1.4 Hz) whose amplitude steps through 0.05, "
+        "0.15, 0.4 and 0.8 rad every 10 s, so fits see small strokes as well as large; free motion";
+    s.default_duration_s = 40.0;
+    s.tissue = "none";
+    s.surface_rad = 0.6;
   } else {
     throw std::invalid_argument("unknown scenario '" + std::string(name) +
-                                "' (known: sine, multisine, palpate, chirp)");
+                                "' (known: sine, multisine, palpate, chirp, excite)");
   }
   return s;
 }
@@ -98,6 +106,20 @@ double Scenario::reference(double t, int joint) const {
       const double phase = kTwoPi * (kF0 * u + 0.5 * (kF1 - kF0) / kSweep * u * u);
       const double ramp = smoothstep(u) * smoothstep((kSweep - u) / 1.0);
       return 0.5 * ramp * std::sin(phase);
+    }
+    case ScenarioKind::excite: {
+      // Small strokes matter as much as large ones: a surgeon's gentle motion
+      // never leaves the pre-sliding part of the hysteresis.
+      constexpr double kLevels[] = {0.05, 0.15, 0.4, 0.8};
+      constexpr double kSegment = 10.0;
+      const double u = std::fmod(t, 4.0 * kSegment);
+      const auto k = static_cast<int>(u / kSegment);
+      const double blend = smoothstep((u - k * kSegment) / 1.0);
+      const double a = kLevels[(k + 3) % 4] + (kLevels[k] - kLevels[(k + 3) % 4]) * blend;
+      const double phase = joint == 0 ? 0.0 : 0.9;
+      return a * (0.6 * std::sin(kTwoPi * 0.23 * t + phase) +
+                  0.3 * std::sin(kTwoPi * 0.61 * t + 1.0 + phase) +
+                  0.1 * std::sin(kTwoPi * 1.37 * t + 2.0 + phase));
     }
   }
   return 0.0;

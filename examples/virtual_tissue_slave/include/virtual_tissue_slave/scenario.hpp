@@ -8,7 +8,7 @@
 
 namespace tsmh::virtual_tissue_slave {
 
-enum class ScenarioKind { sine, multisine, palpate, chirp };
+enum class ScenarioKind { sine, multisine, palpate, chirp, excite };
 
 struct Scenario {
   ScenarioKind kind = ScenarioKind::sine;
