@@ -166,6 +166,8 @@ void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions opt
                                      static_cast<int>(r.get_int("in_transfers", o.in_transfers));
                                  if (o.in_transfers < 1 || o.in_transfers > 32)
                                    r.fail("in_transfers", "must be 1 .. 32");
+                                 // Consoles libusb does not list (no udevd) from sysfs.
+                                 if (!r.get_bool("sysfs_fallback", true)) o.sysfs_root.clear();
                                  return std::make_shared<LibusbProvider>(o);
                                }),
                [profiles] {

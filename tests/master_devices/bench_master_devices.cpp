@@ -123,6 +123,11 @@ int main(int argc, char** argv) {
     dev.open();
     dev.set_enabled(true);
     std::vector<double> age_us, read_ns, write_ns, late_us;
+    // Age of the newest sample (dated on the device clock) at every tick
+    // while the device streams: how often a freshness bound of N periods
+    // would call a streaming device stale.
+    std::vector<double> streaming_age_us;
+    int stale_ticks = 0;
     const int ticks = static_cast<int>(seconds * 1000);
     int fresh = 0;
     int unplug_at = ticks / 2;
@@ -155,6 +160,11 @@ int main(int argc, char** argv) {
         age_us.push_back((now - r.t_ns) * 1e-3);
         fresh += r.fresh ? 1 : 0;
       }
+      const bool streaming = k > 10 && (k < unplug_at || k > unplug_at + 200);
+      if (streaming && r.sequence > 0) {
+        streaming_age_us.push_back((now - r.t_ns) * 1e-3);
+        stale_ticks += r.stale ? 1 : 0;
+      }
     }
     const md::ConsoleStats s = dev.stats();
     print("reading age at read()", "us", percentiles(age_us));
@@ -172,6 +182,17 @@ int main(int argc, char** argv) {
         static_cast<unsigned long long>(s.outputs_sent));
     std::printf("  unplug seen by the loop after %d tick(s); replug back to OK after %d ms\n",
                 detected_after, recovered_after);
+    print("sample age (device clock), streaming", "us", percentiles(streaming_age_us));
+    std::printf("  stale ticks while streaming (bound %.1f ms): %d of %zu; late reports %llu\n",
+                static_cast<double>(dev.freshness_bound_ns()) * 1e-6, stale_ticks,
+                streaming_age_us.size(), static_cast<unsigned long long>(s.late_reports));
+    std::printf("  ticks a bound of N periods would call stale:");
+    for (const double n : {1.5, 2.0, 3.0, 5.0, 10.0}) {
+      const auto over = std::count_if(streaming_age_us.begin(), streaming_age_us.end(),
+                                      [n](double a) { return a > n * 1000.0; });
+      std::printf("  N=%.1f: %ld", n, static_cast<long>(over));
+    }
+    std::printf("  (of %zu)\n", streaming_age_us.size());
     dev.close();
   }
 

@@ -110,6 +110,7 @@ TEST(Registry, ConsoleDriversSelectProfilesByNameOrFile) {
   ctx.base_dir = dir;
   auto dev = r.create("emulator", YAML::Load("profile: mine.yaml\n"), ctx);
   EXPECT_EQ(dev->spec().model, "tsm-console-2dof");
+  EXPECT_NO_THROW(r.create("usb", YAML::Load("sysfs_fallback: false\nstale_periods: 4\n"), ctx));
   const std::string typo =
       error_of([&] { r.create("hid", YAML::Load("reconect_interval_ms: 5\n"), ctx); });
   EXPECT_NE(typo.find("device.settings.reconect_interval_ms: unknown key"), std::string::npos)

@@ -50,7 +50,7 @@ struct ConsoleSettings {
   /// sample is older, and a report arriving later than this carries no
   /// torque. 0: stale_periods device periods (1 / DEVICE_INFO nominal rate).
   std::int64_t stale_timeout_ms = 0;
-  double stale_periods = 2.0;
+  double stale_periods = 3.0;
   /// DeviceClock: largest device-vs-host clock rate difference followed.
   double clock_tolerance_ppm = DeviceClock::kDefaultTolerancePpm;
   double velocity_cutoff_hz = 150.0;

@@ -116,14 +116,23 @@ hidraw_for() {
 proc_state() { sed -n 's/^[0-9]* (.*) \([A-Za-z]\).*/\1/p' "/proc/$1/stat" 2>/dev/null; }
 proc_stopped_or_gone() { s=$(proc_state "$1"); [ -z "$s" ] || [ "$s" = T ] || [ "$s" = t ]; }
 
-# run_driver_case PREFIX DRIVER PERSONALITY: the console firmware on a
-# FunctionFS gadget with the given personality, our DRIVER on the host side
-# (usb_stack_console_host), tsm-devices --list when it is built.
+# udevd_running: whether the guest's udevd is up (a case may stop it).
+udevd_running() { pidof systemd-udevd >/dev/null 2>&1; }
+
+# run_driver_case PREFIX DRIVER PERSONALITY [HOST_ARGS...]: the console
+# firmware on a FunctionFS gadget with the given personality, our DRIVER on
+# the host side (usb_stack_console_host HOST_ARGS...), tsm-devices --list when
+# it is built. The firmware tells the host, outside the USB stack, when each
+# input report left (the mailbox, a shared file) and its watchdog verdict
+# (<mailbox>.watchdog).
 run_driver_case() {
   prefix=$1; driver=$2; personality=$3
+  shift 3
+  mailbox=/tmp/${prefix}_mailbox
   gadget_create console 0x1209 0x0001 "tsm-haptics console" &&
     gadget_add_ffs console console || { result "${prefix}_gadget" FAIL "configfs/functionfs setup failed"; return; }
-  usb_stack_ffs_console --ffs /dev/ffs-console --personality "$personality" --prefix "$prefix" &
+  usb_stack_ffs_console --ffs /dev/ffs-console --personality "$personality" --prefix "$prefix" \
+    --mailbox "$mailbox" &
   fw=$!
   WAIT_S=5 wait_for test -e /dev/ffs-console/ep2 ||
     { result "${prefix}_gadget" FAIL "firmware did not write its descriptors"; kill $fw; return; }
@@ -133,7 +142,7 @@ run_driver_case() {
   if ! WAIT_S=10 wait_for grep -q 1 /sys/bus/usb/devices/1-1/bConfigurationValue; then
     result "${prefix}_gadget" FAIL "device 1-1 not configured within 10 s"; kill $fw; return
   fi
-  [ -x /lib/systemd/systemd-udevd ] && udevadm settle -t 5 2>/dev/null
+  udevd_running && udevadm settle -t 5 2>/dev/null
   result "${prefix}_gadget" PASS "enumerated $(( $(uptime_ms) - t0 )) ms after bind"
 
   # The listings a user runs: the console must be found by VID:PID with the
@@ -153,16 +162,20 @@ run_driver_case() {
 
   echo "USB_STACK_PHASE ${prefix}_host uptime=$(cut -d' ' -f1 /proc/uptime)"
   usb_stack_console_host --driver "$driver" --prefix "$prefix" --udc "$CONFIGFS/console/UDC" \
-    --seconds "${STREAM_S:-2}" --replugs "${REPLUGS:-2}" &
+    --mailbox "$mailbox" --seconds "${STREAM_S:-2}" --replugs "${REPLUGS:-2}" "$@" &
   host=$!
   # The host stops itself (SIGSTOP) to play a host that died silently: the
   # firmware's watchdog must zero the torque. Let it judge, then continue.
-  if WAIT_S=60 wait_for proc_stopped_or_gone $host && [ -n "$(proc_state $host)" ]; then
+  # It may ask for another attempt ("retry": nothing to cut), at most 3.
+  for attempt in 1 2 3; do
+    rm -f "$mailbox.watchdog"
+    WAIT_S=60 wait_for proc_stopped_or_gone $host && [ -n "$(proc_state $host)" ] || break
     usleep 300000
     kill -USR1 $fw
-    usleep 200000
+    WAIT_S=5 wait_for test -s "$mailbox.watchdog"
     kill -CONT $host
-  fi
+    [ "$(cat "$mailbox.watchdog" 2>/dev/null)" = retry ] || break
+  done
   wait $host || echo "usb_stack_console_host exited with status $?"
   kill -TERM $fw
   wait $fw 2>/dev/null || true
