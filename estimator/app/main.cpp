@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   add_simulate_command(app, ctx);
   add_convert_command(app, ctx);
   add_fit_command(app, ctx);
+  add_gap_command(app, ctx);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

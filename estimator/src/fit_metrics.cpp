@@ -149,6 +149,45 @@ std::vector<RegimeError> regime_errors(const FitData& data, std::span<const doub
   return out;
 }
 
+double autocorrelation(std::span<const double> r, std::size_t k) {
+  const std::size_t n = r.size();
+  if (k >= n) return 0.0;
+  double mean = 0.0;
+  for (double v : r)
+    mean += v;
+  mean /= static_cast<double>(n);
+  double c0 = 0.0, ck = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    c0 += (r[i] - mean) * (r[i] - mean);
+  for (std::size_t i = k; i < n; ++i)
+    ck += (r[i] - mean) * (r[i - k] - mean);
+  return c0 > 0.0 ? ck / c0 : 0.0;
+}
+
+double correlation_time(std::span<const double> r) {
+  const std::size_t n = r.size();
+  if (n < 10) return 1.0;
+  double mean = 0.0;
+  for (double v : r)
+    mean += v;
+  mean /= static_cast<double>(n);
+  double c0 = 0.0;
+  for (double v : r)
+    c0 += (v - mean) * (v - mean);
+  if (!(c0 > 0.0)) return 1.0;
+  double tau = 1.0;
+  const std::size_t max_lag = std::min<std::size_t>(n / 4, 2000);
+  for (std::size_t k = 1; k < max_lag; ++k) {
+    double ck = 0.0;
+    for (std::size_t i = k; i < n; ++i)
+      ck += (r[i] - mean) * (r[i - k] - mean);
+    const double rho = ck / c0;
+    if (rho < 0.05) break;
+    tau += 2.0 * rho;
+  }
+  return tau;
+}
+
 double noise_floor(std::span<const double> y) {
   if (y.size() < 3) return std::nan("");
   std::vector<double> d2(y.size() - 2);

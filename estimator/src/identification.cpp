@@ -183,7 +183,15 @@ double weighted_mse(std::span<const double> y, std::span<const double> f,
 
 FitResult identify(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
   const auto t_start = Clock::now();
-  const ParameterMap map(initial.parameters());
+  // Time parameters (unit "s", e.g. a step time) are searched within the
+  // recording, not over their catalog bounds, unless the caller narrows them.
+  std::vector<BoundsOverride> bounds;
+  for (const auto& p : initial.parameters()) {
+    if (p.unit == "s" && !p.fixed && !data.motion.empty())
+      bounds.push_back({p.name, data.motion.front().t, data.motion.back().t});
+  }
+  bounds.insert(bounds.end(), o.bounds.begin(), o.bounds.end());
+  const ParameterMap map(initial.parameters(), bounds);
   if (map.size() == 0) throw std::invalid_argument("identify: the model has no free parameters");
   const std::size_t n = map.size();
 

@@ -5,9 +5,16 @@
 
 namespace tsmh::estimator {
 
-ParameterMap::ParameterMap(const std::vector<Parameter>& params) {
+ParameterMap::ParameterMap(const std::vector<Parameter>& params,
+                           const std::vector<BoundsOverride>& overrides) {
   for (std::size_t i = 0; i < params.size(); ++i) {
-    const auto& p = params[i];
+    Parameter p = params[i];
+    for (const auto& o : overrides) {
+      if (o.name == p.name) {
+        p.lower = std::max(o.lower, params[i].lower);
+        p.upper = std::min(o.upper, params[i].upper);
+      }
+    }
     template_.push_back(p.value);
     if (p.fixed || !(p.upper > p.lower)) continue;
     FreeParameter f;

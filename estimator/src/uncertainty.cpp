@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "estimator/fit_metrics.hpp"
 #include "estimator/parameter_map.hpp"
 #include "estimator/simulate.hpp"
 #include "estimator/tsm_model.hpp"
@@ -20,33 +21,6 @@ std::string num(double v, int digits = 3) {
 }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// Integrated autocorrelation time of a sequence, summing the autocorrelation
-// while it stays above 0.05 (the initial positive part, as is usual for
-// correlated noise); 1 for white noise.
-double correlation_time(const std::vector<double>& r) {
-  const std::size_t n = r.size();
-  if (n < 10) return 1.0;
-  double mean = 0.0;
-  for (double v : r)
-    mean += v;
-  mean /= static_cast<double>(n);
-  double c0 = 0.0;
-  for (double v : r)
-    c0 += (v - mean) * (v - mean);
-  if (!(c0 > 0.0)) return 1.0;
-  double tau = 1.0;
-  const std::size_t max_lag = std::min<std::size_t>(n / 4, 2000);
-  for (std::size_t k = 1; k < max_lag; ++k) {
-    double ck = 0.0;
-    for (std::size_t i = k; i < n; ++i)
-      ck += (r[i] - mean) * (r[i - k] - mean);
-    const double rho = ck / c0;
-    if (rho < 0.05) break;
-    tau += 2.0 * rho;
-  }
-  return tau;
-}
 
 }  // namespace
 

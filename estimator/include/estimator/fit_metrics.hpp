@@ -62,6 +62,14 @@ RegimeThresholds regime_thresholds(const FitData& data);
 std::vector<RegimeError> regime_errors(const FitData& data, std::span<const double> model,
                                        SampleRole role);
 
+/// Integrated autocorrelation time of a sequence (samples): 1 + 2 sum of its
+/// autocorrelation over the initial lags where it stays above 0.05. 1 for
+/// white noise; N samples carry about N / tau independent errors.
+double correlation_time(std::span<const double> r);
+
+/// Autocorrelation of `r` at lag k (k >= 1), after removing the mean.
+double autocorrelation(std::span<const double> r, std::size_t k);
+
 /// Robust estimate of the white measurement noise on `y` (standard deviation):
 /// median |second difference| / (0.6745 sqrt(6)). The smooth part of the
 /// friction hardly contributes at 1 kHz; the torque-sensor noise does.

@@ -23,6 +23,7 @@
 
 #include "estimator/fit_data.hpp"
 #include "estimator/friction_model.hpp"
+#include "estimator/parameter_map.hpp"
 
 namespace tsmh::estimator {
 
@@ -58,6 +59,10 @@ struct FitOptions {
   /// Further starting points (full value vectors, as parameters() orders
   /// them), tried after the initial values; e.g. candidate step times.
   std::vector<std::vector<double>> extra_starts;
+  /// Narrower search bounds for some parameters; the model's own bounds
+  /// still apply. Time parameters (unit "s", a step time) are always
+  /// searched within the recording.
+  std::vector<BoundsOverride> bounds;
   /// Called from the calling thread every progress_interval_s while working.
   std::function<void(const FitProgress&)> progress;
   double progress_interval_s = 0.25;

@@ -25,10 +25,20 @@ struct FreeParameter {
   double offset = 0.0;  ///< for log_offset
 };
 
+/// Narrower search bounds for one parameter than the model declares (e.g. a
+/// step time within the recording).
+struct BoundsOverride {
+  std::string name;
+  double lower = 0.0;
+  double upper = 0.0;
+};
+
 class ParameterMap {
  public:
-  /// From the model's parameters (values become the template for fixed ones).
-  explicit ParameterMap(const std::vector<Parameter>& params);
+  /// From the model's parameters (values become the template for fixed ones);
+  /// `overrides` replace the bounds of the named parameters.
+  explicit ParameterMap(const std::vector<Parameter>& params,
+                        const std::vector<BoundsOverride>& overrides = {});
 
   std::size_t size() const { return free_.size(); }
   const std::vector<FreeParameter>& free() const { return free_; }

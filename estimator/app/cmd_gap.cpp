@@ -1,0 +1,133 @@
+// tsm gap DATA [--radius R] --output DIR [--base paper|dahl|FILE] [--seed N] [--margin F]
+//              [--max-effects N] [--candidates a,b,...] [--threads N]
+// The model-gap workflow (issue 8, docs/model-gap.md): fit the base model,
+// find where it disagrees with the measurement, name the missing effects and
+// show the gap shrink. DIR gets report.json (design.md §4), summary.txt,
+// params.yaml (the final model) and plots; on any error nothing is written.
+
+#include <chrono>
+#include <iostream>
+
+#include "commands.hpp"
+#include "estimator/atomic_file.hpp"
+#include "estimator/model_gap.hpp"
+#include "estimator/model_io.hpp"
+#include "estimator/plotting.hpp"
+#include "estimator/staged_output.hpp"
+#include "progress_line.hpp"
+
+namespace tsmh::tsm_cli {
+namespace {
+
+struct GapCliOptions {
+  std::string data;
+  std::optional<double> radius;
+  std::string output;
+  std::string base = "paper";
+  std::uint64_t seed = 1;
+  double margin = 0.10;
+  int max_effects = 4;
+  std::vector<std::string> candidates;
+  int threads = 0;
+};
+
+void run_gap_command(const GapCliOptions& o, const Context& ctx) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto rec =
+      ctx.sources.load(o.data, o.radius, {.tau_in = true, .tau_out = true, .radius = true});
+  const auto base = estimator::load_model(o.base);
+  estimator::StagedDirectory dir(o.output);  // fails early on an unusable path
+
+  estimator::GapOptions go;
+  go.base_fit.seed = o.seed;
+  go.base_fit.threads = o.threads;
+  go.threads = o.threads;
+  go.margin = o.margin;
+  go.max_effects = o.max_effects;
+  go.candidates = o.candidates;
+  ProgressLine line("tsm gap");
+  go.progress = [&](const std::string& s) { line.update(s); };
+  const estimator::GapResult g = estimator::find_model_gaps(rec, *base, o.base, go);
+  line.finish();
+
+  std::vector<std::string> plots;
+  std::string plot_error;
+  const auto curves = estimator::plot_friction(
+      dir.staging(), "gap", g.data,
+      {{"base (" + o.base + ")", g.base_simulated}, {"with the effects found", g.final_simulated}},
+      "tsm gap");
+  plots = curves.files;
+  plot_error = curves.error;
+  if (plot_error.empty()) {
+    estimator::RegimeBars bars;
+    bars.series = {"base", "final"};
+    bars.rmse.resize(2);
+    for (std::size_t i = 0; i < g.regimes_base.size(); ++i) {
+      bars.regimes.push_back(g.regimes_base[i].name);
+      bars.rmse[0].push_back(g.regimes_base[i].metrics.rmse);
+      bars.rmse[1].push_back(g.regimes_final[i].metrics.rmse);
+    }
+    const auto r = estimator::plot_regimes(dir.staging(), "gap", bars,
+                                           "tsm gap: validation RMSE per regime, before and after");
+    plot_error = r.error;
+    plots.insert(plots.end(), r.files.begin(), r.files.end());
+  }
+  if (!plot_error.empty()) std::cerr << "tsm gap: warning: plots: " << plot_error << "\n";
+
+  std::vector<std::string> header = {"final model of tsm gap on " + g.data.source + " (base " +
+                                     o.base + ")"};
+  std::string found;
+  for (const auto& e : g.effects)
+    found += (found.empty() ? "" : ", ") + e.name;
+  header.push_back("effects added: " + (found.empty() ? std::string("none") : found));
+  estimator::write_text_atomically(dir.file("params.yaml"),
+                                   estimator::model_to_yaml(*g.final_model, header));
+  const std::string summary = estimator::gap_summary_text(g, go);
+  estimator::write_text_atomically(dir.file("summary.txt"), summary);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  estimator::write_text_atomically(
+      dir.file("report.json"),
+      estimator::gap_report_json(g, go, plots, plot_error, seconds).dump(2) + "\n");
+  dir.commit();
+
+  std::cerr << summary << "tsm gap: " << seconds << " s; report, summary, params.yaml and plots in "
+            << o.output << "\n";
+}
+
+}  // namespace
+
+void add_gap_command(CLI::App& app, Context& ctx) {
+  auto opts = std::make_shared<GapCliOptions>();
+  auto* cmd = app.add_subcommand(
+      "gap",
+      "Find where the model and the measurement disagree and name the missing effect "
+      "(docs/model-gap.md)");
+  cmd->add_option("data", opts->data, "Recorded data: CSV (t, x_in, tau_in, tau_out) or LCM log")
+      ->required();
+  cmd->add_option("--radius", opts->radius,
+                  "Pulley radius in m (default: the file's '# radius_m:' comment)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--output", opts->output,
+                  "Directory for report.json, summary.txt, params.yaml and plots")
+      ->required();
+  cmd->add_option("--base", opts->base,
+                  "Base model: a tsm preset (paper, dahl) or a tsm params file (default paper)");
+  cmd->add_option("--seed", opts->seed, "Seed of the optimiser's random streams (default 1)");
+  cmd->add_option("--margin", opts->margin,
+                  "Validation-RMSE reduction an effect must bring to be accepted (default 0.10)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--max-effects", opts->max_effects, "Most effects to add (default 4)")
+      ->check(CLI::Range(0, 16));
+  cmd->add_option("--candidates", opts->candidates,
+                  "Candidate effects to try (default: all but coulomb): viscous, load_dependent, "
+                  "position_dependent, time_varying, direction_asymmetry, stribeck, "
+                  "acceleration_dependence, reversal_offset")
+      ->delimiter(',');
+  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
+      ->check(CLI::Range(0, 64));
+  add_lcm_log_options(*cmd, ctx.lcm_log);
+  cmd->callback([opts, &ctx] { run_gap_command(*opts, ctx); });
+}
+
+}  // namespace tsmh::tsm_cli

@@ -1,0 +1,152 @@
+#pragma once
+// The model-gap workflow (`tsm gap`, issue 8): find where the simulated and
+// the measured friction disagree, name the missing effect, add it to the
+// model and show the gap shrink.
+//
+//  1. Fit the base model (a full identification) and measure the gap on
+//     validation data; localise it (per-regime errors) and diagnose the
+//     residual (whiteness; how much of it each candidate term's regressor
+//     explains, to first order).
+//  2. For every candidate term of the catalog (sliding_terms.hpp) not yet in
+//     the model: add it, refit (a local refit from the current optimum, the
+//     new term seeded by the first-order estimate), measure the validation
+//     gap and BIC.
+//  3. Accept the candidate that shrinks the validation RMSE most, only when it
+//     shrinks it by at least `margin` (10 %; BIC is reported with each trial);
+//     re-identify the augmented model globally; repeat until nothing
+//     qualifies or the gap reaches the measurement-noise floor.
+// docs/model-gap.md explains the margin, the floor and the evidence.
+
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "estimator/fit_data.hpp"
+#include "estimator/fit_metrics.hpp"
+#include "estimator/identification.hpp"
+#include "estimator/recording.hpp"
+#include "estimator/sliding_terms.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+
+struct GapOptions {
+  FitOptions base_fit;  ///< the base model's global fit
+  /// Candidate term names; empty: every catalog term except coulomb.
+  std::vector<std::string> candidates;
+  /// A candidate must shrink the validation RMSE by at least this fraction.
+  double margin = 0.10;
+  /// Stop when the validation RMSE is within this factor of the noise floor.
+  double noise_stop = 1.1;
+  int max_effects = 4;
+  /// Budget of each candidate's local refit (per start): BOBYQA on the
+  /// decimated data, then on the full-rate data.
+  int refit_coarse_evaluations = 300;
+  int refit_evaluations = 100;
+  /// After accepting an effect, identify the augmented model again globally
+  /// (base_fit's settings, starting from the refit), kept when it fits the
+  /// train data better.
+  bool reidentify = true;
+  /// Worker threads for the candidates (each refit runs on one); 0: all cores.
+  int threads = 0;
+  SplitConfig split;
+  DataRequirements requirements;
+  DifferentiatorConfig differentiator;
+  /// Progress text, called from the calling thread.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Whiteness of a residual and which candidate explains it.
+struct ResidualDiagnostics {
+  double lag1_autocorrelation = 0.0;
+  double correlation_time = 1.0;  ///< samples (1 for white noise)
+  double ljung_box = 0.0;         ///< Q over lags 1..20 (white: about 20)
+  bool white = false;             ///< correlation time < 2 samples
+  struct Regressor {
+    std::string name;        ///< candidate term
+    double explained = 0.0;  ///< fraction of the residual's energy its regressors explain (train)
+  };
+  std::vector<Regressor> regressors;  ///< best first
+};
+
+struct CandidateTrial {
+  std::string name;
+  double explained = 0.0;   ///< first-order: fraction of the residual its regressors explain
+  ErrorMetrics validation;  ///< after the refit
+  double train_mse = 0.0;
+  double bic = 0.0;        ///< effective-sample BIC on train data (lower is better)
+  double delta_bic = 0.0;  ///< vs the current model
+  double gain = 0.0;       ///< relative validation RMSE reduction (0.3 = 30 % smaller)
+  bool qualifies = false;
+  bool accepted = false;
+  std::vector<double> values;  ///< fitted parameter values (parameters() order)
+  long evaluations = 0;
+};
+
+struct GapRound {
+  ErrorMetrics before;
+  std::vector<CandidateTrial> trials;  ///< best gain first
+  int accepted = -1;                   ///< index into trials, -1: none
+  std::string stop_reason;             ///< when the workflow stopped after this round
+};
+
+struct EffectFound {
+  std::string name;
+  std::string meaning;  ///< the catalog's physical meaning
+  std::string where;    ///< where its absence shows, and where the residual fell most
+  ErrorMetrics gap_after;
+  double gain = 0.0;
+  std::vector<std::pair<std::string, double>> parameters;  ///< the term's fitted values
+};
+
+struct GapResult {
+  std::string base_name;
+  FitData data;
+  double noise = 0.0;  ///< measurement-noise floor of F, N (fit_metrics.hpp)
+
+  std::unique_ptr<FrictionModel> base_model;
+  std::vector<double> base_simulated;
+  ErrorMetrics gap_base;
+  std::vector<RegimeError> regimes_base;
+  ResidualDiagnostics diagnostics_base;
+
+  std::vector<GapRound> rounds;
+  std::vector<EffectFound> effects;
+
+  std::unique_ptr<FrictionModel> final_model;
+  std::vector<double> final_simulated;
+  ErrorMetrics gap_final;
+  std::vector<RegimeError> regimes_final;
+  ResidualDiagnostics diagnostics_final;
+  std::string stop_reason;
+  long evaluations = 0;
+  double seconds = 0.0;
+};
+
+/// Runs the workflow. `base` must be a TsmFrictionModel (the composable
+/// model); throws std::invalid_argument otherwise, DataError for bad data.
+GapResult find_model_gaps(const Recording& rec, const FrictionModel& base,
+                          const std::string& base_name, const GapOptions& options = {});
+/// The same on data already prepared (prepare_fit_data).
+GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::string& base_name,
+                          const GapOptions& options = {});
+
+/// Residual diagnostics of `simulated` against the data (validation samples
+/// for whiteness, train samples for the regressors of `candidates`).
+ResidualDiagnostics diagnose_residual(const FitData& data, const TsmFrictionModel& model,
+                                      std::span<const double> simulated,
+                                      const std::vector<TermKind>& candidates);
+
+/// report.json of design.md §4 (base, gap_base, effects[{name, where,
+/// gap_after}], gap_final) with the evidence around it.
+nlohmann::json gap_report_json(const GapResult& result, const GapOptions& options,
+                               const std::vector<std::string>& plots, const std::string& plot_error,
+                               double seconds);
+
+/// The human-readable summary: what disagreed, where, which effect it names
+/// and why, the gap before and after.
+std::string gap_summary_text(const GapResult& result, const GapOptions& options);
+
+}  // namespace tsmh::estimator

@@ -1,0 +1,679 @@
+#include "estimator/model_gap.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "estimator/simulate.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string num(double v, int digits = 3) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+std::string pct(double fraction) {
+  return num(100.0 * fraction, 3) + " %";
+}
+
+std::string qualified(TermKind kind, std::size_t param) {
+  const auto& info = term_info(kind);
+  return std::string(info.name) + "." + std::string(info.params[param].name);
+}
+
+// The parameters whose value scales a term's contribution (its regressors);
+// the other parameters are shapes kept at their catalog defaults until the refit.
+std::vector<std::size_t> amplitude_params(TermKind kind) {
+  switch (kind) {
+    case TermKind::position_dependent:
+      return {0, 1};
+    case TermKind::time_varying:
+      return {0, 1};  // drift, step (at the scanned step time)
+    case TermKind::acceleration_dependence:
+      return {0, 2};  // mu2, mu3
+    default:
+      return {0};
+  }
+}
+
+double coulomb_level(const TsmModelSpec& s) {
+  for (const auto& t : s.terms) {
+    if (t.kind == TermKind::coulomb) return t.p[0];
+  }
+  return 0.0;
+}
+
+// Adds `kind` with no effect yet: amplitudes 0 (rho2 = rho1, so the negative
+// branch keeps its level), shapes at their defaults, the drift's time origin
+// at the start of the record and the step after its end.
+TsmModelSpec with_neutral_term(TsmModelSpec spec, TermKind kind, double t_start, double t_end) {
+  const double rho1 = coulomb_level(spec);
+  Term& t = spec.add(kind);
+  for (std::size_t k : amplitude_params(kind))
+    t.p[k] = 0.0;
+  if (kind == TermKind::direction_asymmetry) t.p[0] = std::max(rho1, 0.01);
+  if (kind == TermKind::time_varying) {
+    t.p[2] = t_end + 1.0;  // t_step: no step inside the record
+    t.p[3] = t_start;      // t0
+  }
+  return spec;
+}
+
+std::size_t index_of(const std::vector<Parameter>& params, const std::string& name) {
+  for (std::size_t i = 0; i < params.size(); ++i) {
+    if (params[i].name == name) return i;
+  }
+  throw std::logic_error("model_gap: no parameter " + name);
+}
+
+std::vector<double> values_of(const FrictionModel& m) {
+  std::vector<double> v;
+  for (const auto& p : m.parameters())
+    v.push_back(p.value);
+  return v;
+}
+
+// dF/dp of parameter `i`, by a forward step of 1e-3 of its range (backward
+// at the upper bound).
+std::vector<double> sensitivity(const TsmFrictionModel& model, std::size_t i,
+                                std::span<const Motion> motion, std::span<const double> f0) {
+  const auto params = model.parameters();
+  std::vector<double> v = values_of(model);
+  double h = 1e-3 * (params[i].upper - params[i].lower);
+  if (v[i] + h > params[i].upper) h = -h;
+  v[i] += h;
+  TsmFrictionModel m = model;
+  m.set_values(v);
+  std::vector<double> g = simulate_friction(m, motion);
+  for (std::size_t k = 0; k < g.size(); ++k)
+    g[k] = (g[k] - f0[k]) / h;
+  return g;
+}
+
+struct Projection {
+  double explained = 0.0;    // 1 - |r - G b|^2 / |r|^2
+  std::vector<double> beta;  // least-squares coefficients
+};
+
+// Least squares of the residual on the regressors, over the train samples.
+Projection project(const FitData& d, std::span<const double> residual,
+                   const std::vector<std::vector<double>>& regressors) {
+  Projection p;
+  const auto m = static_cast<Eigen::Index>(regressors.size());
+  p.beta.assign(regressors.size(), 0.0);
+  if (m == 0) return p;
+  Eigen::MatrixXd gtg = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd gtr = Eigen::VectorXd::Zero(m);
+  double rr = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (d.role[i] != SampleRole::train) continue;
+    rr += residual[i] * residual[i];
+    for (Eigen::Index a = 0; a < m; ++a) {
+      const double ga = regressors[static_cast<std::size_t>(a)][i];
+      gtr(a) += ga * residual[i];
+      for (Eigen::Index b = 0; b < m; ++b)
+        gtg(a, b) += ga * regressors[static_cast<std::size_t>(b)][i];
+    }
+  }
+  if (!(rr > 0.0)) return p;
+  const Eigen::VectorXd beta = gtg.completeOrthogonalDecomposition().solve(gtr);
+  // |r - G b|^2 = |r|^2 - b^T G^T r for the least-squares b.
+  p.explained = std::clamp(beta.dot(gtr) / rr, 0.0, 1.0);
+  for (Eigen::Index a = 0; a < m; ++a)
+    p.beta[static_cast<std::size_t>(a)] = std::isfinite(beta(a)) ? beta(a) : 0.0;
+  return p;
+}
+
+// One way to start a candidate's refit: the spec with the term seeded by the
+// first-order estimate, further starting points, narrower bounds.
+struct Variant {
+  TsmModelSpec seeded;
+  std::vector<std::vector<double>> extra_starts;  // e.g. the neutral term
+  std::vector<BoundsOverride> bounds;
+};
+
+// A candidate prepared for its refit. time_varying has one variant per
+// promising step time (a step time is a discrete choice a local optimiser
+// cannot move far), each searched within +-5 % of the record around it.
+struct Prepared {
+  TermKind kind;
+  double explained = 0.0;
+  std::vector<Variant> variants;
+};
+
+// Seeds `neutral` with the least-squares coefficients of `regs` on the
+// residual; returns the seeded values.
+std::vector<double> seed_values(const TsmFrictionModel& neutral,
+                                const std::vector<std::size_t>& amp, const Projection& proj) {
+  std::vector<double> v = values_of(neutral);
+  const auto sp = neutral.parameters();
+  for (std::size_t a = 0; a < amp.size(); ++a)
+    v[amp[a]] = std::clamp(v[amp[a]] + proj.beta[a], sp[amp[a]].lower, sp[amp[a]].upper);
+  return v;
+}
+
+Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
+                           std::span<const double> f_cur, std::span<const double> residual,
+                           TermKind kind) {
+  const double t0 = d.motion.front().t, t1 = d.motion.back().t;
+  Prepared p{kind, 0.0, {}};
+  const TsmFrictionModel neutral(with_neutral_term(current.spec(), kind, t0, t1));
+  const auto params = neutral.parameters();
+  std::vector<std::size_t> amp;
+  for (std::size_t k : amplitude_params(kind))
+    amp.push_back(index_of(params, qualified(kind, k)));
+  std::vector<std::vector<double>> regs;
+  for (std::size_t i : amp)
+    regs.push_back(sensitivity(neutral, i, d.motion, f_cur));
+
+  if (kind != TermKind::time_varying) {
+    const Projection proj = project(d, residual, regs);
+    p.explained = proj.explained;
+    TsmFrictionModel seeded = neutral;
+    seeded.set_values(seed_values(neutral, amp, proj));
+    p.variants.push_back({seeded.spec(), {values_of(neutral)}, {}});
+    return p;
+  }
+
+  // The step regressor depends on the step time: scan it over the record
+  // (5 %..95 %) and keep the three best times at least 10 % apart.
+  const std::size_t i_step = index_of(params, qualified(kind, 1));
+  const std::size_t i_time = index_of(params, qualified(kind, 2));
+  const auto at_time = [&](double ts) {
+    std::vector<double> v = values_of(neutral);
+    v[i_time] = ts;
+    TsmFrictionModel m = neutral;
+    m.set_values(v);
+    return m;
+  };
+  std::vector<std::pair<double, double>> scan;  // explained, time
+  for (int k = 0; k <= 36; ++k) {
+    const double ts = t0 + (0.05 + 0.9 * k / 36.0) * (t1 - t0);
+    const TsmFrictionModel m = at_time(ts);
+    scan.push_back(
+        {project(d, residual, {regs[0], sensitivity(m, i_step, d.motion, f_cur)}).explained, ts});
+  }
+  std::stable_sort(scan.begin(), scan.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<double> steps;
+  for (const auto& [e, ts] : scan) {
+    const bool apart = std::all_of(steps.begin(), steps.end(),
+                                   [&](double s) { return std::fabs(s - ts) > 0.1 * (t1 - t0); });
+    if (apart && steps.size() < 3) steps.push_back(ts);
+  }
+  p.explained = scan.front().first;
+  const double half_window = 0.05 * (t1 - t0);
+  for (double ts : steps) {
+    const TsmFrictionModel m = at_time(ts);
+    const Projection proj =
+        project(d, residual, {regs[0], sensitivity(m, i_step, d.motion, f_cur)});
+    TsmFrictionModel seeded = m;
+    seeded.set_values(seed_values(m, amp, proj));
+    p.variants.push_back({seeded.spec(),
+                          {values_of(m)},
+                          {{qualified(kind, 2), ts - half_window, ts + half_window}}});
+  }
+  return p;
+}
+
+double bic(double mse, double n_eff, std::size_t k) {
+  return n_eff * std::log(mse) + static_cast<double>(k) * std::log(n_eff);
+}
+
+std::size_t free_count(const FrictionModel& m) {
+  std::size_t k = 0;
+  for (const auto& p : m.parameters())
+    k += p.fixed ? 0 : 1;
+  return k;
+}
+
+std::vector<TermKind> candidate_kinds(const GapOptions& o) {
+  std::vector<TermKind> out;
+  if (o.candidates.empty()) {
+    for (const auto& info : term_catalog()) {
+      if (info.kind != TermKind::coulomb) out.push_back(info.kind);
+    }
+    return out;
+  }
+  for (const auto& name : o.candidates) {
+    const auto kind = term_kind_from_name(name);
+    if (!kind) throw std::invalid_argument("unknown candidate effect '" + name + "'");
+    out.push_back(*kind);
+  }
+  return out;
+}
+
+std::vector<double> residual_of(const FitData& d, std::span<const double> f) {
+  std::vector<double> r(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i)
+    r[i] = d.measured[i] - f[i];
+  return r;
+}
+
+// Where the residual fell most between two regime breakdowns.
+std::string where_it_fell(const std::vector<RegimeError>& before,
+                          const std::vector<RegimeError>& after) {
+  double best = 0.0;
+  std::string text;
+  for (std::size_t i = 0; i < before.size() && i < after.size(); ++i) {
+    const double drop = before[i].metrics.rmse - after[i].metrics.rmse;
+    if (before[i].metrics.samples > 0 && drop > best) {
+      best = drop;
+      text = before[i].name + " (" + before[i].where + "): RMSE " + num(before[i].metrics.rmse) +
+             " -> " + num(after[i].metrics.rmse) + " N";
+    }
+  }
+  return text;
+}
+
+}  // namespace
+
+ResidualDiagnostics diagnose_residual(const FitData& d, const TsmFrictionModel& model,
+                                      std::span<const double> simulated,
+                                      const std::vector<TermKind>& candidates) {
+  ResidualDiagnostics diag;
+  const auto r = residual_of(d, simulated);
+  std::vector<double> val;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (d.role[i] == SampleRole::validation) val.push_back(r[i]);
+  }
+  diag.lag1_autocorrelation = autocorrelation(val, 1);
+  diag.correlation_time = correlation_time(val);
+  const double n = static_cast<double>(val.size());
+  for (std::size_t k = 1; k <= 20 && k < val.size(); ++k) {
+    const double rho = autocorrelation(val, k);
+    diag.ljung_box += n * (n + 2.0) * rho * rho / (n - static_cast<double>(k));
+  }
+  diag.white = diag.correlation_time < 2.0;
+  for (TermKind kind : candidates) {
+    if (model.spec().has(kind)) continue;
+    const Prepared p = prepare_candidate(d, model, simulated, r, kind);
+    diag.regressors.push_back({std::string(term_info(kind).name), p.explained});
+  }
+  std::sort(diag.regressors.begin(), diag.regressors.end(),
+            [](const auto& a, const auto& b) { return a.explained > b.explained; });
+  return diag;
+}
+
+GapResult find_model_gaps(const Recording& rec, const FrictionModel& base,
+                          const std::string& base_name, const GapOptions& o) {
+  return find_model_gaps(prepare_fit_data(rec, o.split, o.requirements, o.differentiator), base,
+                         base_name, o);
+}
+
+GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::string& base_name,
+                          const GapOptions& o) {
+  const auto t_start = Clock::now();
+  const auto* base_tsm = dynamic_cast<const TsmFrictionModel*>(&base);
+  if (base_tsm == nullptr)
+    throw std::invalid_argument(
+        "tsm gap needs the composable tendon-sheath model (model: tsm; "
+        "presets paper, dahl), not '" +
+        base.kind() + "'");
+  const auto say = [&](const std::string& s) {
+    if (o.progress) o.progress(s);
+  };
+  const std::vector<TermKind> kinds = candidate_kinds(o);
+
+  GapResult g;
+  g.base_name = base_name;
+  g.data = std::move(data);
+  g.noise = noise_floor(g.data.measured);
+  const FitData& d = g.data;
+
+  // 1. The base model, fitted globally.
+  auto start = base.clone();
+  adapt_scale_to_data(*start, d);
+  FitOptions bo = o.base_fit;
+  if (!bo.progress) {
+    bo.progress = [&](const FitProgress& p) {
+      say("base fit: " + std::string(p.stage) + ", " + std::to_string(p.evaluations) +
+          " model runs, " + num(p.elapsed_s, 2) + " s");
+    };
+  }
+  FitResult base_fit = identify(*start, d, bo);
+  g.evaluations += base_fit.evaluations;
+  g.base_model = base_fit.model->clone();
+  g.base_simulated = base_fit.simulated;
+  g.gap_base = error_metrics(d, g.base_simulated, SampleRole::validation);
+  g.regimes_base = regime_errors(d, g.base_simulated, SampleRole::validation);
+
+  auto current =
+      std::make_unique<TsmFrictionModel>(dynamic_cast<const TsmFrictionModel&>(*base_fit.model));
+  std::vector<double> f_cur = g.base_simulated;
+  ErrorMetrics gap_cur = g.gap_base;
+  std::vector<RegimeError> regimes_cur = g.regimes_base;
+  const std::size_t n_train = d.count(SampleRole::train);
+  const auto train_w = d.weights(SampleRole::train);
+
+  // 2-3. Rounds of candidates.
+  const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
+  const int threads = o.threads > 0 ? o.threads : hw;
+  while (true) {
+    GapRound round;
+    round.before = gap_cur;
+    if (static_cast<int>(g.effects.size()) >= o.max_effects) {
+      g.stop_reason = "reached the maximum of " + std::to_string(o.max_effects) + " effects";
+      break;
+    }
+    if (gap_cur.rmse <= o.noise_stop * g.noise) {
+      g.stop_reason = "the gap (" + num(gap_cur.rmse) + " N) is at the measurement-noise floor (" +
+                      num(g.noise) + " N)";
+      break;
+    }
+    std::vector<TermKind> todo;
+    for (TermKind k : kinds) {
+      if (!current->spec().has(k)) todo.push_back(k);
+    }
+    if (todo.empty()) {
+      g.stop_reason = "every candidate is already in the model";
+      break;
+    }
+    const auto residual = residual_of(d, f_cur);
+    const double mse_cur = weighted_mse(d.measured, f_cur, train_w);
+    // Effective sample size for BIC: the residual is correlated in time.
+    std::vector<double> train_resid;
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      if (d.role[i] == SampleRole::train) train_resid.push_back(residual[i]);
+    }
+    const double n_eff = static_cast<double>(n_train) / correlation_time(train_resid);
+    const double bic_cur = bic(mse_cur, n_eff, free_count(*current));
+
+    round.trials.resize(todo.size());
+    std::vector<std::exception_ptr> errors(todo.size());
+    std::atomic<std::size_t> next{0};
+    std::atomic<std::size_t> done{0};
+    const auto work = [&] {
+      for (std::size_t c = next.fetch_add(1); c < todo.size(); c = next.fetch_add(1)) {
+        try {
+          const Prepared p = prepare_candidate(d, *current, f_cur, residual, todo[c]);
+          std::optional<FitResult> best;
+          long evaluations = 0;
+          for (std::size_t v = 0; v < p.variants.size(); ++v) {
+            const Variant& var = p.variants[v];
+            FitOptions fo;
+            fo.seed = o.base_fit.seed + 101 * (c + 1) + 7 * v;
+            fo.global_stage = false;
+            fo.threads = 1;
+            fo.starts = 1 + static_cast<int>(var.extra_starts.size());
+            fo.extra_starts = var.extra_starts;
+            fo.bounds = var.bounds;
+            fo.coarse_local_evaluations = o.refit_coarse_evaluations;
+            fo.local_evaluations = o.refit_evaluations;
+            FitResult r = identify(TsmFrictionModel(var.seeded), d, fo);
+            evaluations += r.evaluations;
+            if (!best || r.train_rmse < best->train_rmse) best = std::move(r);
+          }
+          const FitResult& fit = *best;
+          CandidateTrial& t = round.trials[c];
+          t.name = std::string(term_info(todo[c]).name);
+          t.explained = p.explained;
+          t.validation = error_metrics(d, fit.simulated, SampleRole::validation);
+          t.train_mse = fit.train_rmse * fit.train_rmse;
+          t.bic = bic(t.train_mse, n_eff, free_count(*fit.model));
+          t.delta_bic = t.bic - bic_cur;
+          t.gain = 1.0 - t.validation.rmse / gap_cur.rmse;
+          t.qualifies = t.gain >= o.margin;
+          t.values = fit.values;
+          t.evaluations = evaluations;
+        } catch (...) {
+          errors[c] = std::current_exception();
+        }
+        done.fetch_add(1);
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int w = 0; w < std::min<int>(threads, static_cast<int>(todo.size())); ++w)
+      pool.emplace_back(work);
+    while (done.load() < todo.size()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(250));
+      say("round " + std::to_string(g.rounds.size() + 1) + ": " + std::to_string(done.load()) +
+          "/" + std::to_string(todo.size()) + " candidates refitted, " +
+          num(std::chrono::duration<double>(Clock::now() - t_start).count(), 3) + " s");
+    }
+    for (auto& t : pool)
+      t.join();
+    for (const auto& e : errors) {
+      if (e) std::rethrow_exception(e);
+    }
+    for (const auto& t : round.trials)
+      g.evaluations += t.evaluations;
+
+    // Best gain first; ties to catalog order (stable), so the choice is deterministic.
+    std::stable_sort(round.trials.begin(), round.trials.end(),
+                     [](const auto& a, const auto& b) { return a.gain > b.gain; });
+    if (!round.trials.front().qualifies) {
+      const auto& best = round.trials.front();
+      g.stop_reason = "no candidate shrinks the validation gap by >= " + pct(o.margin) +
+                      " (best: " + best.name + ", " + pct(best.gain) + ")";
+      round.stop_reason = g.stop_reason;
+      g.rounds.push_back(std::move(round));
+      break;
+    }
+    round.accepted = 0;
+    CandidateTrial& win = round.trials.front();
+    win.accepted = true;
+    const TermKind kind = *term_kind_from_name(win.name);
+    auto next_model = std::make_unique<TsmFrictionModel>(
+        with_neutral_term(current->spec(), kind, d.motion.front().t, d.motion.back().t));
+    next_model->set_values(win.values);
+    f_cur = simulate_friction(*next_model, d.motion);
+    ErrorMetrics gap_after = win.validation;
+    if (o.reidentify) {
+      // The local refit starts where the base had bent its other terms to
+      // imitate the missing effect; a global re-identification of the
+      // augmented model lets them unwind. Kept when it fits the train data
+      // better (validation is not used to choose).
+      say("re-identifying the model with " + win.name);
+      FitOptions ro = o.base_fit;
+      ro.progress = nullptr;
+      FitResult re = identify(*next_model, d, ro);
+      g.evaluations += re.evaluations;
+      if (re.train_rmse < std::sqrt(win.train_mse)) {
+        next_model->set_values(re.values);
+        f_cur = std::move(re.simulated);
+        gap_after = error_metrics(d, f_cur, SampleRole::validation);
+      }
+    }
+    const auto regimes_after = regime_errors(d, f_cur, SampleRole::validation);
+
+    EffectFound e;
+    e.name = win.name;
+    e.meaning = std::string(term_info(kind).meaning);
+    e.where = std::string(term_info(kind).where);
+    const std::string fell = where_it_fell(regimes_cur, regimes_after);
+    if (!fell.empty()) e.where += "; residual fell most at " + fell;
+    e.gap_after = gap_after;
+    e.gain = 1.0 - gap_after.rmse / gap_cur.rmse;
+    const auto params = next_model->parameters();
+    for (std::size_t k = 0; k < term_info(kind).params.size(); ++k) {
+      const auto name = qualified(kind, k);
+      e.parameters.push_back({name, params[index_of(params, name)].value});
+    }
+    g.effects.push_back(std::move(e));
+    say("found " + win.name + ": validation RMSE " + num(gap_cur.rmse) + " -> " +
+        num(gap_after.rmse) + " N");
+    current = std::move(next_model);
+    gap_cur = gap_after;
+    regimes_cur = regimes_after;
+    g.rounds.push_back(std::move(round));
+  }
+
+  g.final_model = current->clone();
+  g.final_simulated = f_cur;
+  g.gap_final = gap_cur;
+  g.regimes_final = regimes_cur;
+  g.diagnostics_base = diagnose_residual(d, dynamic_cast<const TsmFrictionModel&>(*g.base_model),
+                                         g.base_simulated, kinds);
+  g.diagnostics_final = diagnose_residual(d, *current, g.final_simulated, kinds);
+  g.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+  return g;
+}
+
+nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
+                               const std::vector<std::string>& plots, const std::string& plot_error,
+                               double seconds) {
+  const auto gap = [](const ErrorMetrics& m) {
+    return nlohmann::json{{"rmse", m.rmse},
+                          {"p2p", m.p2p},
+                          {"fit_percent", m.fit_percent},
+                          {"bias", m.bias},
+                          {"samples", m.samples}};
+  };
+  const auto regimes = [&](const std::vector<RegimeError>& rs) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& r : rs) {
+      a.push_back({{"name", r.name},
+                   {"group", r.group},
+                   {"where", r.where},
+                   {"rmse", r.metrics.rmse},
+                   {"mean_error", r.mean_error},
+                   {"concentration", r.concentration},
+                   {"samples", r.metrics.samples}});
+    }
+    return a;
+  };
+  const auto diagnostics = [](const ResidualDiagnostics& dg) {
+    nlohmann::json regs = nlohmann::json::array();
+    for (const auto& r : dg.regressors)
+      regs.push_back({{"name", r.name}, {"explained", r.explained}});
+    return nlohmann::json{{"lag1_autocorrelation", dg.lag1_autocorrelation},
+                          {"correlation_time_samples", dg.correlation_time},
+                          {"ljung_box_q20", dg.ljung_box},
+                          {"white", dg.white},
+                          {"candidate_regressors", regs}};
+  };
+  nlohmann::json effects = nlohmann::json::array();
+  for (const auto& e : g.effects) {
+    nlohmann::json params = nlohmann::json::object();
+    for (const auto& [name, value] : e.parameters)
+      params[name] = value;
+    effects.push_back({{"name", e.name},
+                       {"where", e.where},
+                       {"meaning", e.meaning},
+                       {"gap_after", gap(e.gap_after)},
+                       {"gain", e.gain},
+                       {"parameters", params}});
+  }
+  nlohmann::json rounds = nlohmann::json::array();
+  for (const auto& r : g.rounds) {
+    nlohmann::json trials = nlohmann::json::array();
+    for (const auto& t : r.trials) {
+      trials.push_back({{"name", t.name},
+                        {"explained_first_order", t.explained},
+                        {"validation", gap(t.validation)},
+                        {"gain", t.gain},
+                        {"delta_bic", t.delta_bic},
+                        {"qualifies", t.qualifies},
+                        {"accepted", t.accepted}});
+    }
+    rounds.push_back({{"gap_before", gap(r.before)}, {"candidates", trials}});
+  }
+  nlohmann::json warnings = nlohmann::json::array();
+  if (!plot_error.empty()) warnings.push_back("plots: " + plot_error);
+  return {{"tool", "tsm gap"},
+          {"base", g.base_name},
+          {"gap_base", gap(g.gap_base)},
+          {"effects", effects},
+          {"gap_final", gap(g.gap_final)},
+          {"data",
+           {{"source", g.data.source},
+            {"samples", g.data.size()},
+            {"duration_s", g.data.duration()},
+            {"radius_m", g.data.radius_m},
+            {"train_samples", g.data.count(SampleRole::train)},
+            {"validation_samples", g.data.count(SampleRole::validation)},
+            {"block_s", g.data.block_s}}},
+          {"noise_floor", g.noise},
+          {"acceptance",
+           {{"margin", o.margin},
+            {"rule",
+             "accept the candidate with the largest validation-RMSE reduction when it is "
+             ">= margin; stop when none is, or when the gap is within noise_stop x the "
+             "noise floor. BIC (effective sample size) is reported with every trial"},
+            {"noise_stop", o.noise_stop}}},
+          {"regimes_base", regimes(g.regimes_base)},
+          {"regimes_final", regimes(g.regimes_final)},
+          {"diagnostics_base", diagnostics(g.diagnostics_base)},
+          {"diagnostics_final", diagnostics(g.diagnostics_final)},
+          {"rounds", rounds},
+          {"stop_reason", g.stop_reason},
+          {"params_file", "params.yaml"},
+          {"plots", plots},
+          {"warnings", warnings},
+          {"evaluations", g.evaluations},
+          {"seconds", seconds}};
+}
+
+std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
+  std::ostringstream s;
+  const auto metrics = [](const ErrorMetrics& m) {
+    return "RMSE " + num(m.rmse) + " N, p2p " + num(m.p2p) + " N, fit " + num(m.fit_percent) + " %";
+  };
+  s << "tsm gap: " << g.data.source << " (" << num(g.data.duration(), 3) << " s), base model '"
+    << g.base_name << "'\n\n";
+  s << "Measurement noise on the friction (white part, from second differences): about "
+    << num(g.noise) << " N.\n";
+  s << "Base model fitted; gap on validation data: " << metrics(g.gap_base) << ".\n\n";
+  s << "Where it disagreed (validation residual per regime; concentration = share of the squared "
+       "error / share of the samples):\n";
+  std::vector<const RegimeError*> worst;
+  for (const auto& r : g.regimes_base)
+    worst.push_back(&r);
+  std::sort(worst.begin(), worst.end(),
+            [](const auto* a, const auto* b) { return a->concentration > b->concentration; });
+  for (std::size_t i = 0; i < worst.size() && i < 5; ++i) {
+    const auto& r = *worst[i];
+    s << "  " << r.name << " (" << r.where << "): RMSE " << num(r.metrics.rmse) << " N, "
+      << num(r.concentration) << "x its share, mean error " << num(r.mean_error) << " N ("
+      << (r.mean_error > 0 ? "model too low" : "model too high") << ")\n";
+  }
+  const auto& db = g.diagnostics_base;
+  s << "Residual: " << (db.white ? "white" : "not white") << " (lag-1 autocorrelation "
+    << num(db.lag1_autocorrelation) << ", correlation time " << num(db.correlation_time)
+    << " samples).\nShare of the residual each candidate's regressor explains (first order):";
+  for (const auto& r : db.regressors)
+    s << " " << r.name << " " << pct(r.explained) << ";";
+  s << "\n\n";
+  for (std::size_t k = 0; k < g.rounds.size(); ++k) {
+    const auto& r = g.rounds[k];
+    s << "Round " << k + 1 << " (gap " << num(r.before.rmse) << " N): each candidate added and "
+      << "refitted, validation RMSE change:\n";
+    for (const auto& t : r.trials) {
+      s << "  " << (t.accepted ? "* " : "  ") << t.name << ": " << num(t.validation.rmse) << " N ("
+        << (t.gain >= 0 ? "-" : "+") << pct(std::fabs(t.gain)) << "), BIC "
+        << (t.delta_bic < 0 ? "better" : "worse") << " by " << num(std::fabs(t.delta_bic)) << "\n";
+    }
+  }
+  s << "\n";
+  if (g.effects.empty()) s << "No missing effect found: " << g.stop_reason << ".\n";
+  for (std::size_t k = 0; k < g.effects.size(); ++k) {
+    const auto& e = g.effects[k];
+    s << "Effect " << k + 1 << ": " << e.name << " -- " << e.meaning << ".\n  Where: " << e.where
+      << ".\n  Why: adding it shrinks the validation gap by " << pct(e.gain)
+      << " (the acceptance margin is " << pct(o.margin) << "); now " << metrics(e.gap_after)
+      << ".\n  Fitted:";
+    for (const auto& [name, value] : e.parameters)
+      s << " " << name << " = " << num(value, 4) << ";";
+    s << "\n";
+  }
+  s << "\nGap before: " << metrics(g.gap_base) << "\nGap after:  " << metrics(g.gap_final) << " ("
+    << (g.gap_base.rmse > 0 ? pct(1.0 - g.gap_final.rmse / g.gap_base.rmse) : "-")
+    << " smaller RMSE)\nStopped: " << g.stop_reason << ".\n";
+  return s.str();
+}
+
+}  // namespace tsmh::estimator

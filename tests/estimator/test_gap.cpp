@@ -1,0 +1,344 @@
+// The model-gap workflow (`tsm gap`, issue 8) on data in which an effect is
+// hidden: the paper's model with a term injected (synthetic.hpp) and the
+// virtual slave run offline with its hidden-effect switches. Each effect must
+// be named, and the validation gap must close: shrink by >= 40 %, or come
+// down to the floor, estimated as the gap the base model leaves on the same
+// world with the effect switched off (same motion, same noise), x 1.15.
+// docs/model-gap.md gives the numbers. Seeds 111-117 were not used while
+// developing the workflow.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "estimator/fit_workflow.hpp"
+#include "estimator/model_gap.hpp"
+#include "estimator/model_io.hpp"
+#include "estimator/synthetic.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kFloorTolerance = 1.15;
+constexpr double kRequiredShrink = 0.40;
+
+struct Injected {
+  TermKind kind;
+  std::vector<double> p;
+};
+
+Recording paper_world(std::uint64_t seed, const std::vector<Injected>& hidden) {
+  TsmModelSpec s = paper_spec();
+  for (const auto& h : hidden) {
+    Term& t = s.add(h.kind);
+    for (std::size_t k = 0; k < h.p.size(); ++k)
+      t.p[k] = h.p[k];
+  }
+  SyntheticConfig c;
+  c.seed = seed;
+  return make_synthetic(TsmFrictionModel(s), c).recording;
+}
+
+GapResult gap(const Recording& rec, const std::string& base = "paper") {
+  return find_model_gaps(rec, *load_model(base), base);
+}
+
+// The floor: the base model's validation gap on the world without the effect.
+double floor_of(const Recording& control) {
+  return run_fit(control, TsmFrictionModel(paper_spec()), "paper").validation.rmse;
+}
+
+std::vector<std::string> names(const GapResult& g) {
+  std::vector<std::string> n;
+  for (const auto& e : g.effects)
+    n.push_back(e.name);
+  return n;
+}
+
+void record(const GapResult& g, double floor) {
+  ::testing::Test::RecordProperty("gap_base_rmse", std::to_string(g.gap_base.rmse));
+  ::testing::Test::RecordProperty("gap_final_rmse", std::to_string(g.gap_final.rmse));
+  ::testing::Test::RecordProperty("floor_rmse", std::to_string(floor));
+  ::testing::Test::RecordProperty("noise_floor", std::to_string(g.noise));
+  std::string found;
+  for (const auto& e : g.effects)
+    found += e.name + " ";
+  ::testing::Test::RecordProperty("effects", found);
+  ::testing::Test::RecordProperty("seconds", std::to_string(g.seconds));
+}
+
+void expect_closed(const GapResult& g, double floor) {
+  const bool shrunk = g.gap_final.rmse <= (1.0 - kRequiredShrink) * g.gap_base.rmse;
+  const bool at_floor = g.gap_final.rmse <= kFloorTolerance * floor;
+  EXPECT_TRUE(shrunk || at_floor) << "gap " << g.gap_base.rmse << " -> " << g.gap_final.rmse
+                                  << " N, floor " << floor << " N";
+}
+
+// --- the paper's model with a term injected ------------------------------
+
+TEST(GapPaperWorld, NothingHiddenNothingFound) {
+  const auto g = gap(paper_world(111, {}));
+  record(g, g.gap_base.rmse);
+  EXPECT_TRUE(g.effects.empty()) << ::testing::PrintToString(names(g));
+  EXPECT_EQ(g.gap_final.rmse, g.gap_base.rmse);
+  EXPECT_FALSE(g.rounds.empty());
+  for (const auto& t : g.rounds.front().trials)
+    EXPECT_LT(t.gain, 0.05) << t.name;  // far below the 10 % margin
+}
+
+TEST(GapPaperWorld, HiddenViscousDrag) {
+  const auto g = gap(paper_world(112, {{TermKind::viscous, {0.3}}}));
+  const double floor = floor_of(paper_world(112, {}));
+  record(g, floor);
+  EXPECT_EQ(names(g), std::vector<std::string>{"viscous"});
+  expect_closed(g, floor);
+}
+
+TEST(GapPaperWorld, HiddenLoadDependence) {
+  const auto g = gap(paper_world(113, {{TermKind::load_dependent, {0.03}}}));
+  const double floor = floor_of(paper_world(113, {}));
+  record(g, floor);
+  EXPECT_EQ(names(g), std::vector<std::string>{"load_dependent"});
+  expect_closed(g, floor);
+}
+
+TEST(GapPaperWorld, HiddenPositionDependence) {
+  const auto g = gap(paper_world(114, {{TermKind::position_dependent, {0.25, 0.2}}}));
+  const double floor = floor_of(paper_world(114, {}));
+  record(g, floor);
+  EXPECT_EQ(names(g), std::vector<std::string>{"position_dependent"});
+  expect_closed(g, floor);
+}
+
+TEST(GapPaperWorld, HiddenStepInTime) {
+  // The sheath re-routed at t = 22 s: every sliding level up by 0.2.
+  const auto g = gap(paper_world(115, {{TermKind::time_varying, {0.0, 0.2, 22.0, 0.0}}}));
+  const double floor = floor_of(paper_world(115, {}));
+  record(g, floor);
+  ASSERT_EQ(names(g), std::vector<std::string>{"time_varying"});
+  for (const auto& [name, value] : g.effects.front().parameters) {
+    if (name == "time_varying.t_step") {
+      EXPECT_NEAR(value, 22.0, 0.5);
+    }
+  }
+  expect_closed(g, floor);
+}
+
+TEST(GapPaperWorld, TwoHiddenEffectsAreBothNamed) {
+  const auto g = gap(paper_world(
+      116, {{TermKind::load_dependent, {0.03}}, {TermKind::position_dependent, {0.25, 0.2}}}));
+  const double floor = floor_of(paper_world(116, {}));
+  record(g, floor);
+  const auto n = names(g);
+  EXPECT_EQ(std::set<std::string>(n.begin(), n.end()),
+            (std::set<std::string>{"load_dependent", "position_dependent"}));
+  expect_closed(g, floor);
+}
+
+TEST(GapPaperWorld, DahlBaseRediscoversThePaperEffects) {
+  const auto g = gap(paper_world(117, {}), "dahl");
+  record(g, 0.0);
+  const std::set<std::string> paper_effects = {"direction_asymmetry", "stribeck",
+                                               "acceleration_dependence", "reversal_offset"};
+  const auto n = names(g);
+  EXPECT_GE(n.size(), 2U);
+  for (const auto& e : n)
+    EXPECT_TRUE(paper_effects.count(e)) << e << " is not one of the paper's effects";
+  EXPECT_LT(g.gap_final.rmse, 0.8 * g.gap_base.rmse);
+}
+
+// --- the virtual slave with its hidden-effect switches ---------------------
+
+Recording virtual_slave(const std::string& name, const std::string& args) {
+  const fs::path out = fs::temp_directory_path() / ("tsmh_gap_vs_" + name + ".csv");
+  const std::string cmd = std::string(TSMH_VIRTUAL_SLAVE) +
+                          " --offline --duration 40 --scenario multisine --seed 7 --output " +
+                          out.string() + " " + args + " >/dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("virtual-slave failed: " + cmd);
+  Recording r = read_recording_csv(out);
+  fs::remove(out);
+  return r;
+}
+
+// Two sessions in one recording (a gap of 2 s between them, which the CSV
+// contract allows): the second starts where the first ended.
+Recording concatenate(Recording a, const Recording& b) {
+  const double shift = a.t.back() + 2.0 - b.t.front();
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    a.t.push_back(b.t[i] + shift);
+    a.x_in.push_back(b.x_in[i]);
+    a.tau_in.push_back(b.tau_in[i]);
+    a.tau_out.push_back(b.tau_out[i]);
+  }
+  a.x_out.clear();
+  a.T1.clear();
+  a.T3.clear();
+  return a;
+}
+
+TEST(GapVirtualSlave, NothingHiddenNothingFound) {
+  // The plant's load dependence (capstan) switched off: the paper's model
+  // describes the rest without a missing term.
+  const auto g = gap(virtual_slave("none", "--effect capstan=0"));
+  record(g, g.gap_base.rmse);
+  EXPECT_TRUE(g.effects.empty()) << ::testing::PrintToString(names(g));
+}
+
+TEST(GapVirtualSlave, HiddenViscousDrag) {
+  // Without the controller's backlash compensation the motor moves smoothly
+  // (the compensation's dead-zone jumps reach 9 rad/s, where the plant's
+  // node drag no longer looks like a sliding-level term).
+  const std::string plain = "--no-compensation --effect capstan=0";
+  const auto g = gap(virtual_slave("visc", plain + " --effect viscous=2"));
+  const double floor = floor_of(virtual_slave("visc_ctl", plain));
+  record(g, floor);
+  EXPECT_EQ(names(g), std::vector<std::string>{"viscous"});
+  expect_closed(g, floor);
+}
+
+TEST(GapVirtualSlave, HiddenPositionDependence) {
+  const auto g = gap(virtual_slave("pos", "--effect capstan=0 --effect position=0.3"));
+  const double floor = floor_of(virtual_slave("pos_ctl", "--effect capstan=0"));
+  record(g, floor);
+  EXPECT_EQ(names(g), std::vector<std::string>{"position_dependent"});
+  expect_closed(g, floor);
+}
+
+TEST(GapVirtualSlave, SheathReroutedMidRun) {
+  const auto g =
+      gap(virtual_slave("time", "--effect capstan=0 --reroute-at 20 --reroute-wrap 4.5"));
+  const double floor = floor_of(virtual_slave("time_ctl", "--effect capstan=0"));
+  record(g, floor);
+  ASSERT_EQ(names(g), std::vector<std::string>{"time_varying"});
+  for (const auto& [name, value] : g.effects.front().parameters) {
+    if (name == "time_varying.t_step") {
+      EXPECT_NEAR(value, 20.0, 0.5);
+    }
+  }
+  expect_closed(g, floor);
+}
+
+TEST(GapVirtualSlave, LoadDependenceOfTheCapstanEffect) {
+  // In one contact session the load is a function of the angle (a tissue
+  // spring, and the transmission's compliance), so load and position
+  // dependence explain the same residual. Two sessions, free motion then
+  // hard tissue, give the same angles with different loads.
+  const auto session = [](const std::string& name, const std::string& args) {
+    return virtual_slave(name, args);
+  };
+  const auto with = concatenate(session("l_free", "--tissue none"),
+                                session("l_hard", "--tissue hard --surface 0.3"));
+  const auto without =
+      concatenate(session("l_free0", "--tissue none --effect capstan=0"),
+                  session("l_hard0", "--tissue hard --surface 0.3 --effect capstan=0"));
+  const auto g = gap(with);
+  const double floor = floor_of(without);
+  record(g, floor);
+  EXPECT_EQ(names(g), std::vector<std::string>{"load_dependent"});
+  // Named, and the gap shrinks by more than the margin; it does not reach
+  // the floor (docs/model-gap.md: the plant's capstan friction follows the
+  // sheath tensions, which |tau_in| / R only approximates).
+  EXPECT_LE(g.gap_final.rmse, 0.85 * g.gap_base.rmse);
+}
+
+TEST(GapVirtualSlave, TwoHiddenEffectsAreBothNamed) {
+  const auto g =
+      gap(virtual_slave("two", "--effect capstan=0 --effect viscous=2 --effect position=0.3"));
+  const double floor = floor_of(virtual_slave("two_ctl", "--effect capstan=0"));
+  record(g, floor);
+  const auto n = names(g);
+  EXPECT_EQ(std::set<std::string>(n.begin(), n.end()),
+            (std::set<std::string>{"viscous", "position_dependent"}));
+  EXPECT_LE(g.gap_final.rmse, 0.8 * g.gap_base.rmse);
+}
+
+// --- the command line -----------------------------------------------------
+
+int run_tsm(const std::string& args, std::string& output) {
+  const fs::path log = fs::temp_directory_path() / "tsmh_gap_cli.log";
+  const std::string cmd = std::string(TSMH_TSM_BIN) + " " + args + " >" + log.string() + " 2>&1";
+  const int rc = std::system(cmd.c_str());
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  output = ss.str();
+  fs::remove(log);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
+  const fs::path dir = fs::temp_directory_path() / "tsmh_gap_cli";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  TsmModelSpec s = paper_spec();
+  s.add(TermKind::position_dependent).p = {0.3, 0.2};
+  SyntheticConfig c;
+  c.seed = 118;
+  c.duration_s = 20.0;
+  write_recording_csv(make_synthetic(TsmFrictionModel(s), c).recording, dir / "data.csv");
+  std::string out;
+  ASSERT_EQ(
+      run_tsm("gap " + (dir / "data.csv").string() + " --output " + (dir / "g").string(), out), 0)
+      << out;
+  std::ifstream in(dir / "g" / "report.json");
+  const auto r = nlohmann::json::parse(in);
+  EXPECT_EQ(r["base"], "paper");
+  for (const char* k : {"rmse", "p2p", "fit_percent"}) {
+    EXPECT_TRUE(r["gap_base"][k].is_number()) << k;
+    EXPECT_TRUE(r["gap_final"][k].is_number()) << k;
+  }
+  ASSERT_TRUE(r["effects"].is_array());
+  ASSERT_FALSE(r["effects"].empty());
+  EXPECT_EQ(r["effects"][0]["name"], "position_dependent");
+  EXPECT_TRUE(r["effects"][0]["where"].is_string());
+  EXPECT_TRUE(r["effects"][0]["gap_after"]["rmse"].is_number());
+  for (const auto& p : r["plots"])
+    EXPECT_TRUE(fs::exists(dir / "g" / p.get<std::string>())) << p;
+  EXPECT_EQ(r["plots"].size(), 4U) << r["warnings"];
+  // The final params file carries the effect and is what simulate/fit load.
+  const auto model = load_model((dir / "g" / "params.yaml").string());
+  const auto* tsm = dynamic_cast<const TsmFrictionModel*>(model.get());
+  ASSERT_NE(tsm, nullptr);
+  EXPECT_TRUE(tsm->spec().has(TermKind::position_dependent));
+  std::ifstream sum(dir / "g" / "summary.txt");
+  std::stringstream text;
+  text << sum.rdbuf();
+  EXPECT_NE(text.str().find("Effect 1: position_dependent"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("Where:"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(GapCommand, BadDataWritesNothing) {
+  const fs::path dir = fs::temp_directory_path() / "tsmh_gap_cli_bad";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  {
+    std::ofstream f(dir / "flat.csv");
+    f << "# radius_m: 0.01\nt,x_in,tau_in,tau_out\n";
+    for (int i = 0; i < 6000; ++i)
+      f << i * 1e-3 << ",0.1,0.01,0.0\n";
+  }
+  std::string out;
+  EXPECT_NE(
+      run_tsm("gap " + (dir / "flat.csv").string() + " --output " + (dir / "g").string(), out), 0);
+  EXPECT_NE(out.find("no motion"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "g"));
+  std::size_t entries = 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    (void)e;
+    ++entries;
+  }
+  EXPECT_EQ(entries, 1U);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
