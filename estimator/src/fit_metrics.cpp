@@ -139,6 +139,14 @@ std::vector<RegimeError> regime_errors(const FitData& data, std::span<const doub
       return data.role[i] == role && s.in(data.motion[i]);
     });
     r.mean_error = r.metrics.bias;
+    double excess = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      if (data.role[i] != role || !s.in(data.motion[i])) continue;
+      excess += (data.measured[i] - model[i]) * sign_of(model[i]);
+      ++n;
+    }
+    if (n > 0) r.magnitude_excess = excess / static_cast<double>(n);
     if (r.metrics.samples > 0 && total_e2 > 0.0) {
       const double e2 = r.metrics.rmse * r.metrics.rmse * static_cast<double>(r.metrics.samples);
       r.concentration = (e2 / total_e2) /

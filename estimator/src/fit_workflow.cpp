@@ -73,6 +73,7 @@ nlohmann::json to_json(const std::vector<RegimeError>& regimes) {
     j["group"] = r.group;
     j["where"] = r.where;
     j["concentration"] = r.concentration;
+    j["magnitude_excess"] = r.magnitude_excess;
     a.push_back(std::move(j));
   }
   return a;

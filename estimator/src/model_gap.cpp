@@ -263,6 +263,37 @@ std::vector<double> residual_of(const FitData& d, std::span<const double> f) {
   return r;
 }
 
+// The regime group where a term's absence shows (fit_metrics.hpp groups).
+std::string group_of(TermKind kind) {
+  switch (kind) {
+    case TermKind::viscous:
+    case TermKind::stribeck:
+      return "speed";
+    case TermKind::load_dependent:
+      return "load";
+    case TermKind::position_dependent:
+      return "position";
+    case TermKind::time_varying:
+      return "time";
+    case TermKind::acceleration_dependence:
+      return "acceleration";
+    default:
+      return "direction";
+  }
+}
+
+// What the base got wrong in the term's own regimes: the friction magnitude
+// measured minus modelled, per regime of its group.
+std::string own_regimes(TermKind kind, const std::vector<RegimeError>& before) {
+  std::string text;
+  for (const auto& r : before) {
+    if (r.group != group_of(kind) || !std::isfinite(r.magnitude_excess)) continue;
+    text += (text.empty() ? "" : ", ") + r.name + " " + (r.magnitude_excess >= 0 ? "+" : "") +
+            num(r.magnitude_excess) + " N";
+  }
+  return text.empty() ? "" : "measured minus model friction magnitude: " + text;
+}
+
 // Where the residual fell most between two regime breakdowns.
 std::string where_it_fell(const std::vector<RegimeError>& before,
                           const std::vector<RegimeError>& after) {
@@ -494,6 +525,8 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     e.name = win.name;
     e.meaning = std::string(term_info(kind).meaning);
     e.where = std::string(term_info(kind).where);
+    const std::string own = own_regimes(kind, regimes_cur);
+    if (!own.empty()) e.where += "; " + own;
     const std::string fell = where_it_fell(regimes_cur, regimes_after);
     if (!fell.empty()) e.where += "; residual fell most at " + fell;
     e.gap_after = gap_after;
@@ -541,6 +574,7 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
                    {"where", r.where},
                    {"rmse", r.metrics.rmse},
                    {"mean_error", r.mean_error},
+                   {"magnitude_excess", r.magnitude_excess},
                    {"concentration", r.concentration},
                    {"samples", r.metrics.samples}});
     }
@@ -638,8 +672,24 @@ std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
   for (std::size_t i = 0; i < worst.size() && i < 5; ++i) {
     const auto& r = *worst[i];
     s << "  " << r.name << " (" << r.where << "): RMSE " << num(r.metrics.rmse) << " N, "
-      << num(r.concentration) << "x its share, mean error " << num(r.mean_error) << " N ("
-      << (r.mean_error > 0 ? "model too low" : "model too high") << ")\n";
+      << num(r.concentration) << "x its share of the squared error\n";
+  }
+  // Systematic errors: the friction magnitude the model misses, per regime
+  // (they show effects that do not change where the error is largest).
+  std::vector<const RegimeError*> biased;
+  for (const auto& r : g.regimes_base) {
+    if (std::isfinite(r.magnitude_excess)) biased.push_back(&r);
+  }
+  std::sort(biased.begin(), biased.end(), [](const auto* a, const auto* b) {
+    return std::fabs(a->magnitude_excess) > std::fabs(b->magnitude_excess);
+  });
+  s << "Largest systematic errors (measured minus model friction magnitude):\n";
+  for (std::size_t i = 0; i < biased.size() && i < 4; ++i) {
+    const auto& r = *biased[i];
+    s << "  " << r.name << " (" << r.where << "): " << (r.magnitude_excess >= 0 ? "+" : "")
+      << num(r.magnitude_excess) << " N ("
+      << (r.magnitude_excess > 0 ? "model friction too small" : "model friction too large")
+      << ")\n";
   }
   const auto& db = g.diagnostics_base;
   s << "Residual: " << (db.white ? "white" : "not white") << " (lag-1 autocorrelation "

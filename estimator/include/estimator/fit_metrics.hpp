@@ -42,7 +42,11 @@ struct RegimeError {
   /// This slice's share of the squared error, divided by its share of the
   /// samples: > 1 means the residual concentrates here.
   double concentration = std::nan("");
-  double mean_error = std::nan("");  ///< mean(e) in the slice, N (a sign tells over/under)
+  double mean_error = std::nan("");  ///< mean(e) in the slice, N
+  /// mean(e sgn(model)): how much the measured friction's magnitude exceeds
+  /// the model's, N (> 0: the model's friction is too small there). Unlike
+  /// mean(e) it does not cancel between the two directions.
+  double magnitude_excess = std::nan("");
 };
 
 /// Thresholds the regimes are cut at, derived from the data.
