@@ -166,8 +166,8 @@ run_driver_case() {
   host=$!
   # The host stops itself (SIGSTOP) to play a host that died silently: the
   # firmware's watchdog must zero the torque. Let it judge, then continue.
-  # It may ask for another attempt ("retry": nothing to cut), at most 3.
-  for attempt in 1 2 3; do
+  # It may ask for another attempt ("retry": nothing to cut), at most 5.
+  for attempt in 1 2 3 4 5; do
     rm -f "$mailbox.watchdog"
     WAIT_S=60 wait_for proc_stopped_or_gone $host && [ -n "$(proc_state $host)" ] || break
     usleep 300000

@@ -13,7 +13,7 @@
 //             come back to OK. When our last output before the stop carried
 //             no current (its input report was late, so the driver sent
 //             zero), the firmware has nothing to cut: it asks for another
-//             attempt (verdict file <mailbox>.watchdog: "retry"), at most 3.
+//             attempt (verdict file <mailbox>.watchdog: "retry"), at most 5.
 //   unplug    --replugs times: unbind the gadget (write "" to --udc) while the
 //             loop commands torque; from one loop cycle after the driver's
 //             freshness bound has passed since the device's last input report
@@ -146,13 +146,22 @@ class Host {
     device_->set_enabled(true);
     LoopClock clock(kPeriodNs);
     // Wall time, not a tick count: a loaded guest runs fewer, later ticks.
-    const std::int64_t t_end = monotonic_ns() + static_cast<std::int64_t>(o_.seconds * 1e9);
+    // A starved guest delivers most reports later than the driver's
+    // freshness bound, and the driver rightly sends no torque for them: the
+    // stream then goes on (up to 10 s more) until torque has flowed on
+    // kTorqueTicks ticks, so that the judged torque path is exercised.
+    constexpr int kTorqueTicks = 20;
+    const std::int64_t t_start = monotonic_ns();
+    const std::int64_t t_end = t_start + static_cast<std::int64_t>(o_.seconds * 1e9);
+    const std::int64_t t_limit = t_end + 10'000'000'000LL;
     std::vector<double> lateness_us, age_us;
     lateness_us.reserve(static_cast<std::size_t>(o_.seconds * 1000.0) + 1);
     age_us.reserve(static_cast<std::size_t>(o_.seconds * 1000.0) + 1);
     int ticks = 0, not_ok = 0, stale = 0, fresh = 0, enabled = 0, torque_seen = 0;
     std::uint64_t last_seq = 0;
-    for (std::int64_t now = clock.wait(); now < t_end; now = clock.wait(), ++ticks) {
+    std::int64_t now = clock.wait();
+    for (; now < t_end || (torque_seen < kTorqueTicks && now < t_limit);
+         now = clock.wait(), ++ticks) {
       lateness_us.push_back(static_cast<double>(clock.lateness_ns()) * 1e-3);
       const md::DeviceReading r = device_->read(now);
       device_->write_torque(render(now, r));
@@ -167,6 +176,7 @@ class Host {
       if (r.tau_commanded[0] != 0.0 || r.tau_commanded[1] != 0.0) ++torque_seen;
     }
     const md::ConsoleStats s = console_->stats();
+    const double seconds = static_cast<double>(now - t_start) * 1e-9;
     const auto late = tsmh::usb_stack::percentiles(lateness_us);
     const auto age = tsmh::usb_stack::percentiles(age_us);
     const auto d = [](std::uint64_t a, std::uint64_t b) {
@@ -179,21 +189,23 @@ class Host {
     const std::string error = device_->last_error();
     result(
         name("stream"), ok && device_->status() == md::DeviceStatus::kOk,
-        fmt("%d ticks: %d fresh samples, input reports %llu, lost (sequence gaps) %llu, late "
+        fmt("%.1f s, %d ticks: %d fresh samples, input reports %llu, lost (sequence gaps) %llu, "
+            "late "
             "(beyond the %.1f ms freshness bound) %llu, malformed %llu; outputs sent %llu, failed "
             "%llu; disconnects %llu; ticks not OK %d (stale %d), enabled %d, torque sent %d; now "
             "%s%s%s",
-            ticks, fresh, d(s.reports, before.reports), d(s.lost_reports, before.lost_reports),
-            ms(console_->freshness_bound_ns()), d(s.late_reports, before.late_reports),
-            d(s.bad_reports, before.bad_reports), d(s.outputs_sent, before.outputs_sent),
-            d(s.outputs_failed, before.outputs_failed), d(s.disconnects, before.disconnects),
-            not_ok, stale, enabled, torque_seen, status.c_str(), error.empty() ? "" : ": ",
-            error.c_str()));
-    metric(name("input_reports_per_s"),
-           static_cast<double>(s.reports - before.reports) / o_.seconds, "Hz");
+            seconds, ticks, fresh, d(s.reports, before.reports),
+            d(s.lost_reports, before.lost_reports), ms(console_->freshness_bound_ns()),
+            d(s.late_reports, before.late_reports), d(s.bad_reports, before.bad_reports),
+            d(s.outputs_sent, before.outputs_sent), d(s.outputs_failed, before.outputs_failed),
+            d(s.disconnects, before.disconnects), not_ok, stale, enabled, torque_seen,
+            status.c_str(), error.empty() ? "" : ": ", error.c_str()));
+    metric(name("input_reports_per_s"), static_cast<double>(s.reports - before.reports) / seconds,
+           "Hz");
     metric(name("lost_reports"), static_cast<double>(s.lost_reports - before.lost_reports),
            "reports");
-    metric(name("loop_ticks_per_s"), ticks / o_.seconds, "Hz");
+    metric(name("loop_ticks_per_s"), ticks / seconds, "Hz");
+    metric(name("stream_seconds"), seconds, "s");
     metric(name("fresh_ratio"), ticks > 0 ? static_cast<double>(fresh) / ticks : 0.0, "of ticks");
     metric(name("ticks_not_ok"), not_ok, "ticks");
     metric(name("ticks_stale"), stale, "ticks");
@@ -249,7 +261,7 @@ class Host {
       // Continued. The firmware has judged its trip, or asks for another
       // attempt: our last output carried no current (the driver answered a
       // late report with zero torque just before the stop).
-      if (attempt >= 3 || watchdog_verdict() != "retry") break;
+      if (attempt >= 5 || watchdog_verdict() != "retry") break;
       clock.rebase();
     }
     // Continued: the driver must be back to OK with fresh samples (stale

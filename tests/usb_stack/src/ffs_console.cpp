@@ -327,8 +327,8 @@ int main(int argc, char** argv) {
       ++watchdog_attempts;
       // The host's last output before it stopped carried no current (the
       // driver answers a late input report with zero torque): nothing to
-      // cut, so no verdict; the host tries again (at most 3 times).
-      if (trip && trip->current_before_ma == 0.0 && watchdog_attempts < 3) {
+      // cut, so no verdict; the host tries again (at most 5 times).
+      if (trip && trip->current_before_ma == 0.0 && watchdog_attempts < 5) {
         std::printf(
             "USB_STACK_NOTE %s_fw_watchdog attempt %d: no motor current when the host "
             "stopped (its last output carried none); asking for another attempt\n",
