@@ -55,8 +55,10 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
   threshold_ = cfg_.acc_sign_threshold;
   if (threshold_ < 0.0) {
     // Steady-state acceleration uncertainty of this filter at 1 kHz. Encoder
-    // quantisation makes the estimate wander up to ~1.6x this at constant
-    // velocity (docs/friction-model.md), so +-1 needs 2x.
+    // quantisation makes the estimate oscillate up to ~1.6x this at constant
+    // velocity, but never beyond 0.75x of it for a whole dwell time
+    // (docs/friction-model.md): a low threshold plus the dwell switches
+    // sooner than a high threshold alone.
     std::array<double, 3> s{};
     Mat3 p{};
     p[0][0] = r_;
@@ -66,13 +68,15 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
       predict_covariance(p, 1e-3, cfg_.jerk_psd);
       correct(s, p, 0.0, r_);
     }
-    threshold_ = 2.0 * std::sqrt(p[2][2]);
+    threshold_ = 0.75 * std::sqrt(p[2][2]);
   }
   reset();
 }
 
 void Differentiator::reset() noexcept {
   started_ = false;
+  pending_sign_ = 0;
+  pending_time_ = 0.0;
   out_ = {};
 }
 
@@ -87,6 +91,8 @@ void Differentiator::start(double t, double x) noexcept {
   p_[1][1] = 10.0 * 10.0;
   p_[2][2] = 100.0 * 100.0;
   out_ = {x, 0.0, 0.0, 0, true};
+  pending_sign_ = 0;
+  pending_time_ = 0.0;
 }
 
 Derivatives Differentiator::update(double t, double x) noexcept {
@@ -108,13 +114,20 @@ Derivatives Differentiator::update(double t, double x) noexcept {
   predict_covariance(p_, dt, cfg_.jerk_psd);
   correct(s_, p_, x, r_);
 
+  // sgn(xdd): unknown (0) from the moment the estimate crosses zero; +-1 once
+  // |xdd| has stayed beyond the threshold with that sign for the dwell time.
   int sign = out_.acc_sign;
-  if (s_[2] > threshold_) {
-    sign = 1;
-  } else if (s_[2] < -threshold_) {
-    sign = -1;
-  } else if (sign * s_[2] < 0.0) {
-    sign = 0;  // crossed zero: the sign is unknown until |xdd| clears the threshold
+  if (sign * s_[2] < 0.0) sign = 0;
+  const int want = s_[2] > threshold_ ? 1 : (s_[2] < -threshold_ ? -1 : 0);
+  if (want != 0 && want != sign) {
+    pending_time_ = want == pending_sign_ ? pending_time_ + dt : dt;
+    pending_sign_ = want;
+    if (pending_time_ >= cfg_.acc_sign_dwell - 1e-9) {
+      sign = want;
+      pending_sign_ = 0;
+    }
+  } else {
+    pending_sign_ = 0;
   }
   out_ = {s_[0], s_[1], s_[2], sign, true};
   return out_;

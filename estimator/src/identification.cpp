@@ -329,6 +329,22 @@ FitResult identify(const FrictionModel& initial, const FitData& data, const FitO
   r.model->set_values(r.values);
   r.simulated = simulate_friction(*r.model, data.motion);
   r.train_rmse = std::sqrt(weighted_mse(data.measured, r.simulated, full.weight));
+  // A search with a small budget can end worse on the full-rate data than it
+  // began (its descent ran on the decimated data): never return worse than
+  // the starting values.
+  {
+    auto start_model = initial.clone();
+    auto start_sim = simulate_friction(*start_model, data.motion);
+    const double start_rmse = std::sqrt(weighted_mse(data.measured, start_sim, full.weight));
+    if (start_rmse < r.train_rmse) {
+      r.values.clear();
+      for (const auto& p : initial.parameters())
+        r.values.push_back(p.value);
+      r.model = std::move(start_model);
+      r.simulated = std::move(start_sim);
+      r.train_rmse = start_rmse;
+    }
+  }
   r.starts = std::move(outcomes);
   r.best_start = best;
   for (const auto& s : r.starts)

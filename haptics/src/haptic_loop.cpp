@@ -101,12 +101,25 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
     request[j] = config_.force[j](slave_tau);
   }
 
-  // 4. State machine.
+  // 4. State machine. A late master reading zeroes torque this tick (below)
+  // without latching a fault unless it persists.
+  const bool device_fresh = reading_.status == master_devices::DeviceStatus::kOk;
+  const bool device_late =
+      reading_.status == master_devices::DeviceStatus::kDisconnected && reading_.stale;
+  if (device_late) {
+    if (device_stale_since_ns_ < 0) device_stale_since_ns_ = now_ns;
+    ++counters_.device_stale_ticks;
+  } else {
+    device_stale_since_ns_ = -1;
+  }
+  const bool device_ok =
+      device_fresh || (device_late && static_cast<double>(now_ns - device_stale_since_ns_) * 1e-9 <
+                                          config_.device_stale_fault_s);
   const LoopState before = machine_.state();
   const LoopState now_state =
       machine_.update({.dead_man = reading_.buttons.dead_man,
                        .e_stop = reading_.buttons.e_stop,
-                       .device_ok = reading_.status == master_devices::DeviceStatus::kOk,
+                       .device_ok = device_ok,
                        .slave_lost = !(age_s <= config_.slave_timeout_s) &&
                                      counters_.ticks * nominal_dt > config_.slave_timeout_s,
                        .internal_error = false});
@@ -126,7 +139,7 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   }
 
   // 5. Safety, then the device.
-  const SafetyOutput& out = safety_.apply(request, dt, age_s, enabled);
+  const SafetyOutput& out = safety_.apply(request, dt, age_s, enabled && device_fresh);
   if (out.flags & safety_flags::kNonFinite) ++counters_.nonfinite_requests;
   if (out.flags & safety_flags::kSaturated) ++counters_.saturated_ticks;
   if (out.flags & safety_flags::kRateLimited) ++counters_.rate_limited_ticks;

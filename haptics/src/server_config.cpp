@@ -135,7 +135,9 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.lcm_prefix = r.text(lcm["prefix"], "lcm.prefix", "");
 
   const YAML::Node safety = section(root, "safety");
-  r.only(safety, {"stale_after_ms", "fade_ms", "recover_ms", "slave_timeout_ms"}, "safety");
+  r.only(safety,
+         {"stale_after_ms", "fade_ms", "recover_ms", "slave_timeout_ms", "device_stale_fault_ms"},
+         "safety");
   const auto sfield = [&](const char* key, double def) {
     return r.number(safety[key], std::string("safety.") + key, def, 0.0, 1e6, true) * 1e-3;
   };
@@ -143,6 +145,7 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.loop.timing.fade_s = sfield("fade_ms", 50.0);
   c.loop.timing.recover_s = sfield("recover_ms", 200.0);
   c.loop.slave_timeout_s = sfield("slave_timeout_ms", 1000.0);
+  c.loop.device_stale_fault_s = sfield("device_stale_fault_ms", 50.0);
 
   const YAML::Node rt = section(root, "realtime");
   r.only(rt, {"sched_fifo", "priority", "lock_memory", "cpu"}, "realtime");

@@ -109,8 +109,9 @@ TEST(Differentiator, AccelerationSignFollowsTruthWithoutChatter) {
     if (r.sign[i] == -(r.xdd_true[i] > 0 ? 1 : -1)) wrong_time += 1e-3;
   }
   EXPECT_EQ(reversals, true_flips) << "the sign reverses once per true zero crossing";
-  EXPECT_LE(transitions, 2 * true_flips + 1)
-      << "+1 -> 0 -> -1 at most (+1 for the window start): no chatter";
+  // +1 -> 0 -> -1 per crossing, with at most one extra return to 0 while the
+  // noisy estimate lingers near zero: no chatter.
+  EXPECT_LE(transitions, 3 * true_flips) << "chatter";
   // Around each crossing the slowly varying acceleration of a 0.5 Hz sine
   // (jerk 25 rad/s^3) stays within the noise band for a while; the sign may
   // lag (hold the old value) only briefly.

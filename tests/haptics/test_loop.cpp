@@ -146,6 +146,34 @@ TEST(HapticLoop, DeviceDisconnectFaults) {
   EXPECT_EQ(rig.device.torque[0], 0.0);
 }
 
+TEST(HapticLoop, LateMasterReadingsZeroTorqueAndFaultOnlyWhenTheyPersist) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(1000);
+  ASSERT_NEAR(rig.device.torque[0], 0.2, 1e-9);
+  // A few late readings (a loaded host): zero torque at once, no fault.
+  rig.device.reading_.status = master_devices::DeviceStatus::kDisconnected;
+  rig.device.reading_.stale = true;
+  rig.run(5);
+  EXPECT_EQ(rig.device.torque[0], 0.0);
+  EXPECT_EQ(rig.loop.state(), LoopState::kEnabled);
+  EXPECT_EQ(rig.loop.counters().device_stale_ticks, 5u);
+  // Fresh again: torque returns within the rate limit, without a step.
+  rig.device.reading_.status = master_devices::DeviceStatus::kOk;
+  rig.device.reading_.stale = false;
+  rig.device.written.clear();
+  rig.run(20);
+  EXPECT_LE(rig.device.written[0], 100.0 * 1e-3 + 1e-12);
+  EXPECT_NEAR(rig.device.torque[0], 0.2, 1e-9);
+  // Late for longer than device_stale_fault_s (50 ms): FAULT.
+  rig.device.reading_.status = master_devices::DeviceStatus::kDisconnected;
+  rig.device.reading_.stale = true;
+  rig.run(49);
+  EXPECT_EQ(rig.loop.state(), LoopState::kEnabled);
+  rig.run(2);
+  EXPECT_EQ(rig.loop.state(), LoopState::kFault);
+  EXPECT_EQ(rig.loop.fault(), FaultReason::kDevice);
+}
+
 TEST(HapticLoop, PositionCommandsFollowMasterWithClutchAndNoJumpOnEnable) {
   Rig rig;
   rig.device.reading_.buttons.dead_man = false;

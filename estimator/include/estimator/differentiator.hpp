@@ -22,10 +22,12 @@ struct DifferentiatorConfig {
   double quantum = 2.0 * std::numbers::pi / 40960.0;
   /// Additional white measurement noise on the angle, rad (standard deviation).
   double position_noise = 0.0;
-  /// |xdd| above which sgn(xdd) becomes +-1, rad/s^2 (it returns to 0 when
-  /// the estimate crosses zero). Negative: automatic, 2 x the steady-state acceleration
-  /// uncertainty at 1 kHz.
+  /// |xdd| above which sgn(xdd) becomes +-1 (after acc_sign_dwell), rad/s^2;
+  /// it returns to 0 when the estimate crosses zero. Negative: automatic,
+  /// 0.75 x the steady-state acceleration uncertainty at 1 kHz.
   double acc_sign_threshold = -1.0;
+  /// How long |xdd| must stay beyond the threshold before sgn(xdd) turns +-1, s.
+  double acc_sign_dwell = 0.010;
   /// A gap longer than this (s) restarts the filter at the new sample.
   double max_gap = 1.0;
 };
@@ -54,8 +56,10 @@ class Differentiator {
   void start(double t, double x) noexcept;
 
   DifferentiatorConfig cfg_;
-  double r_;          // measurement variance, rad^2
-  double threshold_;  // Schmitt trigger half-width, rad/s^2
+  double r_;                   // measurement variance, rad^2
+  double threshold_;           // Schmitt trigger half-width, rad/s^2
+  int pending_sign_ = 0;       // sign waiting out the dwell time
+  double pending_time_ = 0.0;  // how long it has been waiting, s
   bool started_ = false;
   double t_ = 0.0;
   std::array<double, 3> s_{};                 // angle, velocity, acceleration

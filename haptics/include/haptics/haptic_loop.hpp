@@ -41,7 +41,11 @@ struct LoopConfig {
   std::array<JointSafetyLimits, kMaxJoints> limits{};
   SafetyTiming timing{};
   double slave_timeout_s = 1.0;  ///< no slave state this long: FAULT
-  int status_every = 10;         ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
+  /// A device reading that is merely late (DeviceReading::stale: the console
+  /// missed a few periods) zeroes torque at once but only faults when it lasts
+  /// this long; an unplug or a device fault faults at once.
+  double device_stale_fault_s = 0.050;
+  int status_every = 10;  ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
 };
 
 struct LoopCounters {
@@ -53,6 +57,7 @@ struct LoopCounters {
   std::uint64_t saturated_ticks = 0;
   std::uint64_t rate_limited_ticks = 0;
   std::uint64_t stale_ticks = 0;
+  std::uint64_t device_stale_ticks = 0;  ///< master readings too old: torque zeroed, no fault
 };
 
 class HapticLoop {
@@ -110,6 +115,7 @@ class HapticLoop {
   bridge::HapticStatusSample status_{};
   master_devices::JointArray device_torque_{};
 
+  std::int64_t device_stale_since_ns_ = -1;  // -1: the device's reading is fresh
   std::int64_t first_ns_ = 0;
   std::int64_t last_ns_ = 0;
   std::int64_t command_seq_ = 0;
