@@ -164,6 +164,11 @@ int run(const Options& o) {
       const std::string note = haptics::lock_memory();
       if (!note.empty()) std::fprintf(stderr, "haptic-server: warning: %s\n", note.c_str());
     }
+    std::optional<haptics::CpuDmaLatency> dma;
+    if (cfg.realtime.cpu_dma_latency) {
+      dma.emplace();
+      if (!dma->active()) std::fprintf(stderr, "haptic-server: warning: %s\n", dma->note().c_str());
+    }
     link.start();
     haptics::LoopRunner runner(loop, {cfg.loop.rate_hz, cfg.realtime.sched_fifo,
                                       cfg.realtime.priority, cfg.realtime.cpu, cfg.duration_s});

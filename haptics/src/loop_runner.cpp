@@ -1,9 +1,11 @@
 #include "haptics/loop_runner.hpp"
 
+#include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -34,6 +36,21 @@ std::string lock_memory() noexcept {
   return std::string("mlockall failed (") + std::strerror(errno) +
          "); pages may fault during the loop. Allow it with `ulimit -l unlimited` or "
          "CAP_IPC_LOCK (see docs/haptic-server.md).";
+}
+
+CpuDmaLatency::CpuDmaLatency() {
+  fd_ = ::open("/dev/cpu_dma_latency", O_RDWR | O_CLOEXEC);
+  const std::int32_t zero = 0;
+  if (fd_ >= 0 && ::write(fd_, &zero, sizeof zero) == static_cast<ssize_t>(sizeof zero)) return;
+  note_ = std::string("cannot hold /dev/cpu_dma_latency at 0 (") + std::strerror(errno) +
+          "): CPUs may enter deep idle states and wake the loop late. Run as root or grant write "
+          "access to /dev/cpu_dma_latency (docs/haptic-server.md).";
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+CpuDmaLatency::~CpuDmaLatency() {
+  if (fd_ >= 0) ::close(fd_);  // closing restores the system's default
 }
 
 LoopRunner::LoopRunner(HapticLoop& loop, const RunnerOptions& options)

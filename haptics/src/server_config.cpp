@@ -148,10 +148,11 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.loop.device_stale_fault_s = sfield("device_stale_fault_ms", 50.0);
 
   const YAML::Node rt = section(root, "realtime");
-  r.only(rt, {"sched_fifo", "priority", "lock_memory", "cpu"}, "realtime");
+  r.only(rt, {"sched_fifo", "priority", "lock_memory", "cpu", "cpu_dma_latency"}, "realtime");
   c.realtime.sched_fifo = r.boolean(rt["sched_fifo"], "realtime.sched_fifo", true);
   c.realtime.priority = static_cast<int>(r.number(rt["priority"], "realtime.priority", 80, 1, 99));
   c.realtime.lock_memory = r.boolean(rt["lock_memory"], "realtime.lock_memory", true);
+  c.realtime.cpu_dma_latency = r.boolean(rt["cpu_dma_latency"], "realtime.cpu_dma_latency", true);
   c.realtime.cpu = static_cast<int>(r.number(rt["cpu"], "realtime.cpu", -1, -1, 1023));
 
   const YAML::Node ev = section(root, "evaluation");

@@ -15,7 +15,8 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--duration", o.duration_s,
                  "seconds to run (offline: default per scenario; real time: 0 = until SIGINT)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--scenario", o.scenario, "offline scenario: sine, multisine, palpate, chirp, excite");
+  app.add_option("--scenario", o.scenario,
+                 "offline scenario: sine, multisine, palpate, chirp, excite");
   app.add_option("--output", o.output, "offline: CSV file to write (data contract, design.md §4)");
   app.add_option(
          "--joint", o.joint,
@@ -68,6 +69,8 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--rt-priority", o.rt_priority,
                  "SCHED_FIFO priority of the 1 kHz loop (0: normal scheduling)")
       ->check(CLI::Range(0, 99));
+  app.add_option("--cpu", o.cpu, "pin the 1 kHz loop thread to this CPU (-1: no pinning)")
+      ->check(CLI::Range(-1, 1023));
 }
 
 Setup make_setup(const CliOptions& o, const Scenario* scenario) {

@@ -44,6 +44,7 @@ struct CliOptions {
   std::string prefix;
   double command_timeout_s = 0.1;
   int rt_priority = 0;
+  int cpu = -1;  ///< pin the 1 kHz loop thread to this CPU (-1: no pinning)
 };
 
 void add_options(CLI::App& app, CliOptions& o);

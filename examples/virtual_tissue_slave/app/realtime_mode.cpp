@@ -134,6 +134,17 @@ int run_realtime_mode(const CliOptions& o) {
                config.url.c_str(), o.prefix.c_str(), o.prefix.c_str(), o.prefix.c_str(),
                setup.tissue.name.c_str(), setup.tissue.surface_rad);
 
+  if (o.cpu >= 0) {
+    // Only the loop thread: the bridge threads started above stay free to run elsewhere.
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(o.cpu, &set);
+    const int rc = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+    if (rc != 0)
+      std::fprintf(stderr, "virtual-slave: note: cannot pin to CPU %d (%s); not pinned\n", o.cpu,
+                   std::strerror(rc));
+  }
+
   // Everything the loop touches exists before it starts: no allocation,
   // locks, blocking I/O or printing inside.
   const std::int64_t period_ns =

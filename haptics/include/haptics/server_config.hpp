@@ -28,8 +28,9 @@ struct JointConfig {
 struct RealtimeConfig {
   bool sched_fifo = true;  ///< try SCHED_FIFO; fall back with a warning when not permitted
   int priority = 80;
-  bool lock_memory = true;  ///< mlockall; fall back with a warning when not permitted
-  int cpu = -1;             ///< pin the loop thread to this CPU (-1: no pinning)
+  bool lock_memory = true;      ///< mlockall; fall back with a warning when not permitted
+  int cpu = -1;                 ///< pin the loop thread to this CPU (-1: no pinning)
+  bool cpu_dma_latency = true;  ///< hold /dev/cpu_dma_latency at 0 while running
 };
 
 struct EvaluationConfig {
