@@ -11,35 +11,6 @@
 
 namespace tsmh::master_devices {
 
-namespace {
-
-void joint_values(FieldReader& r, std::string_view key, JointArray& out, std::size_t dof,
-                  double fallback) {
-  for (std::size_t j = 0; j < dof; ++j)
-    out[j] = fallback;
-  YAML::Node n = r.node(key);
-  if (!n.IsDefined()) return;
-  if (n.IsScalar()) {
-    const double v = r.get_double(key);
-    for (std::size_t j = 0; j < dof; ++j)
-      out[j] = v;
-    return;
-  }
-  if (!n.IsSequence() || n.size() != dof) {
-    r.fail(key,
-           "must be a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
-  }
-  for (std::size_t j = 0; j < dof; ++j) {
-    double v = 0.0;
-    if (!n[j].IsScalar() || !YAML::convert<double>::decode(n[j], v) || !std::isfinite(v)) {
-      config_fail(r.source(), r.element(key, j), "must be a number", n[j]);
-    }
-    out[j] = v;
-  }
-}
-
-}  // namespace
-
 LcmSettings parse_lcm_settings(FieldReader& r) {
   LcmSettings s;
   s.url = r.get_string("url", "");
@@ -50,11 +21,16 @@ LcmSettings parse_lcm_settings(FieldReader& r) {
   s.dof = static_cast<std::size_t>(dof);
   s.nominal_rate_hz = r.get_double("nominal_rate_hz", s.nominal_rate_hz);
   if (!(s.nominal_rate_hz > 0)) r.fail("nominal_rate_hz", "must be > 0");
-  joint_values(r, "peak_torque_nm", s.peak_torque_nm, s.dof, 0.3);
-  joint_values(r, "continuous_torque_nm", s.continuous_torque_nm, s.dof, 0.15);
-  joint_values(r, "position_min_rad", s.position_min_rad, s.dof, -1.0);
-  joint_values(r, "position_max_rad", s.position_max_rad, s.dof, 1.0);
-  joint_values(r, "max_stiffness_nm_per_rad", s.max_stiffness_nm_per_rad, s.dof, 0.0);
+  s.peak_torque_nm.fill(0.3);
+  r.get_joint_array("peak_torque_nm", s.peak_torque_nm, s.dof);
+  s.continuous_torque_nm.fill(0.15);
+  r.get_joint_array("continuous_torque_nm", s.continuous_torque_nm, s.dof);
+  s.position_min_rad.fill(-1.0);
+  r.get_joint_array("position_min_rad", s.position_min_rad, s.dof);
+  s.position_max_rad.fill(1.0);
+  r.get_joint_array("position_max_rad", s.position_max_rad, s.dof);
+  s.max_stiffness_nm_per_rad.fill(0.0);
+  r.get_joint_array("max_stiffness_nm_per_rad", s.max_stiffness_nm_per_rad, s.dof);
   for (std::size_t j = 0; j < s.dof; ++j) {
     if (!(s.peak_torque_nm[j] > 0)) r.fail("peak_torque_nm", "must be > 0");
     if (!(s.continuous_torque_nm[j] > 0 && s.continuous_torque_nm[j] <= s.peak_torque_nm[j])) {

@@ -80,38 +80,6 @@ Intention step(const StepScenario& s, double t, std::size_t dof) {
   return in;  // a true step: qd stays 0, the hand's own dynamics smooth it
 }
 
-void read_joint_array(FieldReader& r, std::string_view key, JointArray& out, std::size_t dof) {
-  YAML::Node n = r.node(key);
-  if (!n.IsDefined()) return;
-  if (n.IsScalar()) {
-    const double v = r.get_double(key);
-    for (std::size_t j = 0; j < dof; ++j)
-      out[j] = v;
-    return;
-  }
-  if (!n.IsSequence() || n.size() != dof) {
-    r.fail(key,
-           "must be a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
-  }
-  for (std::size_t j = 0; j < dof; ++j) {
-    double v = 0.0;
-    if (!n[j].IsScalar() || !YAML::convert<double>::decode(n[j], v) || !std::isfinite(v)) {
-      config_fail(r.source(), r.element(key, j), "must be a number", n[j]);
-    }
-    out[j] = v;
-  }
-}
-
-double positive(FieldReader& r, std::string_view key, double fallback) {
-  const double v = r.get_double(key, fallback);
-  if (!(v > 0.0)) r.fail(key, "must be > 0");
-  return v;
-}
-double non_negative(FieldReader& r, std::string_view key, double fallback) {
-  const double v = r.get_double(key, fallback);
-  if (!(v >= 0.0)) r.fail(key, "must be >= 0");
-  return v;
-}
 int count(FieldReader& r, std::string_view key, int fallback) {
   const long long v = r.get_int(key, fallback);
   if (v < 0 || v > 1000) r.fail(key, "must be 0 .. 1000");
@@ -181,41 +149,41 @@ Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
     p.press_sign = r.get_double("press_sign", 1.0);
     if (p.press_sign != 1.0 && p.press_sign != -1.0) r.fail("press_sign", "must be 1 or -1");
     p.soft_presses = count(r, "soft_presses", p.soft_presses);
-    p.soft_depth_rad = positive(r, "soft_depth_rad", p.soft_depth_rad);
+    p.soft_depth_rad = r.get_positive("soft_depth_rad", p.soft_depth_rad);
     p.hard_presses = count(r, "hard_presses", p.hard_presses);
-    p.hard_depth_rad = positive(r, "hard_depth_rad", p.hard_depth_rad);
+    p.hard_depth_rad = r.get_positive("hard_depth_rad", p.hard_depth_rad);
     if (p.hard_presses > 0 && p.soft_presses > 0 && !(p.hard_depth_rad > p.soft_depth_rad)) {
       r.fail("hard_depth_rad", "must be > soft_depth_rad (the nodule lies below the soft layer)");
     }
-    p.start_s = non_negative(r, "start_s", p.start_s);
-    p.press_s = positive(r, "press_s", p.press_s);
-    p.hold_s = non_negative(r, "hold_s", p.hold_s);
-    p.release_s = positive(r, "release_s", p.release_s);
-    p.rest_s = non_negative(r, "rest_s", p.rest_s);
-    p.end_s = non_negative(r, "end_s", p.end_s);
-    p.other_amplitude_rad = non_negative(r, "other_amplitude_rad", p.other_amplitude_rad);
-    p.other_frequency_hz = non_negative(r, "other_frequency_hz", p.other_frequency_hz);
+    p.start_s = r.get_non_negative("start_s", p.start_s);
+    p.press_s = r.get_positive("press_s", p.press_s);
+    p.hold_s = r.get_non_negative("hold_s", p.hold_s);
+    p.release_s = r.get_positive("release_s", p.release_s);
+    p.rest_s = r.get_non_negative("rest_s", p.rest_s);
+    p.end_s = r.get_non_negative("end_s", p.end_s);
+    p.other_amplitude_rad = r.get_non_negative("other_amplitude_rad", p.other_amplitude_rad);
+    p.other_frequency_hz = r.get_non_negative("other_frequency_hz", p.other_frequency_hz);
     r.reject_unknown();
     return p;
   }
   if (name == "sine") {
     FieldReader r(sine_node, settings.source(), settings.field("sine"));
     SineScenario s;
-    read_joint_array(r, "amplitude_rad", s.amplitude_rad, dof);
-    read_joint_array(r, "frequency_hz", s.frequency_hz, dof);
-    read_joint_array(r, "phase_rad", s.phase_rad, dof);
-    read_joint_array(r, "offset_rad", s.offset_rad, dof);
-    s.duration_s = positive(r, "duration_s", s.duration_s);
+    r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
+    r.get_joint_array("frequency_hz", s.frequency_hz, dof);
+    r.get_joint_array("phase_rad", s.phase_rad, dof);
+    r.get_joint_array("offset_rad", s.offset_rad, dof);
+    s.duration_s = r.get_positive("duration_s", s.duration_s);
     r.reject_unknown();
     return s;
   }
   if (name == "step") {
     FieldReader r(step_node, settings.source(), settings.field("step"));
     StepScenario s;
-    read_joint_array(r, "amplitude_rad", s.amplitude_rad, dof);
-    s.start_s = non_negative(r, "start_s", s.start_s);
-    s.high_s = positive(r, "high_s", s.high_s);
-    s.low_s = positive(r, "low_s", s.low_s);
+    r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
+    s.start_s = r.get_non_negative("start_s", s.start_s);
+    s.high_s = r.get_positive("high_s", s.high_s);
+    s.low_s = r.get_positive("low_s", s.low_s);
     s.repeats = count(r, "repeats", s.repeats);
     r.reject_unknown();
     return s;

@@ -119,4 +119,35 @@ void FieldReader::reject_unknown() const {
   }
 }
 
+double FieldReader::get_positive(std::string_view key, double fallback) {
+  const double v = get_double(key, fallback);
+  if (!(v > 0.0)) fail(key, "must be > 0");
+  return v;
+}
+
+double FieldReader::get_non_negative(std::string_view key, double fallback) {
+  const double v = get_double(key, fallback);
+  if (!(v >= 0.0)) fail(key, "must be >= 0");
+  return v;
+}
+
+void FieldReader::get_joint_array(std::string_view key, JointArray& out, std::size_t dof) {
+  const YAML::Node n = node(key);
+  if (!n.IsDefined()) return;
+  if (n.IsScalar()) {
+    const double v = get_double(key);
+    for (std::size_t j = 0; j < dof; ++j)
+      out[j] = v;
+    return;
+  }
+  if (!n.IsSequence() || n.size() != dof)
+    fail(key, "must be a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
+  for (std::size_t j = 0; j < dof; ++j) {
+    double v = 0.0;
+    if (!n[j].IsScalar() || !YAML::convert<double>::decode(n[j], v) || !std::isfinite(v))
+      config_fail(source(), element(key, j), "must be a number", n[j]);
+    out[j] = v;
+  }
+}
+
 }  // namespace tsmh::master_devices

@@ -8,43 +8,12 @@
 #include "master_devices/clock.hpp"
 
 namespace tsmh::master_devices {
-namespace {
-
-void joint_values(FieldReader& r, std::string_view key, JointArray& out, std::size_t dof) {
-  YAML::Node n = r.node(key);
-  if (!n.IsDefined()) return;
-  if (n.IsScalar()) {
-    const double v = r.get_double(key);
-    out.fill(v);
-    return;
-  }
-  if (!n.IsSequence() || n.size() != dof) {
-    r.fail(key,
-           "must be a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
-  }
-  for (std::size_t j = 0; j < dof; ++j) {
-    double v = 0.0;
-    if (!n[j].IsScalar() || !YAML::convert<double>::decode(n[j], v) || !std::isfinite(v)) {
-      config_fail(r.source(), r.element(key, j), "must be a number", n[j]);
-    }
-    out[j] = v;
-  }
-}
-
-double positive(FieldReader& r, std::string_view key, double fallback) {
-  const double v = r.get_double(key, fallback);
-  if (!(v > 0.0)) r.fail(key, "must be > 0");
-  return v;
-}
-
-}  // namespace
-
 SimSettings parse_sim_settings(FieldReader& r) {
   SimSettings s;
   const std::string time = r.get_string("time", "real");
   if (time != "real" && time != "simulated") r.fail("time", "must be 'real' or 'simulated'");
   s.simulated_time = time == "simulated";
-  s.rate_hz = positive(r, "rate_hz", s.rate_hz);
+  s.rate_hz = r.get_positive("rate_hz", s.rate_hz);
   const long long dof = r.get_int("dof", 2);
   if (dof < 1 || dof > static_cast<long long>(kMaxDof)) {
     r.fail("dof", "must be 1 .. " + std::to_string(kMaxDof));
@@ -53,23 +22,24 @@ SimSettings parse_sim_settings(FieldReader& r) {
   s.scenario = parse_scenario(r, s.dof);
 
   FieldReader hand(r.node("hand"), r.source(), r.field("hand"));
-  s.hand.inertia_kgm2 = positive(hand, "inertia_kgm2", s.hand.inertia_kgm2);
-  s.hand.stiffness_nm_per_rad = positive(hand, "stiffness_nm_per_rad", s.hand.stiffness_nm_per_rad);
+  s.hand.inertia_kgm2 = hand.get_positive("inertia_kgm2", s.hand.inertia_kgm2);
+  s.hand.stiffness_nm_per_rad =
+      hand.get_positive("stiffness_nm_per_rad", s.hand.stiffness_nm_per_rad);
   s.hand.damping_nms_per_rad = hand.get_double("damping_nms_per_rad", s.hand.damping_nms_per_rad);
   if (s.hand.damping_nms_per_rad < 0) hand.fail("damping_nms_per_rad", "must be >= 0");
   hand.reject_unknown();
   FieldReader handle(r.node("handle"), r.source(), r.field("handle"));
-  s.handle.inertia_kgm2 = positive(handle, "inertia_kgm2", s.handle.inertia_kgm2);
+  s.handle.inertia_kgm2 = handle.get_positive("inertia_kgm2", s.handle.inertia_kgm2);
   s.handle.damping_nms_per_rad =
       handle.get_double("damping_nms_per_rad", s.handle.damping_nms_per_rad);
   if (s.handle.damping_nms_per_rad < 0) handle.fail("damping_nms_per_rad", "must be >= 0");
   handle.reject_unknown();
 
-  joint_values(r, "peak_torque_nm", s.peak_torque_nm, s.dof);
-  joint_values(r, "continuous_torque_nm", s.continuous_torque_nm, s.dof);
-  joint_values(r, "position_min_rad", s.position_min_rad, s.dof);
-  joint_values(r, "position_max_rad", s.position_max_rad, s.dof);
-  joint_values(r, "max_stiffness_nm_per_rad", s.max_stiffness_nm_per_rad, s.dof);
+  r.get_joint_array("peak_torque_nm", s.peak_torque_nm, s.dof);
+  r.get_joint_array("continuous_torque_nm", s.continuous_torque_nm, s.dof);
+  r.get_joint_array("position_min_rad", s.position_min_rad, s.dof);
+  r.get_joint_array("position_max_rad", s.position_max_rad, s.dof);
+  r.get_joint_array("max_stiffness_nm_per_rad", s.max_stiffness_nm_per_rad, s.dof);
   for (std::size_t j = 0; j < s.dof; ++j) {
     if (!(s.peak_torque_nm[j] > 0.0)) r.fail("peak_torque_nm", "must be > 0");
     if (!(s.continuous_torque_nm[j] > 0.0 && s.continuous_torque_nm[j] <= s.peak_torque_nm[j])) {

@@ -12,6 +12,8 @@
 #include <string>
 #include <string_view>
 
+#include "master_devices/types.hpp"
+
 namespace tsmh::master_devices {
 
 /// Bad configuration: a profile or driver settings. The message names source and field.
@@ -38,6 +40,12 @@ class FieldReader {
   bool get_bool(std::string_view key, bool fallback);
   std::string get_string(std::string_view key);
   std::string get_string(std::string_view key, std::string fallback);
+  /// A number > 0 (>= 0): the fallback when absent, an error naming the field otherwise.
+  double get_positive(std::string_view key, double fallback);
+  double get_non_negative(std::string_view key, double fallback);
+  /// One value per joint: a number (every joint) or a list of `dof` numbers.
+  /// Leaves `out` unchanged when absent.
+  void get_joint_array(std::string_view key, JointArray& out, std::size_t dof);
 
   /// "path.key" (or "key" at the root), for messages.
   std::string field(std::string_view key) const;
