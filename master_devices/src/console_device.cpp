@@ -406,23 +406,10 @@ void ConsoleDevice::on_link_lost(const char* why) noexcept {
 DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
   DeviceReading r;
   r.fresh = readings_.fetch(r);
-  const DeviceStatus s = status();
-  r.status = s;
+  r.status = status();
   r.fault = fault_.load();
-  // Silence or a late sample: not OK at once, OK again with the next fresh
-  // sample (link up, so nothing to reconnect and torque stays enabled).
-  const bool stale =
-      r.sequence == 0 || now_ns - r.t_ns > fresh_bound_ns_.load(std::memory_order_relaxed);
-  if (s == DeviceStatus::kOk && stale) {
-    r.status = DeviceStatus::kDisconnected;
-    r.stale = true;
-  }
-  if (r.status != DeviceStatus::kOk) {
-    r.enabled = false;
-    r.tau_commanded = {};
-  } else {
-    r.enabled = r.enabled && enable_requested_;
-  }
+  apply_reading_rules(r, now_ns, fresh_bound_ns_.load(std::memory_order_relaxed),
+                      enable_requested_);
   return r;
 }
 

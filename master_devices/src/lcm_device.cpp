@@ -199,17 +199,7 @@ DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
   r.fresh = readings_.fetch(r);
   r.status = status();
   r.fault = fault_.load();
-  if (r.status == DeviceStatus::kOk &&
-      (r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL)) {
-    r.status = DeviceStatus::kDisconnected;
-    r.stale = true;
-  }
-  if (r.status != DeviceStatus::kOk) {
-    r.enabled = false;
-    r.tau_commanded = {};
-  } else {
-    r.enabled = r.enabled && enable_requested_;
-  }
+  apply_reading_rules(r, now_ns, settings_.stale_timeout_ms * 1'000'000LL, enable_requested_);
   return r;
 }
 

@@ -84,4 +84,23 @@ struct DeviceSpec {
   double nominal_rate_hz = 0.0;           ///< rate at which the device produces samples
 };
 
+/// The rules every driver applies to a reading before the loop sees it: with
+/// no sample yet, or the newest older than `fresh_bound_ns`, an OK device
+/// reads as kDisconnected with `stale` set (torque zero; OK again with the
+/// next fresh sample, nothing to reconnect); whenever the device is not OK,
+/// torque output reads as disabled with nothing commanded.
+constexpr void apply_reading_rules(DeviceReading& r, std::int64_t now_ns,
+                                   std::int64_t fresh_bound_ns, bool enable_requested) noexcept {
+  if (r.status == DeviceStatus::kOk && (r.sequence == 0 || now_ns - r.t_ns > fresh_bound_ns)) {
+    r.status = DeviceStatus::kDisconnected;
+    r.stale = true;
+  }
+  if (r.status != DeviceStatus::kOk) {
+    r.enabled = false;
+    r.tau_commanded = {};
+  } else {
+    r.enabled = r.enabled && enable_requested;
+  }
+}
+
 }  // namespace tsmh::master_devices
