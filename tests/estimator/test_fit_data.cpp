@@ -2,6 +2,7 @@
 // column; the train/validation split; error metrics; the noise-floor
 // estimate; the synthetic generator; normalised parameter coordinates.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -65,7 +66,8 @@ TEST(FitData, RefusesNonFiniteSamplesNamingColumnAndSample) {
 }
 
 TEST(FitData, RefusesNaNInCsvNamingTheLine) {
-  const fs::path p = fs::temp_directory_path() / "tsmh_fit_nan.csv";
+  const fs::path p =
+      fs::temp_directory_path() / ("tsmh_fit_nan_" + std::to_string(::getpid()) + ".csv");
   {
     std::ofstream f(p);
     f << "# radius_m: 0.01\nt,x_in,tau_in,tau_out\n0,0,0,0\n0.001,nan,0,0\n";

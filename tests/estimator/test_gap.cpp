@@ -7,6 +7,7 @@
 // docs/model-gap.md gives the numbers. Seeds 111-117 were not used while
 // developing the workflow.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -263,7 +264,8 @@ TEST(GapVirtualSlave, TwoHiddenEffectsAreBothNamed) {
 // --- the command line -----------------------------------------------------
 
 int run_tsm(const std::string& args, std::string& output) {
-  const fs::path log = fs::temp_directory_path() / "tsmh_gap_cli.log";
+  const fs::path log =
+      fs::temp_directory_path() / ("tsmh_gap_cli_" + std::to_string(::getpid()) + ".log");
   const std::string cmd = std::string(TSMH_TSM_BIN) + " " + args + " >" + log.string() + " 2>&1";
   const int rc = std::system(cmd.c_str());
   std::ifstream in(log);
@@ -275,7 +277,7 @@ int run_tsm(const std::string& args, std::string& output) {
 }
 
 TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
-  const fs::path dir = fs::temp_directory_path() / "tsmh_gap_cli";
+  const fs::path dir = fs::temp_directory_path() / ("tsmh_gap_cli_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   TsmModelSpec s = paper_spec();
@@ -317,7 +319,8 @@ TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
 }
 
 TEST(GapCommand, BadDataWritesNothing) {
-  const fs::path dir = fs::temp_directory_path() / "tsmh_gap_cli_bad";
+  const fs::path dir =
+      fs::temp_directory_path() / ("tsmh_gap_cli_bad_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   {

@@ -5,6 +5,7 @@
 // Acceptance seeds 101, 202, 303 were not used while developing the fit
 // (development used 11-13, 21-25 and 31-50).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -265,7 +266,8 @@ struct Ran {
 };
 
 Ran run_tsm(const std::string& args) {
-  const fs::path log = fs::temp_directory_path() / "tsmh_fit_cli.log";
+  const fs::path log =
+      fs::temp_directory_path() / ("tsmh_fit_cli_" + std::to_string(::getpid()) + ".log");
   const std::string cmd = std::string(TSMH_TSM_BIN) + " " + args + " >" + log.string() + " 2>&1";
   const int rc = std::system(cmd.c_str());
   std::ifstream in(log);
@@ -276,7 +278,7 @@ Ran run_tsm(const std::string& args) {
 }
 
 TEST(FitCommand, WritesParamsReportAndPlots) {
-  const fs::path dir = fs::temp_directory_path() / "tsmh_fit_cli";
+  const fs::path dir = fs::temp_directory_path() / ("tsmh_fit_cli_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   SyntheticConfig c;
@@ -310,7 +312,8 @@ TEST(FitCommand, WritesParamsReportAndPlots) {
 }
 
 TEST(FitCommand, BadDataWritesNothing) {
-  const fs::path dir = fs::temp_directory_path() / "tsmh_fit_cli_bad";
+  const fs::path dir =
+      fs::temp_directory_path() / ("tsmh_fit_cli_bad_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   {

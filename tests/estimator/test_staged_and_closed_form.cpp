@@ -2,6 +2,7 @@
 // for long travels (n = 1, 2, any sigma >= 1/2), checked against a fine RK4
 // reference; and output directories that appear whole or not at all.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -54,7 +55,8 @@ TEST(BoucWenClosedForm, CostDoesNotGrowWithTravel) {
 }
 
 TEST(StagedDirectory, CommitMovesFilesAndLeavesNoStaging) {
-  const fs::path target = fs::temp_directory_path() / "tsmh_staged_ok";
+  const fs::path target =
+      fs::temp_directory_path() / ("tsmh_staged_ok_" + std::to_string(::getpid()));
   fs::remove_all(target);
   fs::path staging;
   {
@@ -74,7 +76,8 @@ TEST(StagedDirectory, CommitMovesFilesAndLeavesNoStaging) {
 }
 
 TEST(StagedDirectory, FailureBeforeCommitWritesNothing) {
-  const fs::path target = fs::temp_directory_path() / "tsmh_staged_fail";
+  const fs::path target =
+      fs::temp_directory_path() / ("tsmh_staged_fail_" + std::to_string(::getpid()));
   fs::remove_all(target);
   fs::path staging;
   try {
@@ -89,7 +92,8 @@ TEST(StagedDirectory, FailureBeforeCommitWritesNothing) {
 }
 
 TEST(StagedDirectory, RollBackRemovesCommittedFilesAndTheCreatedTarget) {
-  const fs::path target = fs::temp_directory_path() / "tsmh_staged_rollback";
+  const fs::path target =
+      fs::temp_directory_path() / ("tsmh_staged_rollback_" + std::to_string(::getpid()));
   fs::remove_all(target);
   StagedDirectory d(target);
   std::ofstream(d.file("x.txt")) << "x";

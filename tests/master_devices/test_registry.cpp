@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -102,7 +103,8 @@ TEST(Registry, ConsoleDriversSelectProfilesByNameOrFile) {
       std::string::npos)
       << unknown;
   // A file relative to the config's directory.
-  const auto dir = std::filesystem::temp_directory_path() / "tsmh_registry_test";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("tsmh_registry_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::filesystem::copy_file(
       std::string(TSMH_SOURCE_DIR) + "/master_devices/profiles/tsm-console-2dof.yaml",

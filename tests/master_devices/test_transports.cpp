@@ -3,6 +3,7 @@
 // paths run against a real kernel in the QEMU USB-gadget tests (issue 9).
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -56,7 +57,9 @@ TEST(LibusbTransport, PortPathsLookLikeSysfs) {
 // A fake /sys/bus/usb/devices: what the kernel shows without any udev.
 class FakeSysfs {
  public:
-  FakeSysfs() : root_(std::filesystem::temp_directory_path() / "tsmh_fake_sysfs") {
+  FakeSysfs()
+      : root_(std::filesystem::temp_directory_path() /
+              ("tsmh_fake_sysfs_" + std::to_string(::getpid()))) {
     std::filesystem::remove_all(root_);
     device("1-1", {{"idVendor", "1209"},
                    {"idProduct", "0001"},
