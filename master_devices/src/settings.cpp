@@ -38,12 +38,16 @@ std::string FieldReader::element(std::string_view key, std::size_t index) const 
 }
 
 bool FieldReader::has(std::string_view key) const {
-  return map_.IsMap() && map_[std::string(key)].IsDefined() && !map_[std::string(key)].IsNull();
+  // Look up through a const node: a non-const operator[] would add the key.
+  const YAML::Node& map = map_;
+  if (!map.IsMap()) return false;
+  const YAML::Node n = map[std::string(key)];
+  return n.IsDefined() && !n.IsNull();
 }
 
 void FieldReader::fail(std::string_view key, std::string_view message) const {
-  YAML::Node at = map_.IsMap() ? map_[std::string(key)] : YAML::Node();
-  if (!at.IsDefined()) at = map_;
+  const YAML::Node& map = map_;
+  YAML::Node at = has(key) ? map[std::string(key)] : map;
   config_fail(source_, field(key), message, at);
 }
 

@@ -53,7 +53,7 @@ TEST(ServerConfig, BadFieldsAreNamed) {
                 .find("joints[0].force_sign: must be 1 or -1"),
             std::string::npos);
   EXPECT_NE(error_of("joints:\n  - {max_torque_nm: 1, torque_max: 2}\n")
-                .find("joints[0].torque_max: unknown field"),
+                .find("joints[0].torque_max: unknown key"),
             std::string::npos);
   EXPECT_NE(error_of("rate_hz: 9000\n" + kJoint).find("rate_hz"), std::string::npos);
   EXPECT_NE(error_of("feedback: loud\n" + kJoint).find("feedback: 'loud'"), std::string::npos);
@@ -68,7 +68,7 @@ TEST(ServerConfig, BadFieldsAreNamed) {
                 .find("joints[0].slave_min_rad"),
             std::string::npos);
   EXPECT_NE(error_of("rate_hz: [\n").find("not valid YAML"), std::string::npos);
-  EXPECT_NE(error_of("colour: blue\n" + kJoint).find("colour: unknown field"), std::string::npos);
+  EXPECT_NE(error_of("colour: blue\n" + kJoint).find("colour: unknown key"), std::string::npos);
 }
 
 TEST(Evaluation, SlopeOfALine) {

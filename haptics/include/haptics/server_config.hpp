@@ -11,13 +11,13 @@
 #include <vector>
 
 #include "haptics/haptic_loop.hpp"
+#include "master_devices/settings.hpp"
 
 namespace tsmh::haptics {
 
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+/// Bad configuration; the message names file, field and line. The same type
+/// as the device drivers' settings errors, so one catch covers both.
+using ConfigError = master_devices::ConfigError;
 
 struct JointConfig {
   std::string name;
