@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numeric>
 
@@ -53,15 +54,22 @@ double find_boundary(const Trace& trace, std::size_t j) {
   }
   if (pts.size() < 50) return std::nan("");
   std::sort(pts.begin(), pts.end());
-  double best = std::nan(""), best_sse = INFINITY;
+  double best = std::nan(""), best_sse = std::numeric_limits<double>::infinity();
   for (int k = 1; k < 20; ++k) {
     const std::size_t cut = pts.size() * static_cast<std::size_t>(k) / 20;
     std::vector<double> x1, y1, x2, y2;
-    for (std::size_t i = 0; i < pts.size(); ++i)
-      (i < cut ? x1 : x2).push_back(pts[i].first), (i < cut ? y1 : y2).push_back(pts[i].second);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      auto& x = i < cut ? x1 : x2;
+      auto& y = i < cut ? y1 : y2;
+      x.push_back(pts[i].first);
+      y.push_back(pts[i].second);
+    }
     const LineFit a = fit_line(x1, y1), b = fit_line(x2, y2);
     if (std::isnan(a.slope) || std::isnan(b.slope)) continue;
-    if (a.sse + b.sse < best_sse) best_sse = a.sse + b.sse, best = pts[cut].first;
+    if (a.sse + b.sse < best_sse) {
+      best_sse = a.sse + b.sse;
+      best = pts[cut].first;
+    }
   }
   return best;
 }
@@ -70,6 +78,35 @@ double find_boundary(const Trace& trace, std::size_t j) {
 
 double slope(const std::vector<double>& x, const std::vector<double>& y) {
   return fit_line(x, y).slope;
+}
+
+Discrimination discriminate(const Trace& trace, const ServerConfig& config, int joint) {
+  Discrimination d;
+  d.joint = joint;
+  if (d.joint >= 0) {
+    const auto j = static_cast<std::size_t>(d.joint);
+    d.boundary_m = find_boundary(trace, j);
+    const double gain = config.loop.force[j].scale * config.loop.position[j].scale;
+    std::vector<double> qm[2], tm[2], xs[2], ts[2];
+    for (std::size_t i = 0; i < trace.size(); ++i) {
+      const auto& row = trace[i];
+      if (!enabled_with_truth(row, j)) continue;
+      const auto& q = row.joints[j];
+      if (!(q.indentation > 0.0) || !std::isfinite(q.true_x_out)) continue;
+      const int cls = std::isfinite(d.boundary_m) && q.indentation > d.boundary_m ? 1 : 0;
+      qm[cls].push_back(q.master_q);
+      tm[cls].push_back(q.torque_cmd);
+      xs[cls].push_back(q.true_x_out);
+      ts[cls].push_back(q.true_tau_out);
+    }
+    Stiffness* out[2] = {&d.soft, &d.hard};
+    for (int c = 0; c < 2; ++c) {
+      out[c]->samples = qm[c].size();
+      out[c]->perceived = std::fabs(slope(qm[c], tm[c])) / gain;
+      out[c]->truth = std::fabs(slope(xs[c], ts[c]));
+    }
+  }
+  return d;
 }
 
 EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config) {
@@ -110,30 +147,7 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
     r.joints.push_back(je);
   }
 
-  auto& d = r.discrimination;
-  if (d.joint >= 0) {
-    const auto j = static_cast<std::size_t>(d.joint);
-    d.boundary_m = find_boundary(trace, j);
-    const double gain = config.loop.force[j].scale * config.loop.position[j].scale;
-    std::vector<double> qm[2], tm[2], xs[2], ts[2];
-    for (std::size_t i = 0; i < trace.size(); ++i) {
-      const auto& row = trace[i];
-      if (!enabled_with_truth(row, j)) continue;
-      const auto& q = row.joints[j];
-      if (!(q.indentation > 0.0) || !std::isfinite(q.true_x_out)) continue;
-      const int cls = std::isfinite(d.boundary_m) && q.indentation > d.boundary_m ? 1 : 0;
-      qm[cls].push_back(q.master_q);
-      tm[cls].push_back(q.torque_cmd);
-      xs[cls].push_back(q.true_x_out);
-      ts[cls].push_back(q.true_tau_out);
-    }
-    Stiffness* out[2] = {&d.soft, &d.hard};
-    for (int c = 0; c < 2; ++c) {
-      out[c]->samples = qm[c].size();
-      out[c]->perceived = std::fabs(slope(qm[c], tm[c])) / gain;
-      out[c]->truth = std::fabs(slope(xs[c], ts[c]));
-    }
-  }
+  r.discrimination = discriminate(trace, config, r.discrimination.joint);
   return r;
 }
 

@@ -79,3 +79,41 @@ TEST(Evaluation, SlopeOfALine) {
 
 }  // namespace
 }  // namespace tsmh::haptics
+
+namespace tsmh::haptics {
+namespace {
+
+// A press sweeping a soft layer (222 N/m, 4.5 mm) over a hard inclusion
+// (1666 N/m) through a 30 mm lever: 0.2 and 1.5 N m/rad in joint space. The
+// rendering is made 1.2x too stiff on purpose; the evaluation must see both.
+TEST(Evaluation, FindsTheNoduleEdgeAndBothStiffnesses) {
+  ServerConfig config =
+      parse_server_config("joints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  Trace trace(1, 4000);
+  for (int i = 0; i < 4000; ++i) {
+    const double theta = 0.2 + 0.25 * (i % 2000) / 2000.0;  // two sweeps through the tissue
+    const double ind = (theta - 0.2) * 0.03;
+    const double force = 222.0 * std::min(ind, 0.0045) + 1666.0 * std::max(ind - 0.0045, 0.0);
+    TraceRow row;
+    row.state = static_cast<std::int32_t>(LoopState::kEnabled);
+    auto& q = row.joints[0];
+    q.true_tau_out = force * 0.03;
+    q.true_x_out = theta;
+    q.master_q = theta;
+    q.torque_cmd = 0.6 * 1.2 * q.true_tau_out;
+    q.indentation = ind;
+    q.contact_force = force;
+    trace.append(row);
+  }
+  const Discrimination d = discriminate(trace, config, 0);
+  EXPECT_NEAR(d.boundary_m, 0.0045, 4e-4);
+  EXPECT_NEAR(d.soft.truth, 222.0 * 0.03 * 0.03, 0.02);
+  EXPECT_NEAR(d.hard.truth, 1666.0 * 0.03 * 0.03, 0.05);
+  EXPECT_NEAR(d.soft.perceived, 1.2 * d.soft.truth, 0.02);
+  EXPECT_NEAR(d.hard.perceived, 1.2 * d.hard.truth, 0.06);
+  EXPECT_GT(d.soft.samples, 1000u);
+  EXPECT_GT(d.hard.samples, 1000u);
+}
+
+}  // namespace
+}  // namespace tsmh::haptics

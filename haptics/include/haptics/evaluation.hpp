@@ -52,6 +52,9 @@ struct EvaluationReport {
 
 EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config);
 
+/// The stiffness part alone, for the pressing joint `joint` (-1: none).
+Discrimination discriminate(const Trace& trace, const ServerConfig& config, int joint);
+
 /// Slope of y against x by least squares with intercept (NaN when degenerate).
 double slope(const std::vector<double>& x, const std::vector<double>& y);
 
