@@ -4,18 +4,9 @@
 #include <cstdio>
 
 #include "estimator/tsm_model.hpp"
+#include "number_text.hpp"
 
 namespace tsmh::estimator {
-namespace {
-
-std::string num(double v, int digits = 3) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-}  // namespace
-
 FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double noise) {
   FitVerdict v;
   const std::string numbers = "validation fit " + num(val.fit_percent) + " %, RMSE " +

@@ -13,17 +13,12 @@
 #include <thread>
 
 #include "estimator/simulate.hpp"
+#include "number_text.hpp"
 
 namespace tsmh::estimator {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::string num(double v, int digits = 3) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
 
 std::string pct(double fraction) {
   return num(100.0 * fraction, 3) + " %";

@@ -9,16 +9,10 @@
 #include "estimator/parameter_map.hpp"
 #include "estimator/simulate.hpp"
 #include "estimator/tsm_model.hpp"
+#include "number_text.hpp"
 
 namespace tsmh::estimator {
 namespace {
-
-// A number with `digits` significant digits, for messages.
-std::string num(double v, int digits = 3) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 

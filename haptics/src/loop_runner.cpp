@@ -10,16 +10,11 @@
 #include <cerrno>
 #include <cstring>
 
+#include "bridge/clock.hpp"
 #include "haptics/tick_schedule.hpp"
 
 namespace tsmh::haptics {
 namespace {
-
-std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 void sleep_until(std::int64_t deadline_ns) noexcept {
   timespec ts{};
@@ -96,16 +91,16 @@ void LoopRunner::run() noexcept {
   ready_.store(true, std::memory_order_release);
 
   const auto period = static_cast<std::int64_t>(1e9 / options_.rate_hz + 0.5);
-  const std::int64_t start = monotonic_ns() + period;
+  const std::int64_t start = bridge::monotonic_now_ns() + period;
   const std::int64_t end = options_.duration_s > 0
                                ? start + static_cast<std::int64_t>(options_.duration_s * 1e9)
                                : INT64_MAX;
   std::int64_t deadline = start;
   while (!stop_.load(std::memory_order_relaxed) && deadline < end) {
     sleep_until(deadline);
-    const std::int64_t woke = monotonic_ns();
+    const std::int64_t woke = bridge::monotonic_now_ns();
     loop_.tick(woke, woke - deadline);
-    const std::int64_t done = monotonic_ns();
+    const std::int64_t done = bridge::monotonic_now_ns();
     const NextTick next = next_tick(deadline, done, period);
     loop_.record_compute(done - woke, next.skipped);
     deadline = next.deadline_ns;

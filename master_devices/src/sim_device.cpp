@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "master_devices/clock.hpp"
 
@@ -190,17 +191,12 @@ DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
   r.fresh = readings_.fetch(r);
   r.status = status();
   r.fault = fault_.load();
-  if (r.status == DeviceStatus::kOk && !settings_.simulated_time &&
-      (r.sequence == 0 || now_ns - r.t_ns > settings_.stale_timeout_ms * 1'000'000LL)) {
-    r.status = DeviceStatus::kDisconnected;
-    r.stale = true;
-  }
-  if (r.status != DeviceStatus::kOk) {
-    r.enabled = false;
-    r.tau_commanded = {};
-  } else {
-    r.enabled = enabled_;
-  }
+  // In simulated time the world was just advanced to now_ns: never stale.
+  const std::int64_t fresh_bound = settings_.simulated_time
+                                       ? std::numeric_limits<std::int64_t>::max()
+                                       : settings_.stale_timeout_ms * 1'000'000LL;
+  r.enabled = true;  // the host's request decides
+  apply_reading_rules(r, now_ns, fresh_bound, enabled_);
   return r;
 }
 
