@@ -1,44 +1,22 @@
 #include "estimator/differentiator.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace tsmh::estimator {
 namespace {
 
-using Mat3 = std::array<std::array<double, 3>, 3>;
+constexpr double kFineStep = 25e-6;  // s, grid step up to kFineEnd
+constexpr std::size_t kFine = 160;   // 25 us ... 4 ms
+constexpr double kFineEnd = kFineStep * kFine;
+constexpr std::size_t kCoarse = 200;  // kFineEnd ... max_gap
+// Samples of full recursion after a (re)start, while the covariance falls
+// from the start-up prior to its steady state (about 0.1 s at 1 kHz).
+constexpr int kSettlingSamples = 100;
 
-// Covariance after the prediction over dt for the white-jerk model:
-// P <- F P F^T + Q, F = [[1 dt dt^2/2] [0 1 dt] [0 0 1]], written out for the
-// upper triangle (P is symmetric): a third of the work of the matrix products.
-void predict_covariance(Mat3& p, double dt, double q) noexcept {
-  const double h = 0.5 * dt * dt;
-  // Rows of F P.
-  const double r00 = p[0][0] + dt * p[1][0] + h * p[2][0];
-  const double r01 = p[0][1] + dt * p[1][1] + h * p[2][1];
-  const double r02 = p[0][2] + dt * p[1][2] + h * p[2][2];
-  const double r11 = p[1][1] + dt * p[2][1];
-  const double r12 = p[1][2] + dt * p[2][2];
-  const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt;
-  const double p00 = r00 + dt * r01 + h * r02 + q * d5 / 20.0;
-  const double p01 = r01 + dt * r02 + q * d4 / 8.0;
-  const double p02 = r02 + q * d3 / 6.0;
-  const double p11 = r11 + dt * r12 + q * d3 / 3.0;
-  const double p12 = r12 + q * d2 / 2.0;
-  const double p22 = p[2][2] + q * dt;
-  p = {{{p00, p01, p02}, {p01, p11, p12}, {p02, p12, p22}}};
-}
-
-// Measurement update with the angle; returns the gain-weighted innovation.
-void correct(std::array<double, 3>& s, Mat3& p, double z, double r) noexcept {
-  const double inv = 1.0 / (p[0][0] + r);
-  const double k[3] = {p[0][0] * inv, p[1][0] * inv, p[2][0] * inv};
-  const double innovation = z - s[0];
-  for (int i = 0; i < 3; ++i)
-    s[i] += k[i] * innovation;
-  const double row0[3] = {p[0][0], p[0][1], p[0][2]};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      p[i][j] -= k[i] * row0[j];
+double measurement_variance(const DifferentiatorConfig& c) {
+  const double r = c.quantum * c.quantum / 12.0 + c.position_noise * c.position_noise;
+  return r > 0.0 ? r : 1e-12;
 }
 
 Derivatives invalidated(Derivatives last) noexcept {
@@ -50,49 +28,113 @@ Derivatives invalidated(Derivatives last) noexcept {
 
 Differentiator::Differentiator(const DifferentiatorConfig& config)
     : cfg_(config),
-      r_(config.quantum * config.quantum / 12.0 + config.position_noise * config.position_noise) {
-  if (!(r_ > 0.0)) r_ = 1e-12;
-  threshold_ = cfg_.acc_sign_threshold;
-  if (threshold_ < 0.0) {
-    // Steady-state acceleration uncertainty of this filter at 1 kHz. Encoder
-    // quantisation makes the estimate oscillate up to ~1.6x this at constant
-    // velocity, but never beyond 0.75x of it for a whole dwell time
-    // (docs/friction-model.md): a low threshold plus the dwell switches
-    // sooner than a high threshold alone.
-    std::array<double, 3> s{};
-    Mat3 p{};
-    p[0][0] = r_;
-    p[1][1] = 1e2;
-    p[2][2] = 1e4;
-    for (int i = 0; i < 5000; ++i) {
-      predict_covariance(p, 1e-3, cfg_.jerk_psd);
-      correct(s, p, 0.0, r_);
-    }
-    threshold_ = 0.75 * std::sqrt(p[2][2]);
-  }
+      r_(measurement_variance(config)),
+      velocity_(config.jerk_psd, r_),
+      acceleration_(config.snap_psd, r_) {
+  if (!config.exact_covariance) build_gain_table();
   reset();
+}
+
+double Differentiator::grid_dt(std::size_t k) const noexcept {
+  if (k < kFine) return kFineStep * static_cast<double>(k + 1);
+  const double step = std::max(0.0, cfg_.max_gap - kFineEnd) / kCoarse;
+  return kFineEnd + step * static_cast<double>(k - kFine + 1);
+}
+
+void Differentiator::build_gain_table() {
+  coarse_inverse_step_ = kCoarse / std::max(1e-9, cfg_.max_gap - kFineEnd);
+  const std::size_t n = kFine + (cfg_.max_gap > kFineEnd ? kCoarse : 0);
+  gains_.resize(n);
+  // Each fixed point starts from the previous one: a few hundred steps each.
+  const PolyKalman<3>::Mat* warm_v = nullptr;
+  const PolyKalman<4>::Mat* warm_a = nullptr;
+  PolyKalman<3>::Mat pv;
+  PolyKalman<4>::Mat pa;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double dt = grid_dt(k);
+    auto [kv, pv_k] = PolyKalman<3>::steady_state(cfg_.jerk_psd, r_, dt, warm_v);
+    auto [ka, pa_k] = PolyKalman<4>::steady_state(cfg_.snap_psd, r_, dt, warm_a);
+    pv = pv_k;
+    pa = pa_k;
+    warm_v = &pv;
+    warm_a = &pa;
+    gains_[k] = {kv, ka, std::sqrt(pa[2][2])};
+  }
+}
+
+Differentiator::GainEntry Differentiator::gain_for(double dt) const noexcept {
+  // Linear interpolation between the grid's neighbours of dt.
+  double pos;
+  if (dt <= kFineEnd) {
+    pos = dt * (1.0 / kFineStep) - 1.0;
+  } else {
+    pos = static_cast<double>(kFine) - 1.0 + (dt - kFineEnd) * coarse_inverse_step_;
+  }
+  const double last = static_cast<double>(gains_.size() - 1);
+  pos = std::clamp(pos, 0.0, last);
+  const auto k = static_cast<std::size_t>(pos);
+  const std::size_t k1 = std::min(k + 1, gains_.size() - 1);
+  const double w = pos - static_cast<double>(k);
+  const GainEntry& a = gains_[k];
+  const GainEntry& b = gains_[k1];
+  GainEntry g;
+  for (std::size_t i = 0; i < 3; ++i)
+    g.velocity[i] = a.velocity[i] + w * (b.velocity[i] - a.velocity[i]);
+  for (std::size_t i = 0; i < 4; ++i)
+    g.acceleration[i] = a.acceleration[i] + w * (b.acceleration[i] - a.acceleration[i]);
+  g.acc_sd = a.acc_sd + w * (b.acc_sd - a.acc_sd);
+  return g;
 }
 
 void Differentiator::reset() noexcept {
   started_ = false;
-  pending_sign_ = 0;
-  pending_time_ = 0.0;
   out_ = {};
 }
 
 void Differentiator::start(double t, double x) noexcept {
   started_ = true;
   t_ = t;
-  s_ = {x, 0.0, 0.0};
-  p_ = {};
-  p_[0][0] = r_;
-  // Prior spread of velocity and acceleration at start: generous for a hand
-  // or a motor (rad/s, rad/s^2), so the first samples dominate.
-  p_[1][1] = 10.0 * 10.0;
-  p_[2][2] = 100.0 * 100.0;
-  out_ = {x, 0.0, 0.0, 0, true};
-  pending_sign_ = 0;
-  pending_time_ = 0.0;
+  // Prior spread of the rates at start: generous for a hand or a motor
+  // (rad/s, rad/s^2, rad/s^3), so the first samples dominate.
+  velocity_.start(x, {0.0, 10.0, 100.0});
+  acceleration_.start(x, {0.0, 10.0, 100.0, 1000.0});
+  in_band_ = 0.0;
+  last_x_ = x;
+  still_ = 0.0;
+  settling_ = kSettlingSamples;
+  out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
+}
+
+double Differentiator::decide_sign(double xdd, double sd, double dt) noexcept {
+  // At rest the true acceleration is exactly 0 and the model's state must
+  // not move; the acceleration estimate still rings for a while after a stop
+  // (the jerk ends abruptly), so an encoder that has not moved decides.
+  if (cfg_.still_time > 0.0 && still_ >= cfg_.still_time) {
+    in_band_ = 0.0;
+    return 0.0;
+  }
+  if (cfg_.sign_mode == SignMode::smooth) {
+    // The expected sign across the estimate's uncertainty, as a ramp: no
+    // decision delay at a zero crossing and no chatter. The model is linear
+    // in sgn(xdd), so a fraction acts as the expected value of both branches.
+    return std::clamp(xdd / (cfg_.smooth_sigmas * sd), -1.0, 1.0);
+  }
+  // Hard: a dead band with hysteresis around zero, scaled by the estimate's
+  // own uncertainty; a decided sign is held inside the release band for
+  // sign_hold (through the end of a deceleration), then 0.
+  const bool fixed = cfg_.acc_sign_threshold >= 0.0;
+  const double on = fixed ? cfg_.acc_sign_threshold : cfg_.sign_sigmas * sd;
+  const double off = fixed ? cfg_.acc_sign_threshold : cfg_.sign_release * sd;
+  double sign = out_.acc_sign;
+  if (sign * xdd < off) {
+    in_band_ += dt;
+    if (in_band_ > cfg_.sign_hold) sign = 0.0;
+  } else {
+    in_band_ = 0.0;
+  }
+  if (xdd > on) sign = 1.0, in_band_ = 0.0;
+  if (xdd < -on) sign = -1.0, in_band_ = 0.0;
+  return sign;
 }
 
 Derivatives Differentiator::update(double t, double x) noexcept {
@@ -108,28 +150,25 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     return out_;
   }
   t_ = t;
-  // State prediction with F, then the covariance, then the correction.
-  s_[0] += dt * s_[1] + 0.5 * dt * dt * s_[2];
-  s_[1] += dt * s_[2];
-  predict_covariance(p_, dt, cfg_.jerk_psd);
-  correct(s_, p_, x, r_);
-
-  // sgn(xdd): unknown (0) from the moment the estimate crosses zero; +-1 once
-  // |xdd| has stayed beyond the threshold with that sign for the dwell time.
-  int sign = out_.acc_sign;
-  if (sign * s_[2] < 0.0) sign = 0;
-  const int want = s_[2] > threshold_ ? 1 : (s_[2] < -threshold_ ? -1 : 0);
-  if (want != 0 && want != sign) {
-    pending_time_ = want == pending_sign_ ? pending_time_ + dt : dt;
-    pending_sign_ = want;
-    if (pending_time_ >= cfg_.acc_sign_dwell - 1e-9) {
-      sign = want;
-      pending_sign_ = 0;
-    }
+  double sd;
+  if (cfg_.exact_covariance || settling_ > 0) {
+    // The full recursion: always, or while the filters settle from their
+    // start-up prior (the steady-state gains would converge more slowly).
+    if (settling_ > 0) --settling_;
+    velocity_.update(dt, x);
+    acceleration_.update(dt, x);
+    sd = std::sqrt(acceleration_.covariance()[2][2]);
   } else {
-    pending_sign_ = 0;
+    const GainEntry g = gain_for(dt);
+    velocity_.update_with_gain(dt, x, g.velocity);
+    acceleration_.update_with_gain(dt, x, g.acceleration);
+    sd = g.acc_sd;
   }
-  out_ = {s_[0], s_[1], s_[2], sign, true};
+  still_ = x == last_x_ ? still_ + dt : 0.0;
+  last_x_ = x;
+  const double xdd = acceleration_.state()[2];
+  const double sign = decide_sign(xdd, sd, dt);
+  out_ = {velocity_.state()[0], velocity_.state()[1], xdd, sign, sd, true};
   return out_;
 }
 

@@ -33,10 +33,10 @@ Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, d
   const bool ok = std::isfinite(t) && std::isfinite(x_in) && std::isfinite(xd) &&
                   std::isfinite(xdd) && std::isfinite(tau_in) && (!started_ || t > t_prev_);
   if (!ok) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
-  return finish(t, x_in, xd, xdd, (xdd > 0.0) - (xdd < 0.0), tau_in);
+  return finish(t, x_in, xd, xdd, sign_of(xdd), tau_in);
 }
 
-Estimate DistalTorqueEstimator::finish(double t, double x, double xd, double xdd, int acc_sign,
+Estimate DistalTorqueEstimator::finish(double t, double x, double xd, double xdd, double acc_sign,
                                        double tau_in) noexcept {
   const double dt = started_ ? t - t_prev_ : 0.0;
   started_ = true;

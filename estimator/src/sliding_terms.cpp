@@ -84,16 +84,16 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
       return p[0] * std::exp(-p[1] * speed);
     case TermKind::acceleration_dependence: {
       if (!negative) {
-        // eqs. (6)/(7): + when accelerating (xdd >= 0), - when decelerating;
+        // eqs. (6)/(7): + when accelerating (xdd > 0), - when decelerating;
         // at xdd = 0 both give 0, so the shared boundary is consistent.
         const double mag = p[0] * (1.0 - std::exp(-std::fabs(p[1] * m.xdd)));
-        return m.acc_sign >= 0 ? mag : -mag;
+        return m.acc_sign * mag;
       }
       // eqs. (9)-(11). Eq. (8)'s compact form writes "+ sgn(xdd) mu3 e^-f2",
       // which contradicts its own sub-cases: (9) has +mu3 for xdd < 0 and (10)
       // has -mu3 for xdd > 0. We follow (9)-(11): s = -sgn(xdd).
-      const int s = -m.acc_sign;
-      if (s == 0) return 0.0;
+      const double s = -m.acc_sign;
+      if (s == 0.0) return 0.0;
       const double f2 = p[3] * speed / (std::fabs(m.xdd) + p[4]);
       return s * p[2] * std::exp(-f2);
     }

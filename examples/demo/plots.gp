@@ -1,6 +1,9 @@
 # Demo plots from haptic-server's per-tick trace (columns: see
 # haptics/include/haptics/trace.hpp). Called by scripts/demo:
-#   gnuplot -e "trace='demo-out/trace.csv'; outdir='demo-out'" examples/demo/plots.gp
+#   gnuplot -e "trace='demo-out/trace.csv'; outdir='demo-out'; fscale=0.6; pscale=1" examples/demo/plots.gp
+# fscale / pscale: force and position scale of the pressing joint (master N m
+# per slave N m, slave rad per master rad), so the stiffness plot shows what
+# the surgeon feels in the same units as the truth.
 set datafile separator ","
 set terminal pngcairo size 1200,700 font ",11"
 set key top left
@@ -18,9 +21,11 @@ do for [j = 0:1] {
        trace using 1:(column(col(j, 4))) every 5 with lines lc rgb "#1f77b4" title "estimated (friction model)"
 }
 
+if (!exists("fscale")) fscale = 1.0
+if (!exists("pscale")) pscale = 1.0
 set output sprintf("%s/stiffness.png", outdir)
-set title "What the surgeon feels: master torque vs master angle, pressing joint 0"
-set xlabel "master angle (rad)"
-set ylabel "torque on the master (N m)"
-plot trace using (column(col(0, 1))):(column(col(0, 5))) every 3 with points pt 7 ps 0.3 lc rgb "#1f77b4" title "rendered", \
-     trace using (column(col(0, 1))):(column(col(0, 8))) every 3 with points pt 7 ps 0.3 lc rgb "black" title "true distal torque"
+set title sprintf("What the surgeon feels, in slave joint units (master torque / %g, master angle x %g), pressing joint 0", fscale, pscale)
+set xlabel "joint angle (rad): master angle x position scale, or the true joint angle"
+set ylabel "torque (N m, slave joint)"
+plot trace using (column(col(0, 1)) * pscale):(column(col(0, 5)) / fscale) every 3 with points pt 7 ps 0.3 lc rgb "#1f77b4" title "rendered / force scale vs master angle x position scale", \
+     trace using (column(col(0, 9))):(column(col(0, 8))) every 3 with points pt 7 ps 0.3 lc rgb "black" title "true distal torque vs true joint angle"

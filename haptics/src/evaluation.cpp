@@ -86,7 +86,9 @@ Discrimination discriminate(const Trace& trace, const ServerConfig& config, int 
   if (d.joint >= 0) {
     const auto j = static_cast<std::size_t>(d.joint);
     d.boundary_m = find_boundary(trace, j);
-    const double gain = config.loop.force[j].scale * config.loop.position[j].scale;
+    d.force_scale = config.loop.force[j].scale;
+    d.position_scale = config.loop.position[j].scale;
+    const double gain = d.force_scale * d.position_scale;
     std::vector<double> qm[2], tm[2], xs[2], ts[2];
     for (std::size_t i = 0; i < trace.size(); ++i) {
       const auto& row = trace[i];
@@ -124,7 +126,8 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
   for (std::size_t j = 0; j < joints; ++j) {
     JointEvaluation je;
     je.name = config.joints[j].name;
-    double se_est = 0, se_naive = 0;
+    double se_est = 0, se_naive = 0, phantom = 0, phantom_naive = 0;
+    const double force_scale = config.loop.force[j].scale;
     for (std::size_t i = 0; i < trace.size(); ++i) {
       const auto& row = trace[i];
       if (!enabled_with_truth(row, j)) continue;
@@ -134,6 +137,11 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
       se_naive += (q.tau_in - q.true_tau_out) * (q.tau_in - q.true_tau_out);
       je.true_peak = std::max(je.true_peak, std::fabs(q.true_tau_out));
       ++je.samples;
+      if (std::fabs(q.true_tau_out) < kPhantomThreshold && std::isfinite(q.torque_cmd)) {
+        phantom += q.torque_cmd * q.torque_cmd;
+        phantom_naive += force_scale * force_scale * q.tau_in * q.tau_in;
+        ++je.free_samples;
+      }
       if (std::isfinite(q.indentation) && q.indentation > deepest) {
         deepest = q.indentation;
         r.discrimination.joint = static_cast<int>(j);
@@ -143,6 +151,11 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
       je.rmse_estimated = std::sqrt(se_est / static_cast<double>(je.samples));
       je.rmse_naive = std::sqrt(se_naive / static_cast<double>(je.samples));
       je.ratio = je.rmse_naive > 0 ? je.rmse_estimated / je.rmse_naive : 0.0;
+    }
+    if (je.free_samples) {
+      je.phantom_rendered = std::sqrt(phantom / static_cast<double>(je.free_samples));
+      je.phantom_naive = std::sqrt(phantom_naive / static_cast<double>(je.free_samples));
+      je.phantom_ratio = je.phantom_naive > 0 ? je.phantom_rendered / je.phantom_naive : 0.0;
     }
     r.joints.push_back(je);
   }
@@ -161,7 +174,13 @@ std::string report_to_json(const EvaluationReport& r) {
                       {"rmse_estimated", num(j.rmse_estimated)},
                       {"rmse_naive", num(j.rmse_naive)},
                       {"ratio", num(j.ratio)},
-                      {"true_peak", num(j.true_peak)}});
+                      {"true_peak", num(j.true_peak)},
+                      {"free_motion",
+                       {{"threshold_nm", kPhantomThreshold},
+                        {"samples", j.free_samples},
+                        {"phantom_rendered_nm", num(j.phantom_rendered)},
+                        {"phantom_naive_nm", num(j.phantom_naive)},
+                        {"phantom_ratio", num(j.phantom_ratio)}}}});
   const auto& d = r.discrimination;
   json doc = {{"loop",
                {{"rate_hz", num(r.rate_hz)},
@@ -187,6 +206,8 @@ std::string report_to_json(const EvaluationReport& r) {
                 {"hard_true", num(d.hard.truth)},
                 {"soft_samples", d.soft.samples},
                 {"hard_samples", d.hard.samples},
+                {"force_scale", num(d.force_scale)},
+                {"position_scale", num(d.position_scale)},
                 {"units", "N m/rad, slave joint space"}}}};
   return doc.dump(2) + "\n";
 }
@@ -210,6 +231,14 @@ std::string format_report(const EvaluationReport& r) {
                   "(%zu samples, true peak %.3f N m)\n",
                   j.name.c_str(), j.rmse_estimated, j.rmse_naive, j.ratio, j.samples, j.true_peak);
     s += line;
+    if (j.free_samples) {
+      std::snprintf(line, sizeof line,
+                    "      %-8s free motion (|true| < %.3f N m, %zu samples): phantom torque on "
+                    "the master %.4f N m rms, naive %.4f N m rms, ratio %.2f\n",
+                    "", kPhantomThreshold, j.free_samples, j.phantom_rendered, j.phantom_naive,
+                    j.phantom_ratio);
+      s += line;
+    }
   }
   const auto& d = r.discrimination;
   if (d.joint >= 0) {

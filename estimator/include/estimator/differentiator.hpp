@@ -1,43 +1,82 @@
 #pragma once
-// Online differentiation of a sampled, quantised angle into velocity and
-// acceleration: a three-state Kalman filter (angle, velocity, acceleration)
-// driven by white jerk, discretised for each actual sample interval, so
-// uneven time stamps and dropped samples are handled exactly rather than
-// assumed away. The sign of the acceleration, on which eq. (4) and the
-// sliding-level branches switch, passes through a Schmitt trigger whose
-// threshold follows the filter's own acceleration uncertainty, so it does not
-// chatter on encoder quantisation. Delay and noise: docs/friction-model.md.
+// Online differentiation of a sampled, quantised angle into velocity,
+// acceleration and the sign of the acceleration, causally (the haptic loop
+// and `tsm simulate` run exactly this, sample by sample).
+//
+// Two polynomial Kalman filters on the same samples, each discretised for the
+// actual interval (uneven time stamps and dropped samples are exact):
+// - the velocity channel (white jerk, fast: about 12 Hz) gives x and xd;
+// - the acceleration channel (white snap, slow: a few Hz, zero lag on
+//   constant jerk) gives xdd with little noise, and its own uncertainty.
+// sgn(xdd), on which eq. (4) and the branches of eqs. (5)-(10) switch, is
+// decided against that uncertainty: +-1 beyond `sign_sigmas` standard
+// deviations, 0 inside (where the sign is not known, and where the true
+// acceleration is zero: at rest and at constant speed). Delay and noise are
+// measured in docs/friction-model.md.
 
-#include <array>
 #include <numbers>
+#include <vector>
+
+#include "estimator/poly_kalman.hpp"
 
 namespace tsmh::estimator {
 
+/// How sgn(xdd) is decided from the acceleration estimate.
+enum class SignMode {
+  /// -1, 0 or +1, the paper's model as written: +-1 beyond `sign_sigmas`
+  /// standard deviations, held inside the release band for `sign_hold`, then 0.
+  hard,
+  /// The expected sign across the estimate's uncertainty, a ramp
+  /// clamp(xdd / (smooth_sigmas sd), -1, 1): no decision delay at a zero
+  /// crossing and no chatter; +-1 once the sign is certain. The default: the
+  /// server and `tsm simulate` use it (docs/friction-model.md has both).
+  smooth,
+};
+
 struct DifferentiatorConfig {
-  /// Spectral density of the jerk the filter expects, (rad/s^3)^2/Hz. Larger
-  /// follows faster motion with less lag and more noise.
+  /// Velocity channel (x, xd): spectral density of the jerk, (rad/s^3)^2/Hz.
+  /// Larger follows faster motion with less lag and more noise.
   double jerk_psd = 300.0;
+  /// Acceleration channel (xdd and its uncertainty): spectral density of the
+  /// snap, (rad/s^4)^2/Hz.
+  double snap_psd = 1600.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
   double quantum = 2.0 * std::numbers::pi / 40960.0;
   /// Additional white measurement noise on the angle, rad (standard deviation).
   double position_noise = 0.0;
-  /// |xdd| above which sgn(xdd) becomes +-1 (after acc_sign_dwell), rad/s^2;
-  /// it returns to 0 when the estimate crosses zero. Negative: automatic,
-  /// 0.75 x the steady-state acceleration uncertainty at 1 kHz.
+  SignMode sign_mode = SignMode::smooth;
+  /// Smooth sign: |xdd| at which the sign is +-1, in standard deviations.
+  double smooth_sigmas = 0.3;
+  /// Hard sign: +-1 beyond this many standard deviations, released below
+  /// sign_release of them after sign_hold seconds.
+  double sign_sigmas = 3.0;
+  double sign_release = 2.0;
+  double sign_hold = 0.1;
+  /// Hard sign: a fixed |xdd| threshold, rad/s^2, instead of the
+  /// uncertainty-scaled one (negative: scaled, the default).
   double acc_sign_threshold = -1.0;
-  /// How long |xdd| must stay beyond the threshold before sgn(xdd) turns +-1, s.
-  double acc_sign_dwell = 0.010;
-  /// A gap longer than this (s) restarts the filter at the new sample.
-  double max_gap = 1.0;
+  /// The encoder has not changed for this long (s): the joint is at rest and
+  /// sgn(xdd) is 0 (0: off).
+  double still_time = 0.04;
+  /// A gap longer than this (s) restarts the filters at the new sample.
+  double max_gap = 0.05;
+  /// true: the full Kalman recursion every sample (covariance propagated for
+  /// the actual interval). false: each channel's steady-state gain for the
+  /// actual interval, from a table made at construction (interpolated in
+  /// 25 us steps up to 4 ms, coarser up to max_gap): the same filter once it
+  /// has settled, at a fraction of the cost. Measured against each other in
+  /// docs/friction-model.md.
+  bool exact_covariance = false;
 };
 
 struct Derivatives {
-  double x = 0.0;      ///< filtered angle, rad
-  double xd = 0.0;     ///< rad/s
-  double xdd = 0.0;    ///< rad/s^2
-  int acc_sign = 0;    ///< debounced sgn(xdd)
-  bool valid = false;  ///< false for a rejected sample (non-finite, time not increasing)
+  double x = 0.0;       ///< filtered angle, rad
+  double xd = 0.0;      ///< rad/s
+  double xdd = 0.0;     ///< rad/s^2
+  double acc_sign = 0;  ///< sgn(xdd) (-1, 0, +1), or its expected value (smoothed sign)
+  double acc_sd = 0.0;  ///< standard deviation of xdd, rad/s^2
+  bool valid = false;   ///< false for a rejected sample (non-finite, time not increasing)
 };
 
 class Differentiator {
@@ -49,21 +88,35 @@ class Differentiator {
   Derivatives update(double t, double x) noexcept;
   void reset() noexcept;
 
-  double acc_sign_threshold() const { return threshold_; }
+  const DifferentiatorConfig& config() const { return cfg_; }
   const Derivatives& last() const { return out_; }
 
  private:
   void start(double t, double x) noexcept;
+  double decide_sign(double xdd, double sd, double dt) noexcept;
 
   DifferentiatorConfig cfg_;
-  double r_;                   // measurement variance, rad^2
-  double threshold_;           // Schmitt trigger half-width, rad/s^2
-  int pending_sign_ = 0;       // sign waiting out the dwell time
-  double pending_time_ = 0.0;  // how long it has been waiting, s
+  double r_;  // measurement variance, rad^2
+  PolyKalman<3> velocity_;
+  PolyKalman<4> acceleration_;
+  // Steady-state gains by interval (exact_covariance false): entry k is for
+  // the interval grid_dt(k); see grid_index().
+  struct GainEntry {
+    PolyKalman<3>::Vec velocity;
+    PolyKalman<4>::Vec acceleration;
+    double acc_sd;
+  };
+  std::vector<GainEntry> gains_;
+  double coarse_inverse_step_ = 0.0;
+  int settling_ = 0;  // samples of full recursion left after a (re)start
+  void build_gain_table();
+  double grid_dt(std::size_t k) const noexcept;
+  GainEntry gain_for(double dt) const noexcept;
+  double in_band_ = 0.0;  // how long |xdd| has been inside the release band, s
+  double last_x_ = 0.0;   // last encoder reading
+  double still_ = 0.0;    // how long it has not changed, s
   bool started_ = false;
   double t_ = 0.0;
-  std::array<double, 3> s_{};                 // angle, velocity, acceleration
-  std::array<std::array<double, 3>, 3> p_{};  // state covariance
   Derivatives out_;
 };
 

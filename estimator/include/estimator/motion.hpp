@@ -9,14 +9,17 @@ struct Motion {
   double x = 0.0;    ///< rad, input pulley angle
   double xd = 0.0;   ///< rad/s
   double xdd = 0.0;  ///< rad/s^2 (magnitude used by the acceleration terms)
-  /// sgn(xdd) as the model switches on it: -1, 0 or +1. A differentiator
-  /// debounces it (a Schmitt trigger) so eq. (4)-(10) do not chatter on noise.
-  int acc_sign = 0;
+  /// sgn(xdd) as the model switches on it: -1, 0 or +1 (exact derivatives,
+  /// the paper's model). The differentiator's smoothed variant passes the
+  /// expected sign in [-1, 1] when the estimate cannot tell (near a zero
+  /// crossing); eqs. (4)-(10) are linear in sgn(xdd), so the model takes
+  /// either (docs/friction-model.md).
+  double acc_sign = 0.0;
   double load = 0.0;  ///< N, transmitted load |tau_in| / R, for load-dependent terms
 };
 
 /// sgn with sgn(0) = 0, as in the paper.
-constexpr int sign_of(double v) {
+constexpr double sign_of(double v) {
   return (v > 0.0) - (v < 0.0);
 }
 

@@ -4,9 +4,10 @@
 // realistic sensors (noisy torque channels, a quantised encoder). Knowing the
 // true friction lets a test score a fit against the truth, not the noise.
 //
-// The world: the input pulley follows a sum of sines (random phases from the
-// seed, faded in from rest during a 1 s pre-roll before the recording starts,
-// so a recording begins in ordinary motion); the distal side carries a
+// The world: the input pulley follows one of several motion kinds (a sum of
+// sines by default; random phases from the seed, faded in from rest during a
+// 1 s pre-roll before the recording starts, so a recording begins in ordinary
+// motion; see MotionKind); the distal side carries a
 // slow random load torque tau_out; the proximal torque is
 // tau_in = tau_out + R F_true. Friction is simulated with the exact
 // derivatives, `substeps` times per sample, and the transmitted load the
@@ -15,12 +16,23 @@
 
 #include <cstdint>
 #include <numbers>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 #include "estimator/friction_model.hpp"
 #include "estimator/recording.hpp"
 
 namespace tsmh::estimator {
+
+/// How the input pulley moves. Every kind has exact, continuous velocity and
+/// acceleration, so the true model runs on exact derivatives.
+enum class MotionKind {
+  multisine,  ///< sum of `components` sines, log-spaced in [f_low_hz, f_high_hz]
+  surgeon,    ///< smooth point-to-point moves (bell-shaped velocity) between holds at rest
+  reversals,  ///< constant-speed strokes joined by fast reversals (40-120 ms)
+  creep,      ///< slow motion: speeds of 5-50 mrad/s changing smoothly, with pauses
+};
 
 struct SyntheticConfig {
   double duration_s = 40.0;
@@ -44,6 +56,15 @@ struct SyntheticConfig {
   int substeps = 4;
   /// Also store the exact xd_in, xdd_in columns (a simulator's recording).
   bool exact_derivatives = false;
+  MotionKind motion = MotionKind::multisine;
+  /// Sampling-time jitter: each sample is taken at i/rate + U(-jitter, +jitter) s
+  /// (kept below half a period, so times stay increasing).
+  double jitter_s = 0.0;
+  /// Fraction of samples lost (removed from the recording), in [0, 0.5].
+  double drop_fraction = 0.0;
+  /// Record the 1 s pre-roll too (times from -1 s), so the recording starts
+  /// at rest with the friction state at zero, as an online estimator does.
+  bool from_rest = false;
   std::uint64_t seed = 1;
 };
 
@@ -55,5 +76,9 @@ struct SyntheticData {
 /// Runs `truth` (cloned, not modified) on the configured world. Throws
 /// std::invalid_argument for an unusable config.
 SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& config = {});
+
+/// "multisine", "surgeon", "reversals", "creep"; nullopt for anything else.
+std::optional<MotionKind> motion_kind_from_name(std::string_view name);
+const char* motion_kind_name(MotionKind kind);
 
 }  // namespace tsmh::estimator

@@ -61,7 +61,7 @@ class TsmFrictionModel final : public FrictionModel {
   /// Ff at motion m (eq. 5 with the configured terms), floored at kMinSlidingLevel.
   double sliding_level(const Motion& m) const noexcept;
   /// g of eq. (4).
-  double drive(double xd, int acc_sign) const noexcept { return xd + lambda_ * acc_sign; }
+  double drive(double xd, double acc_sign) const noexcept { return xd + lambda_ * acc_sign; }
   double state() const noexcept { return z_; }
 
  private:

@@ -20,7 +20,16 @@ struct JointEvaluation {
   double rmse_naive = 0.0;      ///< N m, tau_in vs true tau_out
   double ratio = 0.0;           ///< rmse_estimated / rmse_naive
   double true_peak = 0.0;       ///< N m, max |true tau_out|
+  /// Free motion: ticks where |true tau_out| < kPhantomThreshold. What the
+  /// surgeon feels there is phantom torque (the truth is about zero).
+  std::size_t free_samples = 0;
+  double phantom_rendered = 0.0;  ///< N m on the master, rms of the torque written
+  double phantom_naive = 0.0;     ///< N m on the master, rms of force_scale * tau_in
+  double phantom_ratio = 0.0;     ///< phantom_rendered / phantom_naive
 };
+
+/// |true distal torque| below which a tick counts as free motion, N m.
+inline constexpr double kPhantomThreshold = 0.005;
 
 /// Stiffness in slave joint space, N m/rad: perceived = slope of the rendered
 /// master torque against master angle, divided by force_scale * position_scale;
@@ -33,8 +42,10 @@ struct Stiffness {
 };
 
 struct Discrimination {
-  int joint = -1;           ///< the joint that pressed the tissue (-1: no contact seen)
-  double boundary_m = 0.0;  ///< indentation separating soft layer from nodule
+  int joint = -1;               ///< the joint that pressed the tissue (-1: no contact seen)
+  double force_scale = 1.0;     ///< of that joint: master N m per slave N m
+  double position_scale = 1.0;  ///< of that joint: slave rad per master rad
+  double boundary_m = 0.0;      ///< indentation separating soft layer from nodule
   Stiffness soft, hard;
 };
 
