@@ -6,6 +6,7 @@
 #include <map>
 
 #include "commands.hpp"
+#include "estimator/distal_estimator.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/simulate.hpp"
 
@@ -20,11 +21,32 @@ struct SimulateOptions {
   estimator::DerivativeSource derivatives = estimator::DerivativeSource::automatic;
 };
 
+// Without exact derivatives the friction is what haptic-server would have
+// estimated: the same DistalTorqueEstimator (differentiator, sign decision,
+// model), fed the same samples in the same order, never a smoother.
+std::vector<double> causal_friction(const estimator::FrictionModel& model,
+                                    const estimator::Recording& rec) {
+  const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m);
+  estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0);
+  std::vector<double> f(rec.size());
+  for (std::size_t i = 0; i < rec.size(); ++i)
+    f[i] = est.update(rec.t[i], rec.x_in[i], has_load ? rec.tau_in[i] : 0.0).friction;
+  return f;
+}
+
 void run_simulate(const SimulateOptions& o, const Context& ctx) {
   auto model = estimator::load_model(o.params);
   const auto rec = ctx.sources.load(o.input, o.radius, {});
-  const auto motion = estimator::motion_from_recording(rec, o.derivatives);
-  const auto f = estimator::simulate_friction(*model, motion);
+  const bool exact =
+      o.derivatives == estimator::DerivativeSource::exact ||
+      (o.derivatives == estimator::DerivativeSource::automatic && rec.has_derivatives());
+  std::vector<double> f;
+  if (exact) {
+    const auto motion = estimator::motion_from_recording(rec, estimator::DerivativeSource::exact);
+    f = estimator::simulate_friction(*model, motion);
+  } else {
+    f = causal_friction(*model, rec);
+  }
   estimator::Table out;
   out.source = o.output;
   out.set("t", rec.t);
@@ -61,7 +83,8 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
       {"differentiator", estimator::DerivativeSource::differentiator},
       {"exact", estimator::DerivativeSource::exact}};
   cmd->add_option("--derivatives", opts->derivatives,
-                  "auto: xd_in/xdd_in when present, else the differentiator")
+                  "auto: xd_in/xdd_in when present, else the causal estimator haptic-server "
+                  "runs (differentiator: always that; exact: xd_in/xdd_in)")
       ->transform(CLI::CheckedTransformer(sources, CLI::ignore_case));
   cmd->callback([opts, &ctx] { run_simulate(*opts, ctx); });
 }

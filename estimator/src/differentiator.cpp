@@ -58,11 +58,12 @@ void Differentiator::build_gain_table() {
     pa = pa_k;
     warm_v = &pv;
     warm_a = &pa;
-    gains_[k] = {kv, ka, std::sqrt(pa[2][2])};
+    const double sd = std::sqrt(pa[2][2]);
+    gains_[k] = {kv, ka, sd, 1.0 / (cfg_.smooth_sigmas * sd)};
   }
 }
 
-Differentiator::GainEntry Differentiator::gain_for(double dt) const noexcept {
+inline Differentiator::GainEntry Differentiator::gain_for(double dt) const noexcept {
   // Linear interpolation between the grid's neighbours of dt.
   double pos;
   if (dt <= kFineEnd) {
@@ -83,6 +84,7 @@ Differentiator::GainEntry Differentiator::gain_for(double dt) const noexcept {
   for (std::size_t i = 0; i < 4; ++i)
     g.acceleration[i] = a.acceleration[i] + w * (b.acceleration[i] - a.acceleration[i]);
   g.acc_sd = a.acc_sd + w * (b.acc_sd - a.acc_sd);
+  g.inv_width = a.inv_width + w * (b.inv_width - a.inv_width);
   return g;
 }
 
@@ -105,7 +107,8 @@ void Differentiator::start(double t, double x) noexcept {
   out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
 }
 
-double Differentiator::decide_sign(double xdd, double sd, double dt) noexcept {
+inline double Differentiator::decide_sign(double xdd, double sd, double inv_width,
+                                          double dt) noexcept {
   // At rest the true acceleration is exactly 0 and the model's state must
   // not move; the acceleration estimate still rings for a while after a stop
   // (the jerk ends abruptly), so an encoder that has not moved decides.
@@ -117,7 +120,7 @@ double Differentiator::decide_sign(double xdd, double sd, double dt) noexcept {
     // The expected sign across the estimate's uncertainty, as a ramp: no
     // decision delay at a zero crossing and no chatter. The model is linear
     // in sgn(xdd), so a fraction acts as the expected value of both branches.
-    return std::clamp(xdd / (cfg_.smooth_sigmas * sd), -1.0, 1.0);
+    return std::clamp(xdd * inv_width, -1.0, 1.0);
   }
   // Hard: a dead band with hysteresis around zero, scaled by the estimate's
   // own uncertainty; a decided sign is held inside the release band for
@@ -150,7 +153,7 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     return out_;
   }
   t_ = t;
-  double sd;
+  double sd, inv_width;
   if (cfg_.exact_covariance || settling_ > 0) {
     // The full recursion: always, or while the filters settle from their
     // start-up prior (the steady-state gains would converge more slowly).
@@ -158,16 +161,18 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     velocity_.update(dt, x);
     acceleration_.update(dt, x);
     sd = std::sqrt(acceleration_.covariance()[2][2]);
+    inv_width = 1.0 / (cfg_.smooth_sigmas * sd);
   } else {
     const GainEntry g = gain_for(dt);
     velocity_.update_with_gain(dt, x, g.velocity);
     acceleration_.update_with_gain(dt, x, g.acceleration);
     sd = g.acc_sd;
+    inv_width = g.inv_width;
   }
   still_ = x == last_x_ ? still_ + dt : 0.0;
   last_x_ = x;
   const double xdd = acceleration_.state()[2];
-  const double sign = decide_sign(xdd, sd, dt);
+  const double sign = decide_sign(xdd, sd, inv_width, dt);
   out_ = {velocity_.state()[0], velocity_.state()[1], xdd, sign, sd, true};
   return out_;
 }

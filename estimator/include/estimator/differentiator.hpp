@@ -39,7 +39,7 @@ struct DifferentiatorConfig {
   double jerk_psd = 300.0;
   /// Acceleration channel (xdd and its uncertainty): spectral density of the
   /// snap, (rad/s^4)^2/Hz.
-  double snap_psd = 1600.0;
+  double snap_psd = 3200.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
   double quantum = 2.0 * std::numbers::pi / 40960.0;
@@ -93,7 +93,7 @@ class Differentiator {
 
  private:
   void start(double t, double x) noexcept;
-  double decide_sign(double xdd, double sd, double dt) noexcept;
+  double decide_sign(double xdd, double sd, double inv_width, double dt) noexcept;
 
   DifferentiatorConfig cfg_;
   double r_;  // measurement variance, rad^2
@@ -105,6 +105,7 @@ class Differentiator {
     PolyKalman<3>::Vec velocity;
     PolyKalman<4>::Vec acceleration;
     double acc_sd;
+    double inv_width;  // 1 / (smooth_sigmas acc_sd)
   };
   std::vector<GainEntry> gains_;
   double coarse_inverse_step_ = 0.0;

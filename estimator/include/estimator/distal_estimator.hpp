@@ -13,9 +13,9 @@
 namespace tsmh::estimator {
 
 struct Estimate {
-  double xd = 0.0;   ///< rad/s (from the differentiator or given)
-  double xdd = 0.0;  ///< rad/s^2
-  double acc_sign = 0.0;  ///< sgn(xdd) as the model used it
+  double xd = 0.0;           ///< rad/s (from the differentiator or given)
+  double xdd = 0.0;          ///< rad/s^2
+  double acc_sign = 0.0;     ///< sgn(xdd) as the model used it
   double tau_in = 0.0;       ///< N m, proximal torque
   double friction = 0.0;     ///< N, total sheath friction F
   double tau_out_est = 0.0;  ///< N m, estimated distal torque; NaN when !valid
@@ -42,7 +42,8 @@ class DistalTorqueEstimator {
   const FrictionModel& model() const { return *model_; }
 
  private:
-  Estimate finish(double t, double x, double xd, double xdd, double acc_sign, double tau_in) noexcept;
+  Estimate finish(double t, double x, double xd, double xdd, double acc_sign,
+                  double tau_in) noexcept;
 
   std::unique_ptr<FrictionModel> model_;
   double radius_;

@@ -75,10 +75,13 @@ class PolyKalman {
   /// Predicts over dt > 0 and corrects with z using a given gain, leaving the
   /// covariance alone: the steady-state filter for that interval.
   void update_with_gain(double dt, double z, const Vec& gain) noexcept {
-    predict_state(dt);
-    const double innovation = z - s_[0];
+    // On a local copy, written back once: element-wise stores followed by
+    // vector loads of the same array stall store forwarding.
+    Vec s = predicted(dt);
+    const double innovation = z - s[0];
     for (std::size_t i = 0; i < N; ++i)
-      s_[i] += gain[i] * innovation;
+      s[i] += gain[i] * innovation;
+    s_ = s;
   }
 
   /// The gain and covariance this filter converges to when every interval is
@@ -126,16 +129,19 @@ class PolyKalman {
       c[k] = c[k - 1] * dt * inverse[k];
     return c;
   }
-  // s <- F s, F[i][j] = dt^(j-i) / (j-i)!.
-  void predict_state(double dt) noexcept {
+  // F s, F[i][j] = dt^(j-i) / (j-i)!.
+  Vec predicted(double dt) const noexcept {
     const auto c = taylor<N>(dt);
+    Vec out;
     for (std::size_t i = 0; i < N; ++i) {
       double v = 0.0;
       for (std::size_t j = i; j < N; ++j)
         v += c[j - i] * s_[j];
-      s_[i] = v;
+      out[i] = v;
     }
+    return out;
   }
+  void predict_state(double dt) noexcept { s_ = predicted(dt); }
 
   double q_, r_;
   Vec s_{};

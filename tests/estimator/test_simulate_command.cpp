@@ -1,0 +1,57 @@
+// The contract of `tsm simulate` on a recording without xd_in/xdd_in: it runs
+// exactly the causal estimator haptic-server runs (DistalTorqueEstimator with
+// its default differentiator), sample by sample, never a smoother.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "estimator/distal_estimator.hpp"
+#include "estimator/recording.hpp"
+#include "estimator/synthetic.hpp"
+#include "estimator/table.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(SimulateCommand, WithoutDerivativesRunsTheServersEstimatorSampleBySample) {
+  const fs::path dir = fs::temp_directory_path() / ("tsmh_sim_cli_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  SyntheticConfig c;
+  c.motion = MotionKind::surgeon;
+  c.duration_s = 8.0;
+  c.jitter_s = 2e-4;       // uneven time stamps
+  c.drop_fraction = 0.02;  // and lost samples
+  c.seed = 3;
+  write_recording_csv(make_synthetic(TsmFrictionModel(paper_spec()), c).recording, dir / "in.csv");
+  const std::string cmd = std::string(TSMH_TSM_BIN) + " simulate --params paper --input " +
+                          (dir / "in.csv").string() + " --output " + (dir / "out.csv").string() +
+                          " >" + (dir / "log").string() + " 2>&1";
+  const int rc = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0);
+
+  // What the server computes from the same samples (as read back from the
+  // file, so both see identical numbers).
+  const Recording rec = read_recording_csv(dir / "in.csv");
+  DistalTorqueEstimator server(std::make_unique<TsmFrictionModel>(paper_spec()), rec.radius_m);
+  const Table out = read_csv_table(dir / "out.csv");
+  const auto& f = out.column("F");
+  const auto& est = out.column("tau_out_est");
+  ASSERT_EQ(f.size(), rec.size());
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    const Estimate e = server.update(rec.t[i], rec.x_in[i], rec.tau_in[i]);
+    ASSERT_EQ(f[i], e.friction) << "row " << i;
+    ASSERT_EQ(est[i], e.tau_out_est) << "row " << i;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
