@@ -81,6 +81,34 @@ TEST(Differentiator, DelayIsAFewMilliseconds) {
   EXPECT_LT(std::fabs(best_delay), 0.003);
 }
 
+TEST(Differentiator, AccelerationDelayIsAFewMilliseconds) {
+  // The acceleration channel (white snap) follows constant jerk without lag;
+  // on a 0.5 Hz sine its best-matching delay is a few ms, and its noise is
+  // the acc_sd it reports.
+  Differentiator d;
+  std::vector<double> t, a;
+  for (double ti : uniform_times(10.0, 1e-3)) {
+    t.push_back(ti);
+    a.push_back(d.update(ti, quantise(0.8 * std::sin(kW * ti))).xdd);
+  }
+  double best_delay = 0.0, best = 1e9;
+  for (double delay = -0.01; delay <= 0.03; delay += 1e-4) {
+    double se = 0.0;
+    int n = 0;
+    for (std::size_t i = 1000; i < t.size(); ++i) {
+      const double truth = -0.8 * kW * kW * std::sin(kW * (t[i] - delay));
+      se += (a[i] - truth) * (a[i] - truth);
+      ++n;
+    }
+    if (std::sqrt(se / n) < best) best = std::sqrt(se / n), best_delay = delay;
+  }
+  RecordProperty("acceleration_delay_ms", std::to_string(best_delay * 1e3));
+  RecordProperty("acceleration_rms_error_rad_s2", std::to_string(best));
+  RecordProperty("acceleration_sd_reported", std::to_string(d.last().acc_sd));
+  EXPECT_LT(std::fabs(best_delay), 0.005);
+  EXPECT_LT(best, 2.0 * d.last().acc_sd);
+}
+
 TEST(Differentiator, UnevenTimeStampsAndDroppedSamples) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> jitter(0.6e-3, 1.4e-3);
