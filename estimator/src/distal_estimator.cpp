@@ -7,8 +7,9 @@
 namespace tsmh::estimator {
 
 DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionModel> model, double radius_m,
-                                             const DifferentiatorConfig& diff)
-    : model_(std::move(model)), radius_(radius_m), diff_(diff) {
+                                             const DifferentiatorConfig& diff,
+                                             StartState start)
+    : model_(std::move(model)), radius_(radius_m), diff_(diff), start_(start) {
   if (!model_) throw std::invalid_argument("estimator: no friction model");
   if (!(radius_m > 0.0) || !std::isfinite(radius_m))
     throw std::invalid_argument("estimator: radius_m must be a finite number > 0");
@@ -39,9 +40,10 @@ Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, d
 Estimate DistalTorqueEstimator::finish(double t, double x, double xd, double xdd, double acc_sign,
                                        double tau_in) noexcept {
   const double dt = started_ ? t - t_prev_ : 0.0;
+  const Motion m{t, x, xd, xdd, acc_sign, std::fabs(tau_in) / radius_};
+  if (!started_ && start_ == StartState::free_tip) model_->preset(tau_in / radius_, m);
   started_ = true;
   t_prev_ = t;
-  const Motion m{t, x, xd, xdd, acc_sign, std::fabs(tau_in) / radius_};
   const double f = dt > 0.0 ? model_->step(m, dt) : model_->friction();
   return {xd, xdd, acc_sign, tau_in, f, tau_in - radius_ * f, true};
 }

@@ -171,6 +171,12 @@ double TsmFrictionModel::step(const Motion& m, double dt) noexcept {
   return friction();
 }
 
+void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {
+  if (!std::isfinite(friction)) return;
+  const double level = sliding_level(m);
+  z_ = std::clamp(friction / spec_.gamma, -level, level);
+}
+
 std::unique_ptr<FrictionModel> TsmFrictionModel::clone() const {
   return std::make_unique<TsmFrictionModel>(*this);
 }

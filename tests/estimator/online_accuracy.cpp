@@ -100,8 +100,11 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
   const SyntheticData data = make_synthetic(truth, sc);
   const Recording& rec = data.recording;
 
-  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff);
-  DistalTorqueEstimator exact(truth.clone(), rec.radius_m, diff);
+  // The recordings start at rest with the true friction state at zero, so
+  // the estimators start there too (the server's default tares the state
+  // from the proximal torque instead: StartState::free_tip).
+  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::zero);
+  DistalTorqueEstimator exact(truth.clone(), rec.radius_m, diff, StartState::zero);
   std::vector<double> f_causal(rec.size()), f_exact(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
     f_causal[i] = causal.update(rec.t[i], rec.x_in[i], rec.tau_in[i]).friction;

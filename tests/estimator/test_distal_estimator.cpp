@@ -68,3 +68,29 @@ TEST(DistalEstimator, RefusesBadConfiguration) {
 
 }  // namespace
 }  // namespace tsmh::estimator
+
+namespace tsmh::estimator {
+namespace {
+
+TEST(DistalEstimator, StartsWithTheTipFreeUnlessToldOtherwise) {
+  // The sheath holds 5 N of friction at rest (tau_in 0.05 N m, R 0.01 m) when
+  // the session starts with the instrument free: the default reads that as
+  // friction (tip torque 0); the paper's zero state reads it as tip torque.
+  const auto run = [](StartState start) {
+    DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01, {}, start);
+    Estimate e;
+    for (int i = 0; i < 200; ++i)
+      e = est.update(i * 1e-3, 0.3, 0.05);
+    return e.tau_out_est;
+  };
+  EXPECT_NEAR(run(StartState::free_tip), 0.0, 1e-9);
+  EXPECT_NEAR(run(StartState::zero), 0.05, 1e-9);
+  // Beyond what the sheath can hold at rest (gamma Ff = 20.4 N, 0.204 N m)
+  // the rest is tip torque.
+  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
+  const double held = 0.01 * 9.5651 * (1.038 + 1.0978);
+  EXPECT_NEAR(est.update(0.0, 0.3, 0.5).tau_out_est, 0.5 - held, 1e-3);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator

@@ -22,11 +22,24 @@ struct Estimate {
   bool valid = false;        ///< false: the sample was rejected (non-finite, time not increasing)
 };
 
+/// The friction state the estimator starts from (and restarts from after
+/// reset()), before any motion has shown it.
+enum class StartState {
+  /// The tip is free at the first sample: the proximal torque is all
+  /// friction, F = tau_in / R, within what the model allows at rest. Like
+  /// taring a force sensor; a session starts with the instrument free.
+  free_tip,
+  /// Zero friction state (the paper's initial condition): whatever friction
+  /// the sheath holds at start reads as tip torque until motion saturates it.
+  zero,
+};
+
 class DistalTorqueEstimator {
  public:
   /// `model` is owned; radius_m > 0 (throws std::invalid_argument otherwise).
   DistalTorqueEstimator(std::unique_ptr<FrictionModel> model, double radius_m,
-                        const DifferentiatorConfig& diff = {});
+                        const DifferentiatorConfig& diff = {},
+                        StartState start = StartState::free_tip);
 
   /// One sample with the proximal torque given. Never allocates or throws.
   Estimate update(double t, double x_in, double tau_in) noexcept;
@@ -48,6 +61,7 @@ class DistalTorqueEstimator {
   std::unique_ptr<FrictionModel> model_;
   double radius_;
   Differentiator diff_;
+  StartState start_;
   bool started_ = false;
   double t_prev_ = 0.0;
 };

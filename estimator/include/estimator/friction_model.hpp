@@ -48,6 +48,11 @@ class FrictionModel {
   /// The friction returned by the last step().
   virtual double friction() const noexcept = 0;
 
+  /// Sets the internal state so that the friction is as close to `friction`
+  /// (N) as the model allows at rest at `m` (e.g. within +-gamma Ff). Models
+  /// without a settable state ignore it. Never allocates or throws.
+  virtual void preset(double /*friction*/, const Motion& /*m*/) noexcept {}
+
   virtual std::unique_ptr<FrictionModel> clone() const = 0;
 };
 

@@ -55,6 +55,7 @@ class TsmFrictionModel final : public FrictionModel {
   void reset() noexcept override;
   double step(const Motion& m, double dt) noexcept override;
   double friction() const noexcept override { return spec_.gamma * z_; }
+  void preset(double friction, const Motion& m) noexcept override;
   std::unique_ptr<FrictionModel> clone() const override;
 
   const TsmModelSpec& spec() const { return spec_; }
