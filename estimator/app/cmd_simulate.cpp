@@ -19,15 +19,19 @@ struct SimulateOptions {
   std::string output;
   std::optional<double> radius;
   estimator::DerivativeSource derivatives = estimator::DerivativeSource::automatic;
+  estimator::SignMode sign = estimator::SignMode::smooth;
+  estimator::StartState start = estimator::StartState::free_tip;
 };
 
 // Without exact derivatives the friction is what haptic-server would have
 // estimated: the same DistalTorqueEstimator (differentiator, sign decision,
 // model), fed the same samples in the same order, never a smoother.
 std::vector<double> causal_friction(const estimator::FrictionModel& model,
-                                    const estimator::Recording& rec) {
+                                    const estimator::Recording& rec, const SimulateOptions& o) {
   const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m);
-  estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0);
+  estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0,
+                                       estimator::DifferentiatorConfig{.sign_mode = o.sign},
+                                       o.start);
   std::vector<double> f(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i)
     f[i] = est.update(rec.t[i], rec.x_in[i], has_load ? rec.tau_in[i] : 0.0).friction;
@@ -45,7 +49,7 @@ void run_simulate(const SimulateOptions& o, const Context& ctx) {
     const auto motion = estimator::motion_from_recording(rec, estimator::DerivativeSource::exact);
     f = estimator::simulate_friction(*model, motion);
   } else {
-    f = causal_friction(*model, rec);
+    f = causal_friction(*model, rec, o);
   }
   estimator::Table out;
   out.source = o.output;
@@ -86,6 +90,18 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "auto: xd_in/xdd_in when present, else the causal estimator haptic-server "
                   "runs (differentiator: always that; exact: xd_in/xdd_in)")
       ->transform(CLI::CheckedTransformer(sources, CLI::ignore_case));
+  const std::map<std::string, estimator::SignMode> signs{{"smooth", estimator::SignMode::smooth},
+                                                         {"hard", estimator::SignMode::hard}};
+  cmd->add_option("--sign", opts->sign,
+                  "sgn(xdd) of the causal estimator: smooth (haptic-server's default) or hard "
+                  "(the paper's -1/0/+1 switch)")
+      ->transform(CLI::CheckedTransformer(signs, CLI::ignore_case));
+  const std::map<std::string, estimator::StartState> starts{
+      {"free_tip", estimator::StartState::free_tip}, {"zero", estimator::StartState::zero}};
+  cmd->add_option("--start-state", opts->start,
+                  "friction state at the first sample: free_tip (tared from tau_in, the "
+                  "default) or zero")
+      ->transform(CLI::CheckedTransformer(starts, CLI::ignore_case));
   cmd->callback([opts, &ctx] { run_simulate(*opts, ctx); });
 }
 

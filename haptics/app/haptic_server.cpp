@@ -121,7 +121,8 @@ int run(const Options& o) {
   for (const auto& j : cfg.joints) {
     try {
       estimators.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
-          estimator::load_model(j.params), j.radius_m));
+          estimator::load_model(j.params), j.radius_m,
+          estimator::DifferentiatorConfig{.sign_mode = j.sign}, j.start_state));
     } catch (const std::exception& e) {
       throw haptics::ConfigError(cfg.source + ": joint '" + j.name + "': " + e.what());
     }

@@ -13,8 +13,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <cstdlib>
+#include <numbers>
 #include <string>
 #include <vector>
 

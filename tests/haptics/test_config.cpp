@@ -71,6 +71,22 @@ TEST(ServerConfig, BadFieldsAreNamed) {
   EXPECT_NE(error_of("colour: blue\n" + kJoint).find("colour: unknown key"), std::string::npos);
 }
 
+TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
+  const auto c = parse_server_config(
+      "joints:\n  - {max_torque_nm: 0.3}\n  - {max_torque_nm: 0.3, sign: hard, start_state: "
+      "zero}\n",
+      "server.yaml", "/cfg");
+  EXPECT_EQ(c.joints[0].sign, estimator::SignMode::smooth);
+  EXPECT_EQ(c.joints[0].start_state, estimator::StartState::free_tip);
+  EXPECT_EQ(c.joints[1].sign, estimator::SignMode::hard);
+  EXPECT_EQ(c.joints[1].start_state, estimator::StartState::zero);
+  EXPECT_NE(error_of("joints:\n  - {max_torque_nm: 0.3, sign: soft}\n").find("joints[0].sign"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("joints:\n  - {max_torque_nm: 0.3, start_state: x}\n").find("joints[0].start_state"),
+      std::string::npos);
+}
+
 TEST(Evaluation, SlopeOfALine) {
   EXPECT_NEAR(slope({0, 1, 2, 3}, {1, 3, 5, 7}), 2.0, 1e-12);
   EXPECT_TRUE(std::isnan(slope({1, 1, 1}, {1, 2, 3})));

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "estimator/distal_estimator.hpp"
 #include "haptics/haptic_loop.hpp"
 #include "master_devices/settings.hpp"
 
@@ -23,6 +24,11 @@ struct JointConfig {
   std::string name;
   std::string params = "paper";  ///< friction model: preset or params YAML (resolved path)
   double radius_m = 0.01;
+  /// sgn(xdd) as the model sees it: the smoothed expected sign (default) or
+  /// the paper's -1/0/+1 switch (docs/friction-model.md).
+  estimator::SignMode sign = estimator::SignMode::smooth;
+  /// The estimator's friction state at start: tip assumed free (default) or zero.
+  estimator::StartState start_state = estimator::StartState::free_tip;
 };
 
 struct RealtimeConfig {
