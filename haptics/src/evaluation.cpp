@@ -106,6 +106,7 @@ Discrimination discriminate(const Trace& trace, const ServerConfig& config, int 
       out[c]->samples = qm[c].size();
       out[c]->perceived = std::fabs(slope(qm[c], tm[c])) / gain;
       out[c]->truth = std::fabs(slope(xs[c], ts[c]));
+      out[c]->ideal = std::fabs(slope(qm[c], ts[c])) / d.position_scale;
     }
   }
   return d;
@@ -206,6 +207,8 @@ std::string report_to_json(const EvaluationReport& r) {
                 {"hard_true", num(d.hard.truth)},
                 {"soft_samples", d.soft.samples},
                 {"hard_samples", d.hard.samples},
+                {"soft_ideal", num(d.soft.ideal)},
+                {"hard_ideal", num(d.hard.ideal)},
                 {"force_scale", num(d.force_scale)},
                 {"position_scale", num(d.position_scale)},
                 {"units", "N m/rad, slave joint space"}}}};
@@ -244,8 +247,10 @@ std::string format_report(const EvaluationReport& r) {
   if (d.joint >= 0) {
     std::snprintf(
         line, sizeof line,
-        "stiffness felt (joint %d, N m/rad): soft %.3f (true %.3f), nodule %.3f (true %.3f)\n",
-        d.joint, d.soft.perceived, d.soft.truth, d.hard.perceived, d.hard.truth);
+        "stiffness felt (joint %d, N m/rad): soft %.3f (true %.3f, perfect estimate %.3f), "
+        "nodule %.3f (true %.3f, perfect estimate %.3f)\n",
+        d.joint, d.soft.perceived, d.soft.truth, d.soft.ideal, d.hard.perceived, d.hard.truth,
+        d.hard.ideal);
     s += line;
   } else {
     s += "stiffness felt: no tissue contact in this run\n";

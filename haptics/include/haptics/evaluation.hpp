@@ -38,6 +38,10 @@ inline constexpr double kPhantomThreshold = 0.005;
 struct Stiffness {
   double perceived = 0.0;
   double truth = 0.0;
+  /// What a perfect estimate would have felt: the true distal torque against
+  /// the master angle / position_scale (differs from truth by the slave's
+  /// tracking under load).
+  double ideal = 0.0;
   std::size_t samples = 0;
 };
 
