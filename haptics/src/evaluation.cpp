@@ -112,6 +112,39 @@ Discrimination discriminate(const Trace& trace, const ServerConfig& config, int 
   return d;
 }
 
+JointEvaluation evaluate_joint(const Trace& trace, const ServerConfig& config, std::size_t j) {
+  JointEvaluation je;
+  je.name = config.joints[j].name;
+  double se_est = 0, se_naive = 0, phantom = 0, phantom_naive = 0;
+  const double force_scale = config.loop.force[j].scale;
+  for (std::size_t i = 0; i < trace.size(); ++i) {
+    const auto& row = trace[i];
+    if (!enabled_with_truth(row, j)) continue;
+    const auto& q = row.joints[j];
+    if (!std::isfinite(q.tau_out_est) || !std::isfinite(q.tau_in)) continue;
+    se_est += (q.tau_out_est - q.true_tau_out) * (q.tau_out_est - q.true_tau_out);
+    se_naive += (q.tau_in - q.true_tau_out) * (q.tau_in - q.true_tau_out);
+    je.true_peak = std::max(je.true_peak, std::fabs(q.true_tau_out));
+    ++je.samples;
+    if (std::fabs(q.true_tau_out) < kPhantomThreshold && std::isfinite(q.torque_cmd)) {
+      phantom += q.torque_cmd * q.torque_cmd;
+      phantom_naive += force_scale * force_scale * q.tau_in * q.tau_in;
+      ++je.free_samples;
+    }
+  }
+  if (je.samples) {
+    je.rmse_estimated = std::sqrt(se_est / static_cast<double>(je.samples));
+    je.rmse_naive = std::sqrt(se_naive / static_cast<double>(je.samples));
+    je.ratio = je.rmse_naive > 0 ? je.rmse_estimated / je.rmse_naive : 0.0;
+  }
+  if (je.free_samples) {
+    je.phantom_rendered = std::sqrt(phantom / static_cast<double>(je.free_samples));
+    je.phantom_naive = std::sqrt(phantom_naive / static_cast<double>(je.free_samples));
+    je.phantom_ratio = je.phantom_naive > 0 ? je.phantom_rendered / je.phantom_naive : 0.0;
+  }
+  return je;
+}
+
 EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config) {
   EvaluationReport r;
   r.nominal_rate_hz = config.loop.rate_hz;
@@ -125,40 +158,15 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
 
   double deepest = 0.0;
   for (std::size_t j = 0; j < joints; ++j) {
-    JointEvaluation je;
-    je.name = config.joints[j].name;
-    double se_est = 0, se_naive = 0, phantom = 0, phantom_naive = 0;
-    const double force_scale = config.loop.force[j].scale;
+    r.joints.push_back(evaluate_joint(trace, config, j));
     for (std::size_t i = 0; i < trace.size(); ++i) {
-      const auto& row = trace[i];
-      if (!enabled_with_truth(row, j)) continue;
-      const auto& q = row.joints[j];
-      if (!std::isfinite(q.tau_out_est) || !std::isfinite(q.tau_in)) continue;
-      se_est += (q.tau_out_est - q.true_tau_out) * (q.tau_out_est - q.true_tau_out);
-      se_naive += (q.tau_in - q.true_tau_out) * (q.tau_in - q.true_tau_out);
-      je.true_peak = std::max(je.true_peak, std::fabs(q.true_tau_out));
-      ++je.samples;
-      if (std::fabs(q.true_tau_out) < kPhantomThreshold && std::isfinite(q.torque_cmd)) {
-        phantom += q.torque_cmd * q.torque_cmd;
-        phantom_naive += force_scale * force_scale * q.tau_in * q.tau_in;
-        ++je.free_samples;
-      }
-      if (std::isfinite(q.indentation) && q.indentation > deepest) {
+      const auto& q = trace[i].joints[j];
+      if (enabled_with_truth(trace[i], j) && std::isfinite(q.indentation) &&
+          q.indentation > deepest) {
         deepest = q.indentation;
         r.discrimination.joint = static_cast<int>(j);
       }
     }
-    if (je.samples) {
-      je.rmse_estimated = std::sqrt(se_est / static_cast<double>(je.samples));
-      je.rmse_naive = std::sqrt(se_naive / static_cast<double>(je.samples));
-      je.ratio = je.rmse_naive > 0 ? je.rmse_estimated / je.rmse_naive : 0.0;
-    }
-    if (je.free_samples) {
-      je.phantom_rendered = std::sqrt(phantom / static_cast<double>(je.free_samples));
-      je.phantom_naive = std::sqrt(phantom_naive / static_cast<double>(je.free_samples));
-      je.phantom_ratio = je.phantom_naive > 0 ? je.phantom_rendered / je.phantom_naive : 0.0;
-    }
-    r.joints.push_back(je);
   }
 
   r.discrimination = discriminate(trace, config, r.discrimination.joint);

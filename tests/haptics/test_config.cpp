@@ -129,6 +129,35 @@ TEST(Evaluation, FindsTheNoduleEdgeAndBothStiffnesses) {
   EXPECT_NEAR(d.hard.perceived, 1.2 * d.hard.truth, 0.06);
   EXPECT_GT(d.soft.samples, 1000u);
   EXPECT_GT(d.hard.samples, 1000u);
+  // The master follows the true joint angle here: a perfect estimate would
+  // have felt the truth.
+  EXPECT_NEAR(d.soft.ideal, d.soft.truth, 1e-9);
+  EXPECT_NEAR(d.hard.ideal, d.hard.truth, 1e-9);
+}
+
+TEST(Evaluation, PhantomTorqueInFreeMotion) {
+  // Half the ticks in free motion (true torque 0) rendering 0.01 N m where
+  // naive feedback would render 0.6 x 0.05; half in contact.
+  ServerConfig config =
+      parse_server_config("joints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  Trace trace(1, 1000);
+  for (int i = 0; i < 1000; ++i) {
+    TraceRow row;
+    row.state = static_cast<std::int32_t>(LoopState::kEnabled);
+    auto& q = row.joints[0];
+    const bool free = i % 2 == 0;
+    q.true_tau_out = free ? 0.0 : 0.2;
+    q.tau_in = free ? 0.05 : 0.25;
+    q.tau_out_est = free ? 0.01 / 0.6 : 0.2;
+    q.torque_cmd = 0.6 * q.tau_out_est;
+    trace.append(row);
+  }
+  const JointEvaluation e = evaluate_joint(trace, config, 0);
+  EXPECT_EQ(e.free_samples, 500u);
+  EXPECT_NEAR(e.phantom_rendered, 0.01, 1e-12);
+  EXPECT_NEAR(e.phantom_naive, 0.03, 1e-12);
+  EXPECT_NEAR(e.phantom_ratio, 1.0 / 3.0, 1e-9);
+  EXPECT_NEAR(e.rmse_naive, 0.05, 1e-12);
 }
 
 }  // namespace

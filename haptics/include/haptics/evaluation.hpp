@@ -67,6 +67,9 @@ struct EvaluationReport {
 
 EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config);
 
+/// One joint's torque figures (rmse estimated/naive, free-motion phantom torque).
+JointEvaluation evaluate_joint(const Trace& trace, const ServerConfig& config, std::size_t joint);
+
 /// The stiffness part alone, for the pressing joint `joint` (-1: none).
 Discrimination discriminate(const Trace& trace, const ServerConfig& config, int joint);
 
