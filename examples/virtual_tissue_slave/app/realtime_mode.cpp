@@ -9,6 +9,7 @@
 #include <bridge/latency_histogram.hpp>
 #include <bridge/receiver.hpp>
 #include <bridge/sender.hpp>
+#include <bridge/stop_signals.hpp>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -28,10 +29,7 @@ namespace {
 class StopOnSignal {
  public:
   StopOnSignal() {
-    sigemptyset(&set_);
-    sigaddset(&set_, SIGINT);
-    sigaddset(&set_, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &set_, nullptr);  // before any other thread exists
+    set_ = bridge::block_terminating_signals();  // before any other thread exists
     watcher_ = std::thread([this] {
       int sig = 0;
       sigwait(&set_, &sig);

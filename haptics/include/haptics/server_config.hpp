@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "haptics/haptic_loop.hpp"
+#include "master_devices/device.hpp"
 #include "master_devices/settings.hpp"
 
 namespace tsmh::haptics {
@@ -58,6 +59,10 @@ struct ServerConfig {
 ServerConfig parse_server_config(const std::string& yaml_text, const std::string& origin,
                                  const std::filesystem::path& base_dir);
 ServerConfig load_server_config(const std::filesystem::path& path);
+
+/// The configuration against the device it opened: no more joints than the
+/// device has axes. Throws ConfigError naming the file.
+void check_against_device(const ServerConfig& c, const master_devices::DeviceSpec& spec);
 
 FeedbackSource feedback_source_from_string(const std::string& s);  ///< throws ConfigError
 
