@@ -320,7 +320,10 @@ void HapticLoop::shutdown() noexcept {
   device_.write_torque(device_torque_);
   device_.set_enabled(false);
   device_enabled_ = false;
-  command_.utime = last_ns_ / 1000;
+  // Strictly after the last tick's command: a receiver drops a message whose
+  // seq advances while its utime does not (time_backwards), and this one --
+  // the slave told to hold -- must never be dropped.
+  command_.utime = last_ns_ / 1000 + 1;
   command_.seq = command_seq_++;
   command_.num_joints = config_.joints;
   command_.enable = false;
