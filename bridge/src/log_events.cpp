@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 
@@ -19,6 +20,10 @@ std::uint32_t be32(const std::uint8_t* p) noexcept {
 
 std::uint64_t be64(const std::uint8_t* p) noexcept {
   return (std::uint64_t{be32(p)} << 32) | be32(p + 4);
+}
+
+std::int64_t add_saturating(std::int64_t a, std::int64_t b) noexcept {
+  return a > INT64_MAX - b ? INT64_MAX : a + b;  // both >= 0
 }
 
 }  // namespace
@@ -107,7 +112,7 @@ bool LogEventReader::next(LogEvent& out) noexcept {
       damage_.truncated_offset = pos_;
       damage_.truncated_reason =
           h == Header::kTruncated ? why : "an unreadable header (" + why + ")";
-      damage_.events_lost += 1;
+      damage_.events_lost = add_saturating(damage_.events_lost, 1);
       pos_ = bytes_.size();
       return false;
     }
@@ -117,9 +122,14 @@ bool LogEventReader::next(LogEvent& out) noexcept {
     }
     damage_.corrupt_bytes += at - pos_;
     // The event numbers say how many were lost (at least the damaged one).
-    const std::int64_t skipped =
-        have_last_ && out.eventnum > last_eventnum_ ? out.eventnum - last_eventnum_ - 1 : 1;
-    damage_.events_lost += skipped > 0 ? skipped : 1;
+    // (Unsigned: hostile event numbers must not overflow the subtraction.)
+    const std::uint64_t gap =
+        have_last_ && out.eventnum > last_eventnum_
+            ? static_cast<std::uint64_t>(out.eventnum) - static_cast<std::uint64_t>(last_eventnum_)
+            : 2;
+    const std::uint64_t skipped = gap > static_cast<std::uint64_t>(INT64_MAX) ? INT64_MAX : gap - 1;
+    damage_.events_lost =
+        add_saturating(damage_.events_lost, skipped > 0 ? static_cast<std::int64_t>(skipped) : 1);
     pos_ = at + kLogHeaderSize + out.channel.size() + out.data.size();
   }
   have_last_ = true;

@@ -166,8 +166,12 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
         continue;
       }
       const TruthRow* best = &it->second.front();
+      // Distances in double: hostile event numbers must not overflow.
+      const auto distance = [&](const TruthRow& t) {
+        return std::fabs(static_cast<double>(t.event) - static_cast<double>(r.event));
+      };
       for (const TruthRow& t : it->second)
-        if (std::llabs(t.event - r.event) < std::llabs(best->event - r.event)) best = &t;
+        if (distance(t) < distance(*best)) best = &t;
       tau_out = best->tau_out;
     }
     if (out.t.empty()) {
@@ -183,8 +187,15 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
                                std::to_string(out.radius_m) + " to " + std::to_string(r.radius) +
                                "; one CSV holds one radius");
     }
+    // In double (a hostile utime must not overflow), and strictly increasing
+    // as doubles too: far from the first row two utimes can round to one t.
+    const double t = (static_cast<double>(r.utime) - static_cast<double>(out.first_utime)) * 1e-6;
+    if (!out.t.empty() && !(t > out.t.back())) {
+      ++out.skipped_not_increasing;
+      continue;
+    }
     last_utime = r.utime;
-    out.t.push_back(static_cast<double>(r.utime - out.first_utime) * 1e-6);
+    out.t.push_back(t);
     out.x_in.push_back(r.x_in);
     out.x_out.push_back(r.x_out);
     out.T1.push_back(r.T1);
