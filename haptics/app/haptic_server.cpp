@@ -174,6 +174,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
   link_cfg.bridge.url = bridge::resolve_lcm_url(o.lcm_url.empty() ? cfg.lcm_url : o.lcm_url);
   link_cfg.bridge.prefix = cfg.lcm_prefix;
   link_cfg.joints = cfg.loop.joints;
+  link_cfg.state_limits = cfg.slave_limits;
   link_cfg.subscribe_truth = cfg.evaluation.truth;
   haptics::LcmSlaveLink link(link_cfg);
 

@@ -109,7 +109,7 @@ void LoopRunner::run() noexcept {
     const std::int64_t done = bridge::monotonic_now_ns();
     const NextTick next = next_tick(deadline, done, period);
     loop_.record_compute(done - woke, next.skipped);
-    due = deadline + period;
+    due = next.due_ns;
     deadline = next.deadline_ns;
   }
   loop_.shutdown();

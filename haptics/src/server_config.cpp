@@ -109,6 +109,16 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.loop.estimate_fault_s = ms("estimate_fault_ms", 500.0);
   safety.reject_unknown();
 
+  FieldReader slave(r.node("slave_state"), origin, "slave_state");
+  auto& sl = c.slave_limits;
+  sl.max_x_in_rate_rad_s = in_range(slave, "max_motor_speed_rad_s", sl.max_x_in_rate_rad_s, 0, 1e6);
+  sl.max_x_out_rate_rad_s =
+      in_range(slave, "max_joint_speed_rad_s", sl.max_x_out_rate_rad_s, 0, 1e6);
+  sl.max_tension_rate_n_per_s =
+      in_range(slave, "max_tension_rate_n_per_s", sl.max_tension_rate_n_per_s, 0, 1e9);
+  sl.step_slack_s = in_range(slave, "step_slack_ms", sl.step_slack_s * 1e3, 0, 1e4) * 1e-3;
+  slave.reject_unknown();
+
   FieldReader rt(r.node("realtime"), origin, "realtime");
   c.realtime.sched_fifo = rt.get_bool("sched_fifo", true);
   c.realtime.priority = static_cast<int>(in_range(rt, "priority", 80, 1, 99));

@@ -143,6 +143,24 @@ TEST(ServerConfig, PinningToACpuThatIsNotThereIsAnError) {
   EXPECT_EQ(error_of("realtime: {cpu: 0}\n" + kJoint), "");
 }
 
+TEST(ServerConfig, PlausibleStepLimitsAreConfigurableWithSaneDefaults) {
+  auto c = parse_server_config(kJoint, "server.yaml", "/cfg");
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_x_in_rate_rad_s, 500.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_tension_rate_n_per_s, 1e5);
+  c = parse_server_config(
+      "slave_state: {max_motor_speed_rad_s: 50, max_joint_speed_rad_s: 5, "
+      "max_tension_rate_n_per_s: 2000, step_slack_ms: 5}\n" +
+          kJoint,
+      "server.yaml", "/cfg");
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_x_in_rate_rad_s, 50.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_x_out_rate_rad_s, 5.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_tension_rate_n_per_s, 2000.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.step_slack_s, 0.005);
+  EXPECT_NE(error_of("slave_state: {max_motor_speed_rad_s: -1}\n" + kJoint)
+                .find("slave_state.max_motor_speed_rad_s"),
+            std::string::npos);
+}
+
 TEST(ServerConfig, MoreJointsThanTheDeviceHasIsAnError) {
   const auto c = parse_server_config(
       "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3}\n  - {max_torque_nm: 0.3}\n"

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge/limits.hpp"
 #include "haptics/haptic_loop.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/settings.hpp"
@@ -52,6 +53,9 @@ struct ServerConfig {
   double duration_s = 0.0;  ///< 0 = until SIGINT/SIGTERM
   RealtimeConfig realtime;
   EvaluationConfig evaluation;
+  /// `slave_state:` how fast the slave's values can physically change
+  /// (bridge/limits.hpp); a faster step rejects the message.
+  bridge::SlaveStateLimits slave_limits;
 };
 
 /// Parses YAML text; relative paths (params, trace, report) resolve against
