@@ -6,6 +6,7 @@
 // MASTER_COMMAND and HAPTIC_STATUS.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -65,9 +66,16 @@ bool wait_until(Pred done, std::chrono::milliseconds timeout) {
 /// running when destroyed.
 class Child {
  public:
-  Child(const std::vector<std::string>& argv, const fs::path& log) : log_(log) {
+  /// `cpu` >= 0: the whole process runs on that CPU only.
+  Child(const std::vector<std::string>& argv, const fs::path& log, int cpu = -1) : log_(log) {
     pid_ = fork();
     if (pid_ == 0) {
+      if (cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(cpu, &set);
+        sched_setaffinity(0, sizeof set, &set);
+      }
       // The test blocks nothing, but be explicit: the child starts with the
       // default dispositions, as from a shell.
       sigset_t none;
@@ -271,14 +279,14 @@ class ServerFaults : public ::testing::Test {
                      << "  - {params: paper, max_torque_nm: 0.3, max_rate_nm_per_s: 30}\n";
     return p;
   }
-  std::unique_ptr<Child> start_server(const fs::path& config,
+  std::unique_ptr<Child> start_server(const fs::path& config, int process_cpu = -1,
                                       const std::vector<std::string>& more = {}) {
     // TSMH_SERVER_UNDER_TEST runs another build (e.g. before a fix) against these tests.
     const char* other = std::getenv("TSMH_SERVER_UNDER_TEST");
     std::vector<std::string> argv{other ? other : TSMH_HAPTIC_SERVER, "--config", config.string(),
                                   "--lcm-url", url()};
     argv.insert(argv.end(), more.begin(), more.end());
-    return std::make_unique<Child>(argv, dir_ / "server.log");
+    return std::make_unique<Child>(argv, dir_ / "server.log", process_cpu);
   }
 
   fs::path dir_;
@@ -389,11 +397,12 @@ TEST_F(ServerFaults, SlaveClockResetRecoversFeedbackAndIsFlagged) {
 TEST_F(ServerFaults, SlaveStateFloodDoesNotStallTheLoop) {
   const std::string prefix = unique_prefix();
   Peer peer(prefix);
-  // Pinned, as the demo pins it: the bridge's receive thread then shares the
-  // loop's CPU part of the time, which is when a reader that waits for the
-  // writer (the old seqlock) could spin on a writer it had itself preempted.
+  // The whole server on one CPU (the peer floods from the other): the
+  // bridge's receive thread always shares the SCHED_FIFO loop's CPU, which is
+  // when a reader that waits for the writer (the old one-slot seqlock) spins
+  // on a writer it has itself preempted mid-store.
   const int cpu = std::thread::hardware_concurrency() > 1 ? 1 : 0;
-  auto server = start_server(write_config(prefix, cpu));
+  auto server = start_server(write_config(prefix, cpu), cpu);
   peer.start();
   ASSERT_TRUE(wait_until([&] { return rendering(peer); }, 8s)) << server->log();
   const std::size_t before = peer.statuses().size();
