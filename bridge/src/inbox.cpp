@@ -1,5 +1,7 @@
 #include "bridge/inbox.hpp"
 
+#include <algorithm>
+
 #include "bridge/validation.hpp"
 
 namespace tsmh::bridge {
@@ -13,6 +15,7 @@ ChannelStats InboxBase::stats() const noexcept {
   s.duplicates = duplicates_.load(std::memory_order_relaxed);
   s.reordered = reordered_.load(std::memory_order_relaxed);
   s.seq_gaps = seq_gaps_.load(std::memory_order_relaxed);
+  s.seq_missing = seq_missing_.load(std::memory_order_relaxed);
   s.restarts = restarts_.load(std::memory_order_relaxed);
   s.resyncs = resyncs_.load(std::memory_order_relaxed);
   s.latency = latency_.summary();
@@ -38,7 +41,15 @@ bool InboxBase::count_order(const OrderVerdict& v, std::int64_t seq, std::int64_
     case Order::Next:
       break;
     case Order::Gap:
-      seq_gaps_.fetch_add(static_cast<std::uint64_t>(v.missing), std::memory_order_relaxed);
+      // One event per gap, whatever its width: a single bogus seq of 2e12
+      // must read as one gap, not two trillion (and never overflow).
+      seq_gaps_.fetch_add(1, std::memory_order_relaxed);
+      {  // single writer (the receive thread): load + store is enough
+        const std::uint64_t had = seq_missing_.load(std::memory_order_relaxed);
+        const auto add = static_cast<std::uint64_t>(v.missing);
+        seq_missing_.store(had > UINT64_MAX - add ? UINT64_MAX : had + add,
+                           std::memory_order_relaxed);
+      }
       break;
     case Order::Restart:
       restarts_.fetch_add(1, std::memory_order_relaxed);
@@ -71,6 +82,22 @@ void InboxBase::count_accepted(std::int64_t utime, std::int64_t receive_ns,
   accepted_.fetch_add(1, std::memory_order_relaxed);
 }
 
+namespace {
+
+// check_step() over the interval between two samples: the smaller of the
+// sender's (utime) and the receiver's (receive_ns) interval, so a forged utime
+// cannot widen the bound (doubles: a hostile utime must not overflow).
+template <class Sample, class Limits>
+std::optional<Rejection> step_check(const Sample& prev, const Sample& next,
+                                    const Limits& limits) noexcept {
+  const double utime_s = (static_cast<double>(next.utime) - static_cast<double>(prev.utime)) * 1e-6;
+  const double receive_s =
+      (static_cast<double>(next.receive_ns) - static_cast<double>(prev.receive_ns)) * 1e-9;
+  return bridge::check_step(prev, next, std::min(std::max(utime_s, 0.0), receive_s), limits);
+}
+
+}  // namespace
+
 template <class Sample>
 Inbox<Sample>::Inbox(std::string channel, InboxOptions<Sample> options)
     : InboxBase(std::move(channel)),
@@ -93,9 +120,31 @@ void Inbox<Sample>::ingest(const void* data, std::size_t size, std::int64_t rece
     r->seq = scratch_.seq;
     return reject(*r);
   }
+  bool rebased = false;
+  if (has_accepted_) {
+    scratch_.receive_ns = receive_ns;
+    if (auto r = step_check(last_accepted_, scratch_, options_.limits)) {
+      // A re-homed slave sends a new trajectory that is consistent in itself;
+      // random garbage never is. Re-base only on resync_after rejected
+      // samples in a row that each follow the previous one plausibly.
+      const bool continues =
+          candidate_run_ > 0 && !step_check(candidate_, scratch_, options_.limits);
+      candidate_run_ = continues ? candidate_run_ + 1 : 1;
+      candidate_ = scratch_;
+      if (candidate_run_ < options_.resync_after) {
+        r->seq = scratch_.seq;
+        return reject(*r);
+      }
+      rebased = true;
+    }
+  }
   const OrderVerdict v = tracker_.observe(scratch_.seq, scratch_.utime);
   if (!count_order(v, scratch_.seq, scratch_.utime, receive_ns)) return;
+  candidate_run_ = 0;
+  if (rebased) count_resync();
   scratch_.receive_ns = receive_ns;
+  last_accepted_ = scratch_;
+  has_accepted_ = true;
   cell_.store(scratch_);
   count_accepted(scratch_.utime, receive_ns, options_.clocks_shared);
 }

@@ -4,12 +4,13 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <optional>
 #include <unordered_map>
 
 #include "bridge/channels.hpp"
 #include "bridge/codec.hpp"
+#include "bridge/log_events.hpp"
 
 namespace tsmh::bridge {
 namespace {
@@ -45,8 +46,8 @@ bool is_lcm_log(const std::filesystem::path& path) {
   return std::equal(std::begin(head), std::end(head), std::begin(kSyncWord));
 }
 
-JointSeries read_joint_series(const std::filesystem::path& path, int joint,
-                              std::string_view prefix) {
+JointSeries read_joint_series(const std::filesystem::path& path, int joint, std::string_view prefix,
+                              const LogReadOptions& options) {
   const std::string file = path.string();
   if (joint < 0 || joint >= kMaxJoints)
     throw LogError(file, "joint " + std::to_string(joint) + " is outside 0.." +
@@ -54,8 +55,24 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
   if (!std::filesystem::is_regular_file(path)) throw LogError(file, "no such file");
   if (!is_lcm_log(path))
     throw LogError(file, "not an LCM log (it does not start with LCM's event sync word)");
-  lcm::LogFile log(file, "r");
-  if (!log.good()) throw LogError(file, "cannot open as an LCM log");
+  std::optional<MappedFile> mapped;
+  try {
+    mapped.emplace(file);
+  } catch (const std::runtime_error& e) {
+    throw LogError(file, e.what());
+  }
+  return read_joint_series(mapped->bytes(), file, joint, prefix, options);
+}
+
+JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::string& file,
+                              int joint, std::string_view prefix, const LogReadOptions& options) {
+  if (joint < 0 || joint >= kMaxJoints)
+    throw LogError(file, "joint " + std::to_string(joint) + " is outside 0.." +
+                             std::to_string(kMaxJoints - 1));
+  if (bytes.size() < 4 || !std::equal(bytes.begin(), bytes.begin() + 4, std::begin(kSyncWord)))
+    throw LogError(file, "not an LCM log (it does not start with LCM's event sync word)");
+  // Our own reader: liblcm's trusts the length fields (issue 15).
+  LogEventReader log(bytes);
 
   const std::string state_channel = channel_name(prefix, Channel::SlaveState);
   const std::string truth_channel = channel_name(prefix, Channel::SlaveTruth);
@@ -76,12 +93,13 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
   int max_joints_seen = 0;
   std::size_t lacking_joint = 0;
 
-  for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
-    ++seen[ev->channel];
-    const auto size = static_cast<std::size_t>(ev->datalen < 0 ? 0 : ev->datalen);
+  LogEvent event;
+  for (const LogEvent* ev = &event; log.next(event);) {
+    ++seen[std::string(ev->channel)];
+    const std::size_t size = ev->data.size();
     if (ev->channel == state_channel) {
       ++out.state_messages;
-      if (state_decoder.decode(ev->data, size, state)) {
+      if (state_decoder.decode(ev->data.data(), size, state)) {
         ++out.skipped_invalid;
         continue;
       }
@@ -101,13 +119,21 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
       states.push_back(r);
     } else if (ev->channel == truth_channel) {
       ++out.truth_messages;
-      if (truth_decoder.decode(ev->data, size, truth) || joint >= truth.num_joints ||
+      if (truth_decoder.decode(ev->data.data(), size, truth) || joint >= truth.num_joints ||
           !std::isfinite(truth.tau_out[j])) {
         continue;  // unusable truth: its state row is dropped below for lack of a match
       }
       truths[truth.seq].push_back({ev->eventnum, truth.tau_out[j]});
     }
   }
+
+  // Damage is an error unless the caller accepts it; then it is reported
+  // (JointSeries::damage) with the number of events lost.
+  out.damage = log.damage();
+  if (out.damage.any() && !options.accept_damage)
+    throw LogError(file, out.damage.describe() +
+                             ". The log is damaged (cut off while recording, or corrupt); to "
+                             "use the intact events anyway, pass --accept-truncated");
 
   if (states.empty()) {
     if (lacking_joint > 0)
@@ -140,8 +166,12 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
         continue;
       }
       const TruthRow* best = &it->second.front();
+      // Distances in double: hostile event numbers must not overflow.
+      const auto distance = [&](const TruthRow& t) {
+        return std::fabs(static_cast<double>(t.event) - static_cast<double>(r.event));
+      };
       for (const TruthRow& t : it->second)
-        if (std::llabs(t.event - r.event) < std::llabs(best->event - r.event)) best = &t;
+        if (distance(t) < distance(*best)) best = &t;
       tau_out = best->tau_out;
     }
     if (out.t.empty()) {
@@ -157,8 +187,15 @@ JointSeries read_joint_series(const std::filesystem::path& path, int joint,
                                std::to_string(out.radius_m) + " to " + std::to_string(r.radius) +
                                "; one CSV holds one radius");
     }
+    // In double (a hostile utime must not overflow), and strictly increasing
+    // as doubles too: far from the first row two utimes can round to one t.
+    const double t = (static_cast<double>(r.utime) - static_cast<double>(out.first_utime)) * 1e-6;
+    if (!out.t.empty() && !(t > out.t.back())) {
+      ++out.skipped_not_increasing;
+      continue;
+    }
     last_utime = r.utime;
-    out.t.push_back(static_cast<double>(r.utime - out.first_utime) * 1e-6);
+    out.t.push_back(t);
     out.x_in.push_back(r.x_in);
     out.x_out.push_back(r.x_out);
     out.T1.push_back(r.T1);

@@ -18,6 +18,8 @@ std::string_view reason_name(RejectReason reason) noexcept {
       return "out_of_range";
     case RejectReason::TimeBackwards:
       return "time_backwards";
+    case RejectReason::Implausible:
+      return "implausible_step";
   }
   return "unknown";
 }
@@ -81,6 +83,12 @@ std::string describe(const Rejection& r, std::string_view channel) {
       out += " us is not after the previous message's (";
       out += field;
       out += ')';
+      break;
+    case RejectReason::Implausible:
+      out += field;
+      out += " stepped by ";
+      out += value;
+      out += " since the last accepted sample: faster than its configured limit";
       break;
   }
   return out;

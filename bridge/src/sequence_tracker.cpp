@@ -12,13 +12,18 @@ OrderVerdict SequenceTracker::observe(std::int64_t seq, std::int64_t utime) noex
     v.order = Order::Duplicate;
     return v;
   } else if (seq > last_seq_) {
+    // The distance in unsigned arithmetic: seq - last_seq_ overflows int64
+    // when a hostile sender puts INT64_MAX after a negative seq.
+    const std::uint64_t ahead =
+        static_cast<std::uint64_t>(seq) - static_cast<std::uint64_t>(last_seq_);
     if (utime <= last_utime_) {
       v.order = Order::TimeBackwards;
-    } else if (seq == last_seq_ + 1) {
+    } else if (ahead == 1) {
       v.order = Order::Next;
     } else {
       v.order = Order::Gap;
-      v.missing = seq - last_seq_ - 1;
+      constexpr auto kMax = static_cast<std::uint64_t>(INT64_MAX);
+      v.missing = static_cast<std::int64_t>(ahead - 1 > kMax ? kMax : ahead - 1);
     }
   } else {
     v.order = utime > last_utime_ ? Order::Restart : Order::Late;

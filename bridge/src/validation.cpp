@@ -19,7 +19,30 @@ std::optional<Rejection> check(const char* name, const JointArray& a, int n, con
   return std::nullopt;
 }
 
+// |next - prev| <= max_step for the first n joints; NaN on either side (an
+// absent encoder) is not a step. max_step <= 0 disables the check.
+std::optional<Rejection> check_step(const char* name, const JointArray& prev,
+                                    const JointArray& next, int n, double max_step) noexcept {
+  if (!(max_step > 0.0)) return std::nullopt;
+  for (int j = 0; j < n; ++j) {
+    const auto k = static_cast<std::size_t>(j);
+    const double d = next[k] - prev[k];
+    if (std::fabs(d) > max_step) return make_rejection(RejectReason::Implausible, name, d, j);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
+
+std::optional<Rejection> check_step(const SlaveStateSample& prev, const SlaveStateSample& next,
+                                    double elapsed_s, const SlaveStateLimits& l) noexcept {
+  const double t = (elapsed_s > 0.0 ? elapsed_s : 0.0) + l.step_slack_s;
+  const int n = next.num_joints < prev.num_joints ? next.num_joints : prev.num_joints;
+  if (auto r = check_step("x_in", prev.x_in, next.x_in, n, l.max_x_in_rate_rad_s * t)) return r;
+  if (auto r = check_step("x_out", prev.x_out, next.x_out, n, l.max_x_out_rate_rad_s * t)) return r;
+  if (auto r = check_step("T1", prev.T1, next.T1, n, l.max_tension_rate_n_per_s * t)) return r;
+  return check_step("T3", prev.T3, next.T3, n, l.max_tension_rate_n_per_s * t);
+}
 
 std::optional<Rejection> check_joint_count(int num_joints, int expected) noexcept {
   if (num_joints < 1 || num_joints > kMaxJoints) {

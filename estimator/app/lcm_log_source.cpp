@@ -1,6 +1,7 @@
 #include "lcm_log_source.hpp"
 
 #include <charconv>
+#include <iostream>
 
 #include "bridge/log_reader.hpp"
 #include "estimator/table.hpp"
@@ -14,7 +15,8 @@ estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
                                             std::string* summary) {
   bridge::JointSeries js;
   try {
-    js = bridge::read_joint_series(path, sel.joint, sel.prefix);
+    js = bridge::read_joint_series(path, sel.joint, sel.prefix,
+                                   {.accept_damage = sel.accept_truncated});
   } catch (const bridge::LogError& e) {
     throw estimator::DataError(e.file(), 0, "", e.detail());
   }
@@ -27,6 +29,10 @@ estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
                " without matching SLAVE_TRUTH" +
                (js.x_out.empty() ? "; no x_out (NaN in the log)" : "");
   }
+  // Accepted damage is never silent, whether or not a summary was asked for.
+  if (js.damage.any())
+    std::cerr << "tsm: warning: " << path.string() << ": " << js.damage.describe() << "; using the "
+              << js.state_messages << " intact SLAVE_STATE events\n";
   // Through the CSV contract's own checks (time strictly increasing,
   // requirements, tau_in from T1 and T3), so a log and a CSV behave the same.
   estimator::Table table;
@@ -59,6 +65,9 @@ void add_lcm_log_options(CLI::App& cmd, LcmLogSelection& sel) {
       ->check(CLI::NonNegativeNumber);
   cmd.add_option("--prefix", sel.prefix,
                  "LCM log DATA: channel prefix of the arm, e.g. ARM1_ (default none)");
+  cmd.add_flag("--accept-truncated", sel.accept_truncated,
+               "LCM log DATA: use the intact events of a log that is cut off or has corrupt "
+               "regions (and say how many were lost) instead of refusing it");
 }
 
 }  // namespace tsmh::tsm_cli

@@ -17,6 +17,9 @@ namespace tsmh::tsm_cli {
 struct LcmLogSelection {
   int joint = 0;
   std::string prefix;  ///< e.g. "ARM1_"; empty: SLAVE_STATE, SLAVE_TRUTH
+  /// --accept-truncated: use the intact events of a log that was cut off (or
+  /// has corrupt regions), saying how many were lost; otherwise an error.
+  bool accept_truncated = false;
 };
 
 /// Reads joint `sel.joint` of `sel.prefix`SLAVE_STATE (+ SLAVE_TRUTH) from an

@@ -8,8 +8,11 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <sstream>
+#include <stdexcept>
 
 namespace tsmh::estimator {
 namespace {
@@ -113,6 +116,58 @@ std::string run_gnuplot(const fs::path& script) {
   return err;
 }
 
+namespace {
+
+// Plot data and scripts are part of the output folder: a write that fails
+// part way (disk full, a file-size limit) is an error of the run, never a
+// warning that leaves a truncated file to be committed (issue 15).
+void write_or_throw(const fs::path& path, const std::function<void(std::ostream&)>& write) {
+  errno = 0;
+  std::ofstream f(path);
+  if (f) write(f);
+  f.flush();
+  if (f) f.close();
+  if (!f) {
+    const std::string why = errno != 0 ? std::string(" (") + std::strerror(errno) + ")" : "";
+    std::error_code ec;
+    fs::remove(path, ec);
+    throw std::runtime_error(path.string() + ": write failed" + why);
+  }
+}
+
+// Whatever went wrong in gnuplot, no partial image stays behind; an image
+// that gnuplot reported as made but is cut short (no PNG IEND chunk, no
+// closing </svg>) turns the outcome into an error.
+void check_images(const fs::path& dir, const std::vector<std::string>& images, std::string& error) {
+  std::error_code ec;
+  for (const auto& name : images) {
+    const fs::path p = dir / name;
+    if (!error.empty()) {
+      fs::remove(p, ec);
+      continue;
+    }
+    std::ifstream in(p, std::ios::binary);
+    std::string tail;
+    if (in) {
+      in.seekg(0, std::ios::end);
+      const auto size = static_cast<long>(in.tellg());
+      const long n = std::min(16L, std::max(0L, size));
+      in.seekg(size - n);
+      tail.resize(static_cast<std::size_t>(n));
+      if (!in.read(tail.data(), n)) tail.clear();
+    }
+    const bool complete = name.ends_with(".png")   ? tail.find("IEND") != std::string::npos
+                          : name.ends_with(".svg") ? tail.find("</svg>") != std::string::npos
+                                                   : !tail.empty();
+    if (!complete) error = p.string() + ": the image is missing or cut short";
+  }
+  if (!error.empty())
+    for (const auto& name : images)
+      fs::remove(dir / name, ec);
+}
+
+}  // namespace
+
 PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const FitData& data,
                           const std::vector<PlotCurve>& curves, const std::string& title) {
   PlotOutcome out;
@@ -121,8 +176,7 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
   // The data file: at most ~20000 rows, so a 40 s record keeps 2 ms detail.
   const std::size_t stride = std::max<std::size_t>(1, data.size() / 20000);
   const fs::path dat = dir / (prefix + "_plot_data.csv");
-  {
-    std::ofstream f(dat);
+  write_or_throw(dat, [&](std::ostream& f) {
     f << "# t, xd, measured";
     for (const auto& c : curves)
       f << ", " << c.title;
@@ -134,11 +188,7 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
         f << "," << c.friction[i];
       f << "\n";
     }
-    if (!f) {
-      out.error = dat.string() + ": cannot write plot data";
-      return out;
-    }
-  }
+  });
   std::ostringstream shade;
   for (const auto& [a, b] : validation_spans(data)) {
     shade << "set object rect from " << a << ", graph 0 to " << b
@@ -178,16 +228,12 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
   }
   s << "\nunset object\n";
   const fs::path script = dir / (prefix + "_plots.gp");
-  {
-    std::ofstream f(script);
-    f << s.str();
-    if (!f) {
-      out.error = script.string() + ": cannot write the plot script";
-      return out;
-    }
-  }
+  write_or_throw(script, [&](std::ostream& f) { f << s.str(); });
+  const std::vector<std::string> images = {image("friction"), image("hysteresis"),
+                                           image("residual")};
   out.error = run_gnuplot(script);
-  if (out.error.empty()) out.files = {image("friction"), image("hysteresis"), image("residual")};
+  check_images(dir, images, out.error);
+  if (out.error.empty()) out.files = images;
   return out;
 }
 
@@ -197,8 +243,7 @@ PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const R
   const std::string term = plot_terminal();
   const std::string ext = extension(term);
   const fs::path dat = dir / (prefix + "_regimes.csv");
-  {
-    std::ofstream f(dat);
+  write_or_throw(dat, [&](std::ostream& f) {
     f << "regime";
     for (const auto& s : bars.series)
       f << "," << s;
@@ -209,7 +254,7 @@ PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const R
         f << "," << bars.rmse[s][r];
       f << "\n";
     }
-  }
+  });
   std::ostringstream s;
   s << "set datafile separator ','\n"
     << terminal_line(term, 1200, 500) << "set output " << quoted(prefix + "_regimes" + ext)
@@ -222,11 +267,9 @@ PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const R
     s << ", '' using " << 2 + k << " title columnhead";
   s << "\n";
   const fs::path script = dir / (prefix + "_regimes.gp");
-  {
-    std::ofstream f(script);
-    f << s.str();
-  }
+  write_or_throw(script, [&](std::ostream& f) { f << s.str(); });
   out.error = run_gnuplot(script);
+  check_images(dir, {prefix + "_regimes" + ext}, out.error);
   if (out.error.empty()) out.files = {prefix + "_regimes" + ext};
   return out;
 }

@@ -1,5 +1,6 @@
 #include "estimator/recording.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -20,6 +21,44 @@ std::optional<double> parse_radius(const Table& table) {
 
 std::vector<double> optional_column(const Table& table, const char* name) {
   return table.has(name) ? table.column(name) : std::vector<double>{};
+}
+
+// Finite and increasing is not enough: a last t of 1e300 gave a "fit" with no
+// validation samples and RMSE NaN. Times beyond ~30 years, or one step longer
+// than a minute and than 10^4 typical steps, are not a recording (issue 15).
+void check_time_column(const Table& table, const std::vector<double>& t) {
+  constexpr double kMaxAbsTime = 1e9;  // s
+  const auto line_of = [&](std::size_t i) {
+    return i < table.line_of_row.size() ? table.line_of_row[i] : 0L;
+  };
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (std::fabs(t[i]) > kMaxAbsTime) {
+      std::ostringstream what;
+      what.precision(6);
+      what << "time " << t[i] << " s is beyond " << kMaxAbsTime
+           << " s (about 30 years): not a time in seconds";
+      throw DataError(table.source, line_of(i), "t", what.str());
+    }
+  }
+  if (t.size() < 3) return;
+  std::vector<double> steps(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i)
+    steps[i - 1] = t[i] - t[i - 1];
+  std::vector<double> sorted = steps;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
+                   sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  const double limit = std::max(60.0, 1e4 * median);
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    if (steps[i] > limit) {
+      std::ostringstream what;
+      what.precision(6);
+      what << "time jumps by " << steps[i] << " s (from " << t[i] << " to " << t[i + 1]
+           << "), more than a minute and 10^4 times the typical step of " << median
+           << " s: not one recording";
+      throw DataError(table.source, line_of(i + 1), "t", what.str());
+    }
+  }
 }
 
 }  // namespace
@@ -70,6 +109,9 @@ Recording recording_from_table(const Table& table, std::optional<double> radius_
       throw DataError(table.source, line, "t", what.str());
     }
   }
+  if (rec.size() == 0)
+    throw DataError(table.source, 0, "", "no data rows (the file has only a header)");
+  check_time_column(table, rec.t);
   if (need.radius && !std::isfinite(rec.radius_m))
     throw DataError(table.source, 0, "",
                     "no pulley radius: add '# radius_m: R' to the file or pass --radius");

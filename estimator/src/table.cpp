@@ -11,14 +11,40 @@
 #include "estimator/atomic_file.hpp"
 
 namespace tsmh::estimator {
+
+std::string excerpt(std::string_view text, std::size_t max_chars) {
+  std::string out;
+  const std::size_t n = std::min(text.size(), max_chars);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\\' || c == '\'') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    }
+  }
+  if (text.size() > n) out += "... (" + std::to_string(text.size()) + " bytes)";
+  return out;
+}
+
 namespace {
+
+// A CSV line is at most this long; anything longer is not our data (a binary
+// file, a line without newlines), and quoting it whole made a 300 MB error
+// message.
+constexpr std::size_t kMaxLineBytes = 1 << 20;
 
 std::string describe(const std::string& file, long line, const std::string& column,
                      const std::string& what) {
   // Built with append(): GCC 12 warns falsely (-Wrestrict) on chained operator+.
   std::string s = file;
   if (line > 0) s.append(":").append(std::to_string(line));
-  if (!column.empty()) s.append(": column '").append(column).append("'");
+  if (!column.empty()) s.append(": column '").append(excerpt(column)).append("'");
   s.append(": ").append(what);
   return s;
 }
@@ -84,6 +110,15 @@ Table read_csv_table(const std::filesystem::path& path) {
   bool have_header = false;
   while (std::getline(in, line)) {
     ++line_no;
+    if (line.size() > kMaxLineBytes)
+      throw DataError(file, line_no, "",
+                      "line is " + std::to_string(line.size()) + " bytes long (at most " +
+                          std::to_string(kMaxLineBytes) + "): not a CSV line; it starts '" +
+                          excerpt(line) + "'");
+    if (const auto nul = line.find('\0'); nul != std::string::npos)
+      throw DataError(file, line_no, "",
+                      "binary data (a NUL byte at column " + std::to_string(nul + 1) +
+                          "): not a CSV file; the line starts '" + excerpt(line) + "'");
     const std::string_view view = trim(line);
     if (view.empty()) continue;
     if (view.front() == '#') {
@@ -121,11 +156,11 @@ Table read_csv_table(const std::filesystem::path& path) {
       if (!cell.empty() && *first == '+') ++first;
       const auto [ptr, ec] = std::from_chars(first, last, v);
       if (cell.empty() || ec != std::errc() || ptr != last) {
-        throw DataError(file, line_no, table.names[i], "not a number: '" + std::string(cell) + "'");
+        throw DataError(file, line_no, table.names[i], "not a number: '" + excerpt(cell) + "'");
       }
       if (!std::isfinite(v)) {
         throw DataError(file, line_no, table.names[i],
-                        "value is " + std::string(cell) + " (not finite)");
+                        "value is " + excerpt(cell) + " (not finite)");
       }
       table.columns[i].push_back(v);
     }

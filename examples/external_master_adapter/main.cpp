@@ -87,15 +87,32 @@ struct ForceInbox {
   }
 };
 
-// Ctrl-C / SIGTERM are blocked and polled once per period, so stopping
+// The stop signals are blocked and polled once per period, so stopping
 // needs no global flag and always ends with zero torque.
 bool stop_requested(const sigset_t& set) {
   sigset_t pending;
   sigpending(&pending);
-  for (int s : {SIGINT, SIGTERM}) {
-    if (sigismember(&set, s) && sigismember(&pending, s)) return true;
-  }
+  for (int s = 1; s < NSIG; ++s)
+    if (sigismember(&set, s) == 1 && sigismember(&pending, s) == 1) return true;
   return false;
+}
+
+// Every signal that would end the process by default and can be caught (not
+// only Ctrl-C / SIGTERM: SIGHUP when the terminal closes, SIGQUIT, SIGUSR1,
+// ...): all of them stop through the zero-torque path. SIGPIPE is ignored.
+// (haptic-server uses the same list, bridge/stop_signals.hpp; this adapter
+// stays independent of the project's libraries on purpose.)
+sigset_t block_stop_signals() {
+  signal(SIGPIPE, SIG_IGN);
+  sigset_t set;
+  sigemptyset(&set);
+  for (int s : {SIGHUP, SIGINT, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGTERM, SIGVTALRM, SIGPROF,
+                SIGXCPU, SIGXFSZ, SIGIO, SIGPWR, SIGSTKFLT})
+    sigaddset(&set, s);
+  for (int s = SIGRTMIN; s <= SIGRTMAX; ++s)
+    sigaddset(&set, s);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  return set;
 }
 
 }  // namespace
@@ -115,6 +132,7 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
   CLI11_PARSE(app, argc, argv);
+  const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
 
   lcm::LCM lcm(url);  // an empty URL honours LCM_DEFAULT_URL, as LCM's tools do
   if (!lcm.good()) {
@@ -127,11 +145,6 @@ int main(int argc, char** argv) {
   }
   ForceInbox inbox;
   lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_force, &inbox);
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
   FakeVendorMaster device;
   tsmh::master_state_t state;

@@ -4,8 +4,9 @@
 //                 [--feedback estimated|naive|none] [--trace F] [--report F]
 //   haptic-server --list-devices
 //
-// Exit paths: SIGINT/SIGTERM, --duration, or any error after the device is
-// open: each writes zero torque and disables the device before exiting.
+// Exit paths: any catchable terminating signal (bridge/stop_signals.hpp),
+// --duration, or any error after the device is open: each writes zero
+// torque and disables the device before exiting.
 
 #include <pthread.h>
 #include <signal.h>
@@ -17,6 +18,7 @@
 #include <optional>
 
 #include "bridge/lcm_url.hpp"
+#include "bridge/stop_signals.hpp"
 #include "estimator/model_io.hpp"
 #include "haptics/evaluation.hpp"
 #include "haptics/lcm_slave_link.hpp"
@@ -42,23 +44,63 @@ struct Options {
   bool quiet = false;
 };
 
-/// Blocks SIGINT/SIGTERM in this thread and every thread it starts, so they
-/// are only ever taken by sigtimedwait() in main: no handler, no global flag.
-sigset_t block_stop_signals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  return set;
-}
+/// Logs what the loop thread reports through LoopEvents (it never prints
+/// itself): estimator re-initialisations, loss and return of the estimate,
+/// state changes with the fault reason, and stalls.
+class EventLog {
+ public:
+  explicit EventLog(haptics::LoopEvents& events) : events_(events) {}
+  void poll() {
+    const auto resets = events_.estimator_resets.load(std::memory_order_relaxed);
+    if (resets != resets_) {
+      std::fprintf(stderr,
+                   "haptic-server: slave clock jumped by %.6f s: estimators re-initialised (%llu "
+                   "so far)\n",
+                   static_cast<double>(events_.last_reset_jump_us.load()) * 1e-6,
+                   static_cast<unsigned long long>(resets));
+      resets_ = resets;
+    }
+    const auto lost = events_.estimate_lost_joints.load(std::memory_order_relaxed);
+    if (lost != lost_) {
+      if (lost != 0)
+        std::fprintf(stderr,
+                     "haptic-server: torque estimate lost (joint mask 0x%x): holding and fading "
+                     "the last valid one, FAULT if it lasts\n",
+                     lost);
+      else
+        std::fprintf(stderr, "haptic-server: torque estimate valid again on every joint\n");
+      lost_ = lost;
+    }
+    const auto state = static_cast<haptics::LoopState>(events_.state.load());
+    if (state != state_) {
+      if (state == haptics::LoopState::kFault)
+        std::fprintf(stderr, "haptic-server: FAULT: %s\n",
+                     std::string(to_string(static_cast<haptics::FaultReason>(events_.fault.load())))
+                         .c_str());
+      state_ = state;
+    }
+    const std::int64_t worst = events_.worst_lateness_ns.exchange(0);
+    if (worst > 10'000'000)
+      std::fprintf(stderr, "haptic-server: warning: a tick started %.1f ms late (overruns %llu)\n",
+                   static_cast<double>(worst) * 1e-6,
+                   static_cast<unsigned long long>(events_.overruns.load()));
+  }
 
-/// Waits for a stop signal or the runner finishing. Returns the signal or 0.
-int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner) {
+ private:
+  haptics::LoopEvents& events_;
+  std::uint64_t resets_ = 0;
+  std::uint32_t lost_ = 0;
+  haptics::LoopState state_ = haptics::LoopState::kDisabled;
+};
+
+/// Waits for a stop signal or the runner finishing, logging loop events every
+/// 50 ms. Returns the signal or 0.
+int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventLog& log) {
   while (!runner.finished()) {
     timespec timeout{0, 50'000'000};
     const int sig = sigtimedwait(&set, nullptr, &timeout);
     if (sig > 0) return sig;
+    log.poll();
   }
   return 0;
 }
@@ -88,8 +130,8 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
       "  lateness us: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f;  compute p99 %.1f us\n"
       "  slave: %llu samples used, %llu accepted, %llu rejected, %llu seq gaps, latency p99 "
       "%.0f us\n"
-      "  safety: stale %llu ticks, saturated %llu, rate-limited %llu, non-finite %llu;  "
-      "state %s\n",
+      "  safety: stale %llu ticks, saturated %llu, rate-limited %llu, non-finite %llu, estimate "
+      "lost %llu ticks, estimator resets %llu;  state %s\n",
       seconds, static_cast<unsigned long long>(c.ticks), loop.measured_rate_hz(), loop.rate_hz(),
       static_cast<unsigned long long>(c.overruns), lat.p50_us, lat.p99_us, lat.p999_us, lat.max_us,
       cmp.p99_us, static_cast<unsigned long long>(c.slave_samples),
@@ -99,11 +141,12 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
       static_cast<unsigned long long>(c.saturated_ticks),
       static_cast<unsigned long long>(c.rate_limited_ticks),
       static_cast<unsigned long long>(c.nonfinite_requests),
+      static_cast<unsigned long long>(c.estimate_lost_ticks),
+      static_cast<unsigned long long>(c.estimator_resets),
       std::string(to_string(loop.state())).c_str());
 }
 
-int run(const Options& o) {
-  const sigset_t stop_signals = block_stop_signals();
+int run(const Options& o, const sigset_t& stop_signals) {
   haptics::ServerConfig cfg = haptics::load_server_config(o.config);
   if (o.duration) cfg.duration_s = *o.duration;
   if (o.feedback) cfg.loop.source = haptics::feedback_source_from_string(*o.feedback);
@@ -132,6 +175,7 @@ int run(const Options& o) {
   link_cfg.bridge.url = bridge::resolve_lcm_url(o.lcm_url.empty() ? cfg.lcm_url : o.lcm_url);
   link_cfg.bridge.prefix = cfg.lcm_prefix;
   link_cfg.joints = cfg.loop.joints;
+  link_cfg.state_limits = cfg.slave_limits;
   link_cfg.subscribe_truth = cfg.evaluation.truth;
   haptics::LcmSlaveLink link(link_cfg);
 
@@ -139,6 +183,7 @@ int run(const Options& o) {
   master_devices::DriverContext ctx{cfg.source, "device.settings",
                                     std::filesystem::path(cfg.source).parent_path()};
   auto device = registry.create(cfg.device_driver, cfg.device_settings, ctx);
+  haptics::check_against_device(cfg, device->spec());
   // The configured torque limit never exceeds what the device can take.
   for (int j = 0; j < cfg.loop.joints; ++j) {
     const double peak = device->spec().peak_torque_nm[static_cast<std::size_t>(j)];
@@ -184,7 +229,8 @@ int run(const Options& o) {
           cfg.loop.joints, cfg.loop.rate_hz, std::string(to_string(cfg.loop.source)).c_str(),
           cfg.device_driver.c_str(), device->spec().model.c_str(), link_cfg.bridge.url.c_str(),
           cfg.lcm_prefix.empty() ? "" : " prefix ", cfg.lcm_prefix.c_str());
-    const int sig = wait_for_stop(stop_signals, runner);
+    EventLog events(loop.events());
+    const int sig = wait_for_stop(stop_signals, runner, events);
     runner.stop();
     runner.join();  // the loop thread wrote zero torque on its way out
     timespec t1{};
@@ -195,7 +241,7 @@ int run(const Options& o) {
     device->close();
     if (sig)
       std::fprintf(stderr, "haptic-server: %s: torque zeroed, stopping\n",
-                   sig == SIGINT ? "SIGINT" : "SIGTERM");
+                   bridge::signal_name(sig));
     print_summary(loop, link, seconds);
     if (trace && !cfg.evaluation.trace.empty()) trace->write_csv(cfg.evaluation.trace);
     if (trace && !cfg.evaluation.report.empty()) {
@@ -214,6 +260,12 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Every catchable terminating signal (SIGHUP, SIGQUIT, SIGUSR1, ... not
+  // only SIGINT/SIGTERM) is blocked before any thread exists, so in every
+  // thread, and taken by sigtimedwait() in run(): all of them end through the
+  // zero-torque path. SIGPIPE is ignored (write errors are reported where
+  // they happen).
+  const sigset_t stop_signals = tsmh::bridge::block_terminating_signals();
   CLI::App app{"haptic-server: 1 kHz haptic feedback for tendon-sheath driven robots"};
   Options o;
   app.add_option("--config", o.config, "Server configuration (YAML)");
@@ -238,7 +290,7 @@ int main(int argc, char** argv) {
           << "haptic-server: error: --config FILE is required (see examples/demo/server.yaml)\n";
       return 2;
     }
-    return run(o);
+    return run(o, stop_signals);
   } catch (const haptics::ConfigError& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
     return 2;

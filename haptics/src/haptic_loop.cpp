@@ -1,5 +1,6 @@
 #include "haptics/haptic_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -57,6 +58,8 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   ++counters_.ticks;
   lateness_.record(lateness_ns);
   window_lateness_.record(lateness_ns);
+  if (lateness_ns > events_.worst_lateness_ns.load(std::memory_order_relaxed))
+    events_.worst_lateness_ns.store(lateness_ns, std::memory_order_relaxed);
   const auto n = static_cast<std::size_t>(config_.joints);
 
   // 1. The master.
@@ -67,37 +70,47 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   const std::uint64_t version = link_.latest_state(state_);
   if (version != 0 && version != state_version_) {
     state_version_ = version;
-    have_state_ = true;
     ++counters_.slave_samples;
-    const bool joints_ok = state_.num_joints >= config_.joints;
-    for (std::size_t j = 0; j < n; ++j) {
-      auto& e = estimates_[j];
-      e = joints_ok ? estimators_[j]->update_tensions(static_cast<double>(state_.utime) * 1e-6,
-                                                      state_.x_in[j], state_.T1[j], state_.T3[j])
-                    : estimator::Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
-      if (!e.valid) ++counters_.estimator_rejects;
-    }
+    estimate();
   }
   const double age_s = have_state_ ? static_cast<double>(now_ns - state_.receive_ns) * 1e-9
                                    : std::numeric_limits<double>::infinity();
 
+  // Loss of the estimate (issue 15): the last valid estimate is held and
+  // faded exactly like a stale slave (the fade counts from the loss), and the
+  // loop faults if it lasts estimate_fault_s. The flag goes out in
+  // HAPTIC_STATUS and the server logs it from its main thread.
+  std::uint32_t lost = 0;
+  if (have_state_ && config_.source != FeedbackSource::kNone)
+    for (std::size_t j = 0; j < n; ++j)
+      if (!estimates_[j].valid) lost |= 1U << j;
+  if (lost != 0) {
+    if (estimate_lost_since_ns_ < 0) estimate_lost_since_ns_ = now_ns;
+    ++counters_.estimate_lost_ticks;
+  } else {
+    estimate_lost_since_ns_ = -1;
+  }
+  const double lost_s =
+      lost != 0 ? static_cast<double>(now_ns - estimate_lost_since_ns_) * 1e-9 : 0.0;
+  events_.estimate_lost_joints.store(lost, std::memory_order_relaxed);
+
   // 3. Feedback request per joint (NaN passes through: the safety filter zeroes it).
   JointArray request{};
   for (std::size_t j = 0; j < n; ++j) {
+    // A joint without a valid estimate renders its last valid one, fading.
+    const estimator::Estimate& e = estimates_[j].valid ? estimates_[j] : held_[j];
     double slave_tau = 0.0;
     switch (config_.source) {
       case FeedbackSource::kEstimated:
-        slave_tau = estimates_[j].tau_out_est;
+        slave_tau = e.tau_out_est;
         break;
       case FeedbackSource::kNaive:
-        slave_tau = estimates_[j].tau_in;
+        slave_tau = e.tau_in;
         break;
       case FeedbackSource::kNone:
         slave_tau = 0.0;
         break;
     }
-    if (!estimates_[j].valid && config_.source != FeedbackSource::kNone)
-      slave_tau = std::numeric_limits<double>::quiet_NaN();
     request[j] = config_.force[j](slave_tau);
   }
 
@@ -122,7 +135,10 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
                        .device_ok = device_ok,
                        .slave_lost = !(age_s <= config_.slave_timeout_s) &&
                                      counters_.ticks * nominal_dt > config_.slave_timeout_s,
+                       .estimate_lost = lost_s > config_.estimate_fault_s,
                        .internal_error = false});
+  events_.state.store(static_cast<std::int32_t>(now_state), std::memory_order_relaxed);
+  events_.fault.store(static_cast<std::int32_t>(machine_.fault()), std::memory_order_relaxed);
   const bool enabled = now_state == LoopState::kEnabled;
   if (enabled && before != LoopState::kEnabled) {
     // Start from where the slave is, so enabling never makes it jump.
@@ -139,7 +155,8 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   }
 
   // 5. Safety, then the device.
-  const SafetyOutput& out = safety_.apply(request, dt, age_s, enabled && device_fresh);
+  const SafetyOutput& out =
+      safety_.apply(request, dt, std::max(age_s, lost_s), enabled && device_fresh);
   if (out.flags & safety_flags::kNonFinite) ++counters_.nonfinite_requests;
   if (out.flags & safety_flags::kSaturated) ++counters_.saturated_ticks;
   if (out.flags & safety_flags::kRateLimited) ++counters_.rate_limited_ticks;
@@ -195,7 +212,51 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
 void HapticLoop::record_compute(std::int64_t compute_ns, std::int64_t skipped) noexcept {
   compute_.record(compute_ns);
   window_compute_.record(compute_ns);
-  if (skipped > 0) counters_.overruns += static_cast<std::uint64_t>(skipped);
+  if (skipped > 0) {
+    counters_.overruns += static_cast<std::uint64_t>(skipped);
+    overrun_in_period_ = true;
+    events_.overruns.store(counters_.overruns, std::memory_order_relaxed);
+  }
+}
+
+void HapticLoop::estimate() noexcept {
+  const auto n = static_cast<std::size_t>(config_.joints);
+  // A slave clock that jumps -- back (the slave rebooted) or forward by more
+  // than the slave timeout -- leaves the differentiators and friction states
+  // in another time base, and every later sample would be rejected as "time
+  // not increasing": re-initialise them so the estimate recovers at once.
+  // (Doubles: a hostile utime must not overflow the subtraction.)
+  if (have_state_) {
+    const double jump_s =
+        (static_cast<double>(state_.utime) - static_cast<double>(last_utime_)) * 1e-6;
+    if (!(jump_s > 0.0) || jump_s > config_.slave_timeout_s) {
+      for (std::size_t j = 0; j < n; ++j)
+        estimators_[j]->reset();
+      ++counters_.estimator_resets;
+      clock_reset_in_period_ = true;
+      events_.last_reset_jump_us.store(
+          static_cast<std::int64_t>(std::clamp(jump_s, -9e12, 9e12) * 1e6),
+          std::memory_order_relaxed);
+      events_.estimator_resets.store(counters_.estimator_resets, std::memory_order_relaxed);
+    }
+  }
+  have_state_ = true;
+  last_utime_ = state_.utime;
+  const bool joints_ok = state_.num_joints >= config_.joints;
+  for (std::size_t j = 0; j < n; ++j) {
+    auto& e = estimates_[j];
+    e = joints_ok ? estimators_[j]->update_tensions(static_cast<double>(state_.utime) * 1e-6,
+                                                    state_.x_in[j], state_.T1[j], state_.T3[j])
+                  : estimator::Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
+    if (e.valid) {
+      held_[j] = e;
+    } else {
+      // Whatever made it invalid, the next sample starts the estimator afresh
+      // instead of leaving it stuck.
+      ++counters_.estimator_rejects;
+      estimators_[j]->reset();
+    }
+  }
 }
 
 void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
@@ -213,7 +274,14 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
   status_.num_joints = config_.joints;
   status_.state = static_cast<std::int32_t>(machine_.state());
   status_.feedback_source = static_cast<std::int32_t>(config_.source);
-  status_.rate_hz = measured_rate_hz();
+  // Over the last status period, as documented: a stall shows here at once
+  // instead of being averaged away over the whole run.
+  status_.rate_hz = status_ns_ > 0 && now_ns > status_ns_
+                        ? static_cast<double>(counters_.ticks - status_ticks_) /
+                              (static_cast<double>(now_ns - status_ns_) * 1e-9)
+                        : measured_rate_hz();
+  status_ticks_ = counters_.ticks;
+  status_ns_ = now_ns;
   status_.lateness_p50_us = lat.p50_us;
   status_.lateness_p99_us = lat.p99_us;
   status_.lateness_max_us = lat.max_us;
@@ -225,11 +293,16 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
   status_.slave_seq_gaps = link.seq_gaps;
   status_.slave_latency_p99_us = link.latency_p99_us;
   std::int32_t flags = 0;
-  if (out.flags & safety_flags::kStaleFade) flags |= 1 << 0;
-  if (reading_.buttons.e_stop) flags |= 1 << 1;
-  if (!reading_.buttons.dead_man) flags |= 1 << 2;
-  if (out.flags & safety_flags::kSaturated) flags |= 1 << 3;
-  if (out.flags & safety_flags::kRateLimited) flags |= 1 << 4;
+  if (out.flags & safety_flags::kStaleFade) flags |= status_flags::kStaleFade;
+  if (reading_.buttons.e_stop) flags |= status_flags::kEStop;
+  if (!reading_.buttons.dead_man) flags |= status_flags::kDeadManReleased;
+  if (out.flags & safety_flags::kSaturated) flags |= status_flags::kSaturated;
+  if (out.flags & safety_flags::kRateLimited) flags |= status_flags::kRateLimited;
+  if (estimate_lost_since_ns_ >= 0) flags |= status_flags::kEstimateLost;
+  if (clock_reset_in_period_) flags |= status_flags::kClockReset;
+  if (overrun_in_period_) flags |= status_flags::kOverrun;
+  clock_reset_in_period_ = false;
+  overrun_in_period_ = false;
   status_.flags = flags;
   for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j) {
     status_.tau_in[j] = estimates_[j].tau_in;
@@ -247,7 +320,10 @@ void HapticLoop::shutdown() noexcept {
   device_.write_torque(device_torque_);
   device_.set_enabled(false);
   device_enabled_ = false;
-  command_.utime = last_ns_ / 1000;
+  // Strictly after the last tick's command: a receiver drops a message whose
+  // seq advances while its utime does not (time_backwards), and this one --
+  // the slave told to hold -- must never be dropped.
+  command_.utime = last_ns_ / 1000 + 1;
   command_.seq = command_seq_++;
   command_.num_joints = config_.joints;
   command_.enable = false;

@@ -6,6 +6,7 @@ LcmSlaveLink::LcmSlaveLink(const LcmSlaveLinkConfig& config)
     : rx_(config.bridge), tx_(config.bridge) {
   bridge::InboxOptions<bridge::SlaveStateSample> state_options;
   state_options.expected_joints = config.joints;
+  state_options.limits = config.state_limits;
   state_ = &rx_.subscribe(state_options);
   if (config.subscribe_truth) {
     bridge::InboxOptions<bridge::SlaveTruthSample> truth_options;

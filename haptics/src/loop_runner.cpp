@@ -96,13 +96,20 @@ void LoopRunner::run() noexcept {
                                ? start + static_cast<std::int64_t>(options_.duration_s * 1e9)
                                : INT64_MAX;
   std::int64_t deadline = start;
+  // Lateness is measured against the absolute schedule: `due` is the first
+  // deadline that has not run. After an overrun the schedule re-bases on the
+  // next deadline ahead, but the tick that then runs reports how late it is
+  // against `due` -- a 100 ms stall reads as 100 ms, not as the few
+  // microseconds by which the re-based deadline was missed.
+  std::int64_t due = start;
   while (!stop_.load(std::memory_order_relaxed) && deadline < end) {
     sleep_until(deadline);
     const std::int64_t woke = bridge::monotonic_now_ns();
-    loop_.tick(woke, woke - deadline);
+    loop_.tick(woke, woke - due);
     const std::int64_t done = bridge::monotonic_now_ns();
     const NextTick next = next_tick(deadline, done, period);
     loop_.record_compute(done - woke, next.skipped);
+    due = next.due_ns;
     deadline = next.deadline_ns;
   }
   loop_.shutdown();

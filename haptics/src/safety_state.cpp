@@ -26,6 +26,8 @@ std::string_view to_string(FaultReason r) noexcept {
       return "slave state lost";
     case FaultReason::kInternal:
       return "internal error";
+    case FaultReason::kEstimateLost:
+      return "torque estimate lost";
   }
   return "?";
 }
@@ -45,6 +47,8 @@ LoopState SafetyStateMachine::update(const SafetyInputs& in) noexcept {
     cause = FaultReason::kDevice;
   else if (in.slave_lost)
     cause = FaultReason::kSlaveLost;
+  else if (in.estimate_lost)
+    cause = FaultReason::kEstimateLost;
 
   if (cause != FaultReason::kNone) {
     if (state_ != LoopState::kFault) fault_ = cause;

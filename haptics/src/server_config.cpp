@@ -1,5 +1,7 @@
 #include "haptics/server_config.hpp"
 
+#include <sched.h>
+
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -28,6 +30,16 @@ double unit_sign(FieldReader& r, const char* key) {
   return s;
 }
 
+std::string cpu_list(const cpu_set_t& set) {
+  std::string out;
+  for (int i = 0; i < CPU_SETSIZE; ++i) {
+    if (!CPU_ISSET(i, &set)) continue;
+    if (!out.empty()) out += ',';
+    out += std::to_string(i);
+  }
+  return out;
+}
+
 std::string resolve(const std::filesystem::path& base, const std::string& p) {
   if (p.empty() || std::filesystem::path(p).is_absolute()) return p;
   return (base / p).lexically_normal().string();
@@ -52,6 +64,7 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
                       "): " + e.msg);
   }
   if (!root.IsMap()) throw ConfigError(origin + ": expected a YAML map");
+  master_devices::reject_duplicate_keys(root, origin);
   FieldReader r(root, origin, "");
   ServerConfig c;
   c.source = origin;
@@ -63,7 +76,16 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.loop.source = feedback_source_from_string(feedback);
   c.duration_s = in_range(r, "duration_s", 0.0, 0.0, 1e7);
 
+  // No silent default: a configuration without a device section would run
+  // the simulated console, which in an operating room means the surgeon's
+  // console is silently ignored. Reported after the joints, whose errors come
+  // first.
+  const bool has_device = r.has("device");
   FieldReader device(r.node("device"), origin, "device");
+  if (has_device && !device.has("driver"))
+    device.fail("driver",
+                "missing: name the master driver (hid, usb, lcm, emulator, or sim for a "
+                "simulated console)");
   c.device_driver = device.get_string("driver", "sim");
   const YAML::Node settings = device.node("settings");
   c.device_settings =
@@ -84,7 +106,18 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.loop.timing.recover_s = ms("recover_ms", 200.0);
   c.loop.slave_timeout_s = ms("slave_timeout_ms", 1000.0);
   c.loop.device_stale_fault_s = ms("device_stale_fault_ms", 50.0);
+  c.loop.estimate_fault_s = ms("estimate_fault_ms", 500.0);
   safety.reject_unknown();
+
+  FieldReader slave(r.node("slave_state"), origin, "slave_state");
+  auto& sl = c.slave_limits;
+  sl.max_x_in_rate_rad_s = in_range(slave, "max_motor_speed_rad_s", sl.max_x_in_rate_rad_s, 0, 1e6);
+  sl.max_x_out_rate_rad_s =
+      in_range(slave, "max_joint_speed_rad_s", sl.max_x_out_rate_rad_s, 0, 1e6);
+  sl.max_tension_rate_n_per_s =
+      in_range(slave, "max_tension_rate_n_per_s", sl.max_tension_rate_n_per_s, 0, 1e9);
+  sl.step_slack_s = in_range(slave, "step_slack_ms", sl.step_slack_s * 1e3, 0, 1e4) * 1e-3;
+  slave.reject_unknown();
 
   FieldReader rt(r.node("realtime"), origin, "realtime");
   c.realtime.sched_fifo = rt.get_bool("sched_fifo", true);
@@ -92,6 +125,16 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.realtime.lock_memory = rt.get_bool("lock_memory", true);
   c.realtime.cpu_dma_latency = rt.get_bool("cpu_dma_latency", true);
   c.realtime.cpu = static_cast<int>(in_range(rt, "cpu", -1, -1, 1023));
+  if (c.realtime.cpu >= 0) {
+    // Pinning to a CPU this process may not use fails at start-up at best;
+    // refuse it here, with the CPUs there are.
+    cpu_set_t allowed;
+    CPU_ZERO(&allowed);
+    if (sched_getaffinity(0, sizeof allowed, &allowed) == 0 && !CPU_ISSET(c.realtime.cpu, &allowed))
+      rt.fail("cpu", "CPU " + std::to_string(c.realtime.cpu) + " is not available (" +
+                         std::to_string(CPU_COUNT(&allowed)) + " CPUs: " + cpu_list(allowed) +
+                         "); use one of them or -1 for no pinning");
+  }
   rt.reject_unknown();
 
   FieldReader ev(r.node("evaluation"), origin, "evaluation");
@@ -139,8 +182,21 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
                         in_range(j, "max_rate_nm_per_s", 50.0, 0.0, 1e6, true)};
     j.reject_unknown();
   }
+  if (!has_device)
+    r.fail("device",
+           "missing: name the master device (device: {driver: hid|usb|lcm|emulator|sim, "
+           "settings: ...}); there is no default, so a configuration can never run a "
+           "simulated console by accident");
   r.reject_unknown();
   return c;
+}
+
+void check_against_device(const ServerConfig& c, const master_devices::DeviceSpec& spec) {
+  if (c.loop.joints > static_cast<int>(spec.dof))
+    throw ConfigError(c.source + ": joints: " + std::to_string(c.loop.joints) +
+                      " joints configured but the device (" + c.device_driver + ", " + spec.model +
+                      ") has " + std::to_string(spec.dof) +
+                      "; a joint without a master axis would render into nothing");
 }
 
 ServerConfig load_server_config(const std::filesystem::path& path) {

@@ -1,6 +1,8 @@
 #include "master_devices/settings.hpp"
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 namespace tsmh::master_devices {
 
@@ -12,6 +14,35 @@ std::string line_of(const YAML::Node& n) {
   return " (line " + std::to_string(m.line + 1) + ")";
 }
 }  // namespace
+
+namespace {
+void reject_duplicates_below(const YAML::Node& n, const std::string& source,
+                             const std::string& path) {
+  if (n.IsSequence()) {
+    for (std::size_t i = 0; i < n.size(); ++i)
+      reject_duplicates_below(n[i], source, path + "[" + std::to_string(i) + "]");
+    return;
+  }
+  if (!n.IsMap()) return;
+  std::vector<std::pair<std::string, YAML::Mark>> seen;
+  for (const auto& kv : n) {
+    const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : std::string("(complex key)");
+    const std::string field = path.empty() ? key : path + "." + key;
+    for (const auto& [k, mark] : seen) {
+      if (k != key) continue;
+      throw ConfigError(source + ": " + field + ": duplicate key (line " +
+                        std::to_string(kv.first.Mark().line + 1) + "; first at line " +
+                        std::to_string(mark.line + 1) + ")");
+    }
+    seen.emplace_back(key, kv.first.Mark());
+    reject_duplicates_below(kv.second, source, field);
+  }
+}
+}  // namespace
+
+void reject_duplicate_keys(const YAML::Node& root, const std::string& source) {
+  reject_duplicates_below(root, source, "");
+}
 
 void config_fail(const std::string& source, const std::string& field, std::string_view message,
                  const YAML::Node& at) {

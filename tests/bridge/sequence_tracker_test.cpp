@@ -50,5 +50,17 @@ TEST(SequenceTracker, DuplicatesNeverForceAResync) {
     EXPECT_EQ(t.observe(4, 100).order, Order::Duplicate);
 }
 
+// Garbage seq values (issue 15): the distance from INT64_MIN to INT64_MAX
+// does not fit an int64; `missing` saturates instead of overflowing.
+TEST(SequenceTracker, ExtremeSeqJumpsSaturateInsteadOfOverflowing) {
+  SequenceTracker t;
+  t.observe(INT64_MIN, 1);
+  const OrderVerdict v = t.observe(INT64_MAX, 2);
+  EXPECT_EQ(v.order, Order::Gap);
+  EXPECT_EQ(v.missing, INT64_MAX);
+  EXPECT_EQ(t.observe(INT64_MIN + 1, 3).order, Order::Restart);
+  EXPECT_EQ(t.observe(INT64_MIN + 2, 4).order, Order::Next);
+}
+
 }  // namespace
 }  // namespace tsmh::bridge

@@ -7,7 +7,7 @@
 namespace tsmh::haptics {
 namespace {
 
-const std::string kJoint = "joints:\n  - {name: a, max_torque_nm: 0.3}\n";
+const std::string kJoint = "device: {driver: sim}\njoints:\n  - {name: a, max_torque_nm: 0.3}\n";
 
 std::string error_of(const std::string& yaml) {
   try {
@@ -33,7 +33,8 @@ TEST(ServerConfig, DefaultsAreSafe) {
 
 TEST(ServerConfig, RelativePathsResolveAgainstTheConfigFolder) {
   const auto c = parse_server_config(
-      "joints:\n  - {params: fits/j0.yaml, max_torque_nm: 0.3}\nevaluation: {trace: out/t.csv}\n",
+      "device: {driver: sim}\njoints:\n  - {params: fits/j0.yaml, max_torque_nm: 0.3}\n"
+      "evaluation: {trace: out/t.csv}\n",
       "server.yaml", "/cfg");
   EXPECT_EQ(c.joints[0].params, "/cfg/fits/j0.yaml");
   EXPECT_EQ(c.evaluation.trace, "/cfg/out/t.csv");
@@ -103,8 +104,8 @@ namespace {
 // (1666 N/m) through a 30 mm lever: 0.2 and 1.5 N m/rad in joint space. The
 // rendering is made 1.2x too stiff on purpose; the evaluation must see both.
 TEST(Evaluation, FindsTheNoduleEdgeAndBothStiffnesses) {
-  ServerConfig config =
-      parse_server_config("joints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  ServerConfig config = parse_server_config(
+      "device: {driver: sim}\njoints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
   Trace trace(1, 4000);
   for (int i = 0; i < 4000; ++i) {
     const double theta = 0.2 + 0.25 * (i % 2000) / 2000.0;  // two sweeps through the tissue
@@ -158,6 +159,72 @@ TEST(Evaluation, PhantomTorqueInFreeMotion) {
   EXPECT_NEAR(e.phantom_naive, 0.03, 1e-12);
   EXPECT_NEAR(e.phantom_ratio, 1.0 / 3.0, 1e-9);
   EXPECT_NEAR(e.rmse_naive, 0.05, 1e-12);
+}
+
+// Issue 15: configurations that used to run silently.
+TEST(ServerConfig, DuplicateKeysAreErrorsNamingKeyAndLine) {
+  const std::string e = error_of(
+      "device: {driver: sim}\njoints:\n  - name: a\n    max_torque_nm: 0.3\n"
+      "    max_torque_nm: 50\n");
+  EXPECT_NE(e.find("joints[0].max_torque_nm: duplicate key (line 5; first at line 4)"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(
+      error_of("rate_hz: 1000\nrate_hz: 500\n" + kJoint).find("rate_hz: duplicate key (line 2"),
+      std::string::npos);
+}
+
+TEST(ServerConfig, AMissingDeviceSectionIsAnErrorNotASimulatedConsole) {
+  const std::string e = error_of("joints:\n  - {name: a, max_torque_nm: 0.3}\n");
+  EXPECT_NE(e.find("server.yaml: device: missing"), std::string::npos) << e;
+  const std::string d = error_of("device: {settings: {}}\njoints:\n  - {max_torque_nm: 0.3}\n");
+  EXPECT_NE(d.find("device.driver: missing"), std::string::npos) << d;
+}
+
+TEST(ServerConfig, PinningToACpuThatIsNotThereIsAnError) {
+  const std::string e = error_of("realtime: {cpu: 1000}\n" + kJoint);
+  EXPECT_NE(e.find("realtime.cpu: CPU 1000 is not available"), std::string::npos) << e;
+  EXPECT_NE(e.find("(line 1)"), std::string::npos) << e;
+  EXPECT_EQ(error_of("realtime: {cpu: 0}\n" + kJoint), "");
+}
+
+TEST(ServerConfig, PlausibleStepLimitsAreConfigurableWithSaneDefaults) {
+  auto c = parse_server_config(kJoint, "server.yaml", "/cfg");
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_x_in_rate_rad_s, 500.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_tension_rate_n_per_s, 1e5);
+  c = parse_server_config(
+      "slave_state: {max_motor_speed_rad_s: 50, max_joint_speed_rad_s: 5, "
+      "max_tension_rate_n_per_s: 2000, step_slack_ms: 5}\n" +
+          kJoint,
+      "server.yaml", "/cfg");
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_x_in_rate_rad_s, 50.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_x_out_rate_rad_s, 5.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.max_tension_rate_n_per_s, 2000.0);
+  EXPECT_DOUBLE_EQ(c.slave_limits.step_slack_s, 0.005);
+  EXPECT_NE(error_of("slave_state: {max_motor_speed_rad_s: -1}\n" + kJoint)
+                .find("slave_state.max_motor_speed_rad_s"),
+            std::string::npos);
+}
+
+TEST(ServerConfig, MoreJointsThanTheDeviceHasIsAnError) {
+  const auto c = parse_server_config(
+      "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3}\n  - {max_torque_nm: 0.3}\n"
+      "  - {max_torque_nm: 0.3}\n",
+      "server.yaml", "/cfg");
+  master_devices::DeviceSpec spec;
+  spec.model = "tsm-console-2dof";
+  spec.dof = 2;
+  try {
+    check_against_device(c, spec);
+    FAIL() << "3 joints on a 2-DOF device were accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("server.yaml: joints: 3 joints configured but the device "
+                                         "(sim, tsm-console-2dof) has 2"),
+              std::string::npos)
+        << e.what();
+  }
+  spec.dof = 3;
+  EXPECT_NO_THROW(check_against_device(c, spec));
 }
 
 }  // namespace

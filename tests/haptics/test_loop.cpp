@@ -39,12 +39,14 @@ std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators() {
 struct Rig {
   explicit Rig(FeedbackSource s = FeedbackSource::kEstimated, Trace* trace = nullptr)
       : loop(config(s), device, link, estimators(), trace) {}
-  // Runs `ms` ticks; the slave sends a sample every tick while `alive`.
+  // Runs `ms` ticks; the slave sends a sample every tick while `alive`,
+  // stamped with its own clock: now + slave_clock_offset.
   void run(int ms, bool alive = true, double t1 = 30.0, double t3 = 20.0) {
     for (int i = 0; i < ms; ++i, now += kMs) {
       if (alive) {
         x += 1e-3;  // slow forward motion of the motor
-        link.push(now, x, t1, t3);
+        link.push(now + slave_clock_offset, x, t1, t3);
+        link.state.receive_ns = now;
       }
       loop.tick(now);
     }
@@ -53,6 +55,7 @@ struct Rig {
   FakeLink link;
   HapticLoop loop;
   std::int64_t now = 1'000 * kMs;
+  std::int64_t slave_clock_offset = 0;
   double x = 0.0;
 };
 
@@ -212,6 +215,10 @@ TEST(HapticLoop, StatusAt100HzAndShutdownWritesZero) {
   EXPECT_EQ(rig.device.torque[0], 0.0);
   EXPECT_FALSE(rig.device.enabled);
   EXPECT_FALSE(rig.link.commands.back().enable);
+  // The hold command must not look like time going backwards to the slave's
+  // bridge (same utime as the last tick's command: dropped as time_backwards).
+  const auto& c = rig.link.commands;
+  EXPECT_GT(c[c.size() - 1].utime, c[c.size() - 2].utime);
   rig.run(5);  // ticks after shutdown do nothing
   EXPECT_EQ(rig.device.torque[0], 0.0);
 }
@@ -230,6 +237,73 @@ TEST(HapticLoop, TraceRecordsAndMatchesTruthBySequence) {
   EXPECT_EQ(trace.dropped(), 50u);
   EXPECT_DOUBLE_EQ(trace[0].joints[0].true_tau_out, 0.05);
   EXPECT_TRUE(std::isnan(trace[1].joints[0].true_tau_out));
+}
+
+// Issue 15: the slave reboots and its utime jumps back. Before, every later
+// sample was "time not increasing" for the estimators: torque 0 for the rest
+// of the run while the state said ENABLED and nothing was flagged. Now the
+// estimators are re-initialised, feedback is back at once and the jump is
+// flagged in HAPTIC_STATUS.
+TEST(HapticLoop, SlaveClockJumpingBackReinitialisesTheEstimators) {
+  for (const std::int64_t jump : {-900 * kMs, -5 * kMs, 5'000 * kMs}) {
+    Rig rig(FeedbackSource::kNaive);
+    rig.run(1000);
+    ASSERT_NEAR(rig.device.torque[0], 0.2, 1e-9);
+    rig.slave_clock_offset = jump;
+    rig.link.statuses.clear();
+    rig.run(20);
+    EXPECT_EQ(rig.loop.counters().estimator_resets, 1U) << "jump " << jump;
+    EXPECT_TRUE(rig.loop.estimate(0).valid) << "jump " << jump;
+    EXPECT_NEAR(rig.device.torque[0], 0.2, 1e-9) << "feedback continues after jump " << jump;
+    ASSERT_FALSE(rig.link.statuses.empty());
+    EXPECT_TRUE(rig.link.statuses.front().flags & status_flags::kClockReset);
+    EXPECT_FALSE(rig.link.statuses.back().flags & status_flags::kClockReset) << "one period only";
+    EXPECT_EQ(rig.loop.state(), LoopState::kEnabled);
+    EXPECT_EQ(rig.loop.events().estimator_resets.load(), 1U);
+  }
+}
+
+// Losing the estimate (here: the motor angle turns NaN, which the bridge
+// would reject but a link might not) holds the last valid torque, fades it
+// like a stale slave, flags it, and faults if it lasts estimate_fault_s.
+TEST(HapticLoop, LostEstimateFadesThenFaults) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(1000);
+  ASSERT_NEAR(rig.device.torque[0], 0.2, 1e-9);
+  rig.device.written.clear();
+  rig.link.statuses.clear();
+  rig.x = std::nan("");
+  rig.run(100);
+  EXPECT_NEAR(rig.device.written[10], 0.2, 1e-9) << "held, not stepped to zero";
+  EXPECT_GT(rig.device.written[40], 0.0);
+  EXPECT_LT(rig.device.written[40], 0.2);
+  EXPECT_EQ(rig.device.written[80], 0.0) << "faded out within stale_after + fade";
+  EXPECT_EQ(rig.loop.state(), LoopState::kEnabled);
+  EXPECT_TRUE(rig.link.statuses.back().flags & status_flags::kEstimateLost);
+  EXPECT_NE(rig.loop.events().estimate_lost_joints.load(), 0U);
+  rig.run(450);
+  EXPECT_EQ(rig.loop.state(), LoopState::kFault);
+  EXPECT_EQ(rig.loop.fault(), FaultReason::kEstimateLost);
+  EXPECT_EQ(rig.device.torque[0], 0.0);
+  // Good samples again: the estimate returns, the flag clears; the fault
+  // latches until the dead-man is released.
+  rig.x = 1.0;
+  rig.run(10);
+  EXPECT_EQ(rig.loop.events().estimate_lost_joints.load(), 0U);
+  EXPECT_FALSE(rig.link.statuses.back().flags & status_flags::kEstimateLost);
+  EXPECT_EQ(rig.loop.state(), LoopState::kFault);
+}
+
+// rate_hz in HAPTIC_STATUS covers the last status period: a stall shows at
+// once instead of being averaged over the run.
+TEST(HapticLoop, StatusRateCoversTheLastPeriod) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(1000);
+  rig.now += 90 * kMs;  // a 90 ms stall before the next ten ticks
+  rig.run(10);
+  EXPECT_NEAR(rig.link.statuses.back().rate_hz, 10.0 / 0.1, 1e-6);
+  EXPECT_GT(rig.loop.measured_rate_hz(), 900.0) << "the whole-run mean hides it";
+  EXPECT_EQ(rig.loop.events().worst_lateness_ns.load(), 0) << "the rig passes no lateness";
 }
 
 }  // namespace

@@ -17,8 +17,12 @@ struct ChannelStats {
   std::array<std::uint64_t, kRejectReasons> rejected_by{};
   std::uint64_t duplicates = 0;  ///< seq equal to the last accepted: dropped
   std::uint64_t reordered = 0;   ///< arrived after a newer one: dropped
-  std::uint64_t seq_gaps =
-      0;  ///< sequence numbers skipped between accepted messages (lost or rejected)
+  /// Gaps between accepted messages (lost or rejected in between): one per
+  /// event, however many numbers it skipped.
+  std::uint64_t seq_gaps = 0;
+  /// Sequence numbers those gaps skipped, saturating at UINT64_MAX (a hostile
+  /// seq can claim 2^63 missing messages in one go).
+  std::uint64_t seq_missing = 0;
   std::uint64_t restarts = 0;        ///< sender restarts detected (seq down, utime up)
   std::uint64_t resyncs = 0;         ///< tracker re-based after a run of out-of-order messages
   LatencySummary latency;            ///< receive time - utime, accepted messages, shared clock only

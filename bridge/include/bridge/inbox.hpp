@@ -63,6 +63,7 @@ class InboxBase {
   bool count_order(const OrderVerdict& v, std::int64_t seq, std::int64_t utime,
                    std::int64_t receive_ns) noexcept;
   void count_accepted(std::int64_t utime, std::int64_t receive_ns, bool clocks_shared) noexcept;
+  void count_resync() noexcept { resyncs_.fetch_add(1, std::memory_order_relaxed); }
 
  private:
   std::string channel_;
@@ -72,6 +73,7 @@ class InboxBase {
   std::atomic<std::uint64_t> duplicates_{0};
   std::atomic<std::uint64_t> reordered_{0};
   std::atomic<std::uint64_t> seq_gaps_{0};
+  std::atomic<std::uint64_t> seq_missing_{0};
   std::atomic<std::uint64_t> restarts_{0};
   std::atomic<std::uint64_t> resyncs_{0};
   std::atomic<std::int64_t> last_receive_ns_{0};
@@ -100,6 +102,10 @@ class Inbox final : public InboxBase {
   Decoder<Sample> decoder_;
   SequenceTracker tracker_;
   Sample scratch_{};
+  Sample last_accepted_{};  // the reference of the plausibility check (check_step)
+  bool has_accepted_ = false;
+  Sample candidate_{};     // the newest sample rejected as Implausible
+  int candidate_run_ = 0;  // consecutive Implausible rejections that follow each other plausibly
   LatestValue<Sample> cell_;
 };
 

@@ -21,6 +21,18 @@ struct SlaveStateLimits {
   Range x_out{-10.0, 10.0};       ///< rad; NaN allowed (joint without encoder)
   Range tension{-200.0, 5000.0};  ///< N, both T1 and T3; load cells read slightly negative at rest
   Range radius_m{1e-4, 0.5};      ///< m
+
+  // Plausible steps (issue 15): a value may change from the last accepted
+  // sample by at most rate * (elapsed + step_slack_s), elapsed being the
+  // smaller of the utime and the receive-time intervals (a forged utime
+  // cannot widen the bound). 0 disables a check. Beyond them a message is
+  // rejected as Implausible; after InboxOptions::resync_after of them in a
+  // row the channel re-bases on the newest (a real re-homing is not blocked
+  // forever).
+  double max_x_in_rate_rad_s = 500.0;           ///< motor pulley: ~4800 rpm
+  double max_x_out_rate_rad_s = 100.0;          ///< joint encoder
+  double max_tension_rate_n_per_s = 100'000.0;  ///< load cell: 100 N per millisecond
+  double step_slack_s = 0.002;                  ///< two 1 kHz periods of jitter and batching
 };
 
 struct SlaveTruthLimits {

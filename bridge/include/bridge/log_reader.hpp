@@ -6,10 +6,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "bridge/log_events.hpp"
 
 namespace tsmh::bridge {
 
@@ -49,9 +52,16 @@ struct JointSeries {
   std::size_t skipped_not_increasing =
       0;  ///< utime not after the previous row (duplicates, reordering)
   std::size_t rows_without_truth =
-      0;  ///< dropped because SLAVE_TRUTH was present but not for this seq
+      0;             ///< dropped because SLAVE_TRUTH was present but not for this seq
+  LogDamage damage;  ///< truncation / corrupt regions (only with accept_damage)
 
   std::size_t rows() const noexcept { return t.size(); }
+};
+
+struct LogReadOptions {
+  /// Use the intact events of a log that is cut off or has corrupt regions
+  /// (JointSeries::damage says what was lost) instead of refusing it.
+  bool accept_damage = false;
 };
 
 /// Reads the channel `prefix`SLAVE_STATE (and `prefix`SLAVE_TRUTH) of `path`
@@ -60,7 +70,15 @@ struct JointSeries {
 /// when the file cannot be read, has no usable SLAVE_STATE on that channel
 /// (the message lists the channels it found), the joint does not exist, or
 /// the radius changes.
+/// Every event header is validated before use (log_events.hpp); a
+/// truncated or corrupt log is a LogError saying where and how many events
+/// were lost, unless `options.accept_damage`.
 JointSeries read_joint_series(const std::filesystem::path& path, int joint,
-                              std::string_view prefix = {});
+                              std::string_view prefix = {}, const LogReadOptions& options = {});
+/// The same over the bytes of a log already in memory (`file` names it in
+/// errors); what the fuzz target drives.
+JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::string& file,
+                              int joint, std::string_view prefix = {},
+                              const LogReadOptions& options = {});
 
 }  // namespace tsmh::bridge

@@ -15,10 +15,12 @@ enum class RejectReason : std::uint8_t {
   NonFinite,      ///< NaN or Inf where a number is required
   OutOfRange,     ///< outside the configured Range
   TimeBackwards,  ///< utime not after the last accepted one although seq advanced
+  Implausible,    ///< a step from the last accepted sample faster than the hardware can move
 };
-inline constexpr int kRejectReasons = 5;
+inline constexpr int kRejectReasons = 6;
 
-/// "decode", "joint_count", "non_finite", "out_of_range", "time_backwards".
+/// "decode", "joint_count", "non_finite", "out_of_range", "time_backwards",
+/// "implausible_step".
 std::string_view reason_name(RejectReason reason) noexcept;
 
 struct Rejection {

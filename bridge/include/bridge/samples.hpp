@@ -84,8 +84,9 @@ struct HapticStatusSample {
   std::int32_t num_joints = 0;
   std::int32_t state = 0;            ///< 0 DISABLED, 1 ENABLED, 2 FAULT
   std::int32_t feedback_source = 0;  ///< 0 estimated, 1 naive, 2 none
-  std::int32_t flags =
-      0;  ///< bit 0 stale fade, 1 e-stop, 2 dead-man released, 3 saturated, 4 rate limited
+  /// bit 0 stale fade, 1 e-stop, 2 dead-man released, 3 saturated, 4 rate
+  /// limited, 5 estimate lost, 6 slave clock jumped, 7 deadline missed
+  std::int32_t flags = 0;
   double rate_hz = 0;
   double lateness_p50_us = 0;
   double lateness_p99_us = 0;

@@ -22,4 +22,15 @@ std::optional<Rejection> validate(const MasterForceSample& s, const MasterForceL
 std::optional<Rejection> validate(const HapticStatusSample& s,
                                   const HapticStatusLimits& l) noexcept;
 
+/// Whether `next` can follow `prev` (the last accepted sample) physically:
+/// SLAVE_STATE angles and tensions must not step faster than the limits'
+/// rates over `elapsed_s` (+ step_slack_s). Other types have no such bound.
+std::optional<Rejection> check_step(const SlaveStateSample& prev, const SlaveStateSample& next,
+                                    double elapsed_s, const SlaveStateLimits& l) noexcept;
+template <class Sample, class Limits>
+std::optional<Rejection> check_step(const Sample& /*prev*/, const Sample& /*next*/,
+                                    double /*elapsed_s*/, const Limits& /*l*/) noexcept {
+  return std::nullopt;
+}
+
 }  // namespace tsmh::bridge

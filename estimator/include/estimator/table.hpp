@@ -7,9 +7,15 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tsmh::estimator {
+
+/// At most `max_chars` of `text` for an error message, escaped (\xNN for
+/// bytes outside printable ASCII, \' and \\) and marked when cut ("... (N
+/// bytes)"): a 300 MB line or a binary file is never echoed whole.
+std::string excerpt(std::string_view text, std::size_t max_chars = 60);
 
 /// Bad input data. The message names the file, line and column at fault.
 class DataError : public std::runtime_error {

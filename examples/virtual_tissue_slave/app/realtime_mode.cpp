@@ -9,6 +9,7 @@
 #include <bridge/latency_histogram.hpp>
 #include <bridge/receiver.hpp>
 #include <bridge/sender.hpp>
+#include <bridge/stop_signals.hpp>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -28,10 +29,7 @@ namespace {
 class StopOnSignal {
  public:
   StopOnSignal() {
-    sigemptyset(&set_);
-    sigaddset(&set_, SIGINT);
-    sigaddset(&set_, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &set_, nullptr);  // before any other thread exists
+    set_ = bridge::block_terminating_signals();  // before any other thread exists
     watcher_ = std::thread([this] {
       int sig = 0;
       sigwait(&set_, &sig);
@@ -176,15 +174,17 @@ int run_realtime_mode(const CliOptions& o) {
       next += missed * period_ns;
     }
 
+    // 0: none yet, or (practically never) the read gave up against the
+    // receive thread: keep the previous view, only its age grows.
     const std::uint64_t version = commands.latest(cmd);
-    view.version = version;
     if (version != 0) {
-      view.age_s = static_cast<double>(woke - cmd.receive_ns) * 1e-9;
+      view.version = version;
       view.enable = cmd.enable;
       view.clutch = cmd.clutch;
       for (std::size_t j = 0; j < kJoints; ++j)
         view.position_ref[j] = cmd.position_ref[j];
     }
+    if (view.version != 0) view.age_s = static_cast<double>(woke - cmd.receive_ns) * 1e-9;
     const auto& refs = gate.update(view, dt);
     if (!rerouted && slave.time() >= rr.at_s) {
       apply_reroute(slave, setup.params, rr, setup.joint_index);

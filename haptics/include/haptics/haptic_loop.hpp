@@ -7,6 +7,7 @@
 // real-time runner (CLOCK_MONOTONIC) and in deterministic simulated time.
 // Nothing in tick() allocates, locks, blocks or prints.
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string_view>
@@ -45,6 +46,10 @@ struct LoopConfig {
   /// missed a few periods) zeroes torque at once but only faults when it lasts
   /// this long; an unplug or a device fault faults at once.
   double device_stale_fault_s = 0.050;
+  /// Slave state arrives but some joint has had no valid estimate this long:
+  /// FAULT. Before that the last valid estimate is held and faded like a
+  /// stale slave (SafetyTiming), so losing the estimate is never a step.
+  double estimate_fault_s = 0.5;
   int status_every = 10;  ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
 };
 
@@ -58,6 +63,33 @@ struct LoopCounters {
   std::uint64_t rate_limited_ticks = 0;
   std::uint64_t stale_ticks = 0;
   std::uint64_t device_stale_ticks = 0;  ///< master readings too old: torque zeroed, no fault
+  std::uint64_t estimator_resets = 0;    ///< slave clock discontinuities: estimators re-initialised
+  std::uint64_t estimate_lost_ticks = 0;  ///< ticks with some joint's estimate invalid
+};
+
+/// HAPTIC_STATUS flags (lcmtypes/haptic_status_t.lcm).
+namespace status_flags {
+inline constexpr std::int32_t kStaleFade = 1 << 0;
+inline constexpr std::int32_t kEStop = 1 << 1;
+inline constexpr std::int32_t kDeadManReleased = 1 << 2;
+inline constexpr std::int32_t kSaturated = 1 << 3;
+inline constexpr std::int32_t kRateLimited = 1 << 4;
+inline constexpr std::int32_t kEstimateLost = 1 << 5;  ///< some joint has no valid estimate
+inline constexpr std::int32_t kClockReset = 1 << 6;    ///< slave clock jumped in this period
+inline constexpr std::int32_t kOverrun = 1 << 7;       ///< a deadline was missed in this period
+}  // namespace status_flags
+
+/// What the loop thread reports to a non-real-time thread (which logs it):
+/// plain atomics written with relaxed stores, never a lock or a print in the
+/// loop.
+struct LoopEvents {
+  std::atomic<std::uint64_t> estimator_resets{0};
+  std::atomic<std::int64_t> last_reset_jump_us{0};     ///< utime step that caused the last reset
+  std::atomic<std::uint32_t> estimate_lost_joints{0};  ///< bit j: joint j has no valid estimate
+  std::atomic<std::int32_t> state{0};                  ///< LoopState
+  std::atomic<std::int32_t> fault{0};                  ///< FaultReason
+  std::atomic<std::uint64_t> overruns{0};
+  std::atomic<std::int64_t> worst_lateness_ns{0};  ///< since the reader last exchanged it with 0
 };
 
 class HapticLoop {
@@ -69,7 +101,9 @@ class HapticLoop {
              Trace* trace = nullptr);
 
   /// One tick at time now_ns (CLOCK_MONOTONIC, or simulated). `lateness_ns`:
-  /// how late this tick started against its deadline (for statistics).
+  /// how late this tick started against the absolute schedule, i.e. the
+  /// first deadline that was due and had not run yet (for statistics; after a
+  /// stall it includes the skipped periods).
   void tick(std::int64_t now_ns, std::int64_t lateness_ns = 0) noexcept;
 
   /// Compute time of the tick that just ran, and deadlines skipped after it.
@@ -91,9 +125,12 @@ class HapticLoop {
   double rate_hz() const noexcept { return config_.rate_hz; }
   /// Mean tick rate measured over the whole run (ticks / elapsed time).
   double measured_rate_hz() const noexcept;
+  /// For a non-real-time thread: events to log (any thread may read).
+  LoopEvents& events() noexcept { return events_; }
 
  private:
   void publish_status(std::int64_t now_ns) noexcept;
+  void estimate() noexcept;  // a new SLAVE_STATE in state_
 
   LoopConfig config_;
   master_devices::Device& device_;
@@ -105,6 +142,14 @@ class HapticLoop {
   SafetyFilter safety_;
   std::array<PositionMapping, kMaxJoints> position_;
   std::array<estimator::Estimate, kMaxJoints> estimates_{};
+  std::array<estimator::Estimate, kMaxJoints> held_{};  // the last valid estimate per joint
+  std::int64_t estimate_lost_since_ns_ = -1;            // -1: every joint's estimate is valid
+  std::int64_t last_utime_ = 0;  // of the last sample given to the estimators
+  bool clock_reset_in_period_ = false;
+  bool overrun_in_period_ = false;
+  std::uint64_t status_ticks_ = 0;  // counters_.ticks at the last HAPTIC_STATUS
+  std::int64_t status_ns_ = 0;      // its time
+  LoopEvents events_;
 
   bridge::SlaveStateSample state_{};
   bridge::SlaveTruthSample truth_{};

@@ -17,7 +17,8 @@ namespace tsmh::haptics {
 struct LcmSlaveLinkConfig {
   bridge::BridgeConfig bridge;
   int joints = 2;
-  bool subscribe_truth = false;  ///< evaluation against the virtual slave
+  bridge::SlaveStateLimits state_limits{};  ///< ranges and plausible steps of SLAVE_STATE
+  bool subscribe_truth = false;             ///< evaluation against the virtual slave
 };
 
 class LcmSlaveLink final : public SlaveLink {

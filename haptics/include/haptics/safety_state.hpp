@@ -3,7 +3,7 @@
 //
 //   DISABLED --dead-man pressed, device ok, no fault--> ENABLED
 //   ENABLED  --dead-man released-----------------------> DISABLED
-//   any      --e-stop, device fault/disconnect, slave lost, internal error--> FAULT
+//   any      --e-stop, device fault/disconnect, slave or estimate lost, internal error--> FAULT
 //   FAULT    --cause gone AND dead-man released--------> DISABLED
 //
 // FAULT latches: the operator must let go of the dead-man before torque can
@@ -19,9 +19,10 @@ enum class LoopState : std::int32_t { kDisabled = 0, kEnabled = 1, kFault = 2 };
 enum class FaultReason : std::int32_t {
   kNone = 0,
   kEStop,
-  kDevice,     ///< the master device reports fault or disconnected
-  kSlaveLost,  ///< no slave state for longer than the slave timeout
-  kInternal,   ///< an error path of the server itself
+  kDevice,        ///< the master device reports fault or disconnected
+  kSlaveLost,     ///< no slave state for longer than the slave timeout
+  kInternal,      ///< an error path of the server itself
+  kEstimateLost,  ///< slave state arrives but no valid estimate for longer than its timeout
 };
 
 std::string_view to_string(LoopState s) noexcept;
@@ -32,6 +33,7 @@ struct SafetyInputs {
   bool e_stop = false;
   bool device_ok = false;
   bool slave_lost = false;
+  bool estimate_lost = false;
   bool internal_error = false;
 };
 

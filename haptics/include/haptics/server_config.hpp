@@ -10,8 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "bridge/limits.hpp"
 #include "estimator/distal_estimator.hpp"
 #include "haptics/haptic_loop.hpp"
+#include "master_devices/device.hpp"
 #include "master_devices/settings.hpp"
 
 namespace tsmh::haptics {
@@ -57,6 +59,9 @@ struct ServerConfig {
   double duration_s = 0.0;  ///< 0 = until SIGINT/SIGTERM
   RealtimeConfig realtime;
   EvaluationConfig evaluation;
+  /// `slave_state:` how fast the slave's values can physically change
+  /// (bridge/limits.hpp); a faster step rejects the message.
+  bridge::SlaveStateLimits slave_limits;
 };
 
 /// Parses YAML text; relative paths (params, trace, report) resolve against
@@ -64,6 +69,10 @@ struct ServerConfig {
 ServerConfig parse_server_config(const std::string& yaml_text, const std::string& origin,
                                  const std::filesystem::path& base_dir);
 ServerConfig load_server_config(const std::filesystem::path& path);
+
+/// The configuration against the device it opened: no more joints than the
+/// device has axes. Throws ConfigError naming the file.
+void check_against_device(const ServerConfig& c, const master_devices::DeviceSpec& spec);
 
 FeedbackSource feedback_source_from_string(const std::string& s);  ///< throws ConfigError
 

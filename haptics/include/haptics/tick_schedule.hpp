@@ -12,6 +12,10 @@ namespace tsmh::haptics {
 struct NextTick {
   std::int64_t deadline_ns;  ///< the next deadline, strictly after `now`
   std::int64_t skipped;      ///< deadlines that were missed and will not run
+  /// The first deadline that has not run: the next tick's lateness is
+  /// measured against it, so a stall is never hidden by the re-basing
+  /// (equal to deadline_ns when nothing was skipped).
+  std::int64_t due_ns;
 };
 
 /// The deadline after `deadline_ns` given the time `now_ns` when the tick
@@ -19,9 +23,9 @@ struct NextTick {
 constexpr NextTick next_tick(std::int64_t deadline_ns, std::int64_t now_ns,
                              std::int64_t period_ns) noexcept {
   const std::int64_t next = deadline_ns + period_ns;
-  if (now_ns < next) return {next, 0};
+  if (now_ns < next) return {next, 0, next};
   const std::int64_t missed = (now_ns - next) / period_ns + 1;
-  return {next + missed * period_ns, missed};
+  return {next + missed * period_ns, missed, next};
 }
 
 }  // namespace tsmh::haptics

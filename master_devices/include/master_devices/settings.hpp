@@ -67,6 +67,12 @@ class FieldReader {
   std::set<std::string, std::less<>> known_;
 };
 
+/// Throws ConfigError "source: path.key: duplicate key (line N; first at line
+/// M)" for the first map anywhere under `root` that holds a key twice.
+/// yaml-cpp keeps both entries and lookups return the first, so without this
+/// `max_torque_nm: 0.3` followed by `max_torque_nm: 50` would pass silently.
+void reject_duplicate_keys(const YAML::Node& root, const std::string& source);
+
 /// "source: field: message (line N)" for a node outside any FieldReader.
 [[noreturn]] void config_fail(const std::string& source, const std::string& field,
                               std::string_view message, const YAML::Node& at = YAML::Node());
