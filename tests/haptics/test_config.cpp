@@ -74,18 +74,19 @@ TEST(ServerConfig, BadFieldsAreNamed) {
 
 TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   const auto c = parse_server_config(
-      "joints:\n  - {max_torque_nm: 0.3}\n  - {max_torque_nm: 0.3, sign: hard, start_state: "
-      "zero}\n",
+      "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3}\n  - {max_torque_nm: 0.3, sign: "
+      "hard, start_state: zero}\n",
       "server.yaml", "/cfg");
   EXPECT_EQ(c.joints[0].sign, estimator::SignMode::smooth);
   EXPECT_EQ(c.joints[0].start_state, estimator::StartState::free_tip);
   EXPECT_EQ(c.joints[1].sign, estimator::SignMode::hard);
   EXPECT_EQ(c.joints[1].start_state, estimator::StartState::zero);
-  EXPECT_NE(error_of("joints:\n  - {max_torque_nm: 0.3, sign: soft}\n").find("joints[0].sign"),
+  EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: soft}\n")
+                .find("joints[0].sign"),
             std::string::npos);
-  EXPECT_NE(
-      error_of("joints:\n  - {max_torque_nm: 0.3, start_state: x}\n").find("joints[0].start_state"),
-      std::string::npos);
+  EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, start_state: x}\n")
+                .find("joints[0].start_state"),
+            std::string::npos);
 }
 
 TEST(Evaluation, SlopeOfALine) {
@@ -139,8 +140,8 @@ TEST(Evaluation, FindsTheNoduleEdgeAndBothStiffnesses) {
 TEST(Evaluation, PhantomTorqueInFreeMotion) {
   // Half the ticks in free motion (true torque 0) rendering 0.01 N m where
   // naive feedback would render 0.6 x 0.05; half in contact.
-  ServerConfig config =
-      parse_server_config("joints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  ServerConfig config = parse_server_config(
+      "device: {driver: sim}\njoints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
   Trace trace(1, 1000);
   for (int i = 0; i < 1000; ++i) {
     TraceRow row;
