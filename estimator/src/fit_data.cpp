@@ -30,6 +30,18 @@ std::string fixed(double v, int digits) {
 
 }  // namespace
 
+const char* derivatives_name(FitDerivatives d) {
+  switch (d) {
+    case FitDerivatives::automatic:
+      return "automatic";
+    case FitDerivatives::offline:
+      return "offline";
+    case FitDerivatives::deployed:
+      return "deployed";
+  }
+  return "?";
+}
+
 std::size_t FitData::count(SampleRole r) const {
   return static_cast<std::size_t>(std::count(role.begin(), role.end(), r));
 }
@@ -53,7 +65,8 @@ int count_reversals(std::span<const Motion> motion, double speed) {
 }
 
 FitData prepare_fit_data(const Recording& rec, const SplitConfig& split,
-                         const DataRequirements& need, const DifferentiatorConfig& diff) {
+                         const DataRequirements& need, const DifferentiatorConfig& diff,
+                         FitDerivatives derivatives, const OfflineDerivativeConfig& offline) {
   if (!rec.has_tau_in())
     throw DataError(rec.source, 0, "tau_in",
                     "required column is missing (give tau_in, or T1 and T3 with a radius)");
@@ -95,9 +108,21 @@ FitData prepare_fit_data(const Recording& rec, const SplitConfig& split,
   FitData d;
   d.source = rec.source;
   d.radius_m = rec.radius_m;
-  // Always the deployed differentiator, even when the file carries exact
-  // derivatives: the fitted model must be right for what the loop will see.
-  d.motion = motion_from_recording(rec, DerivativeSource::differentiator, diff);
+  // By default exact derivatives when the file has them, else the zero-phase
+  // smoother: the fit then finds the physical parameters, not ones bent to
+  // imitate the online differentiator's lag (issue 14).
+  if (derivatives == FitDerivatives::automatic)
+    derivatives = rec.has_derivatives() ? FitDerivatives::automatic : FitDerivatives::offline;
+  if (derivatives == FitDerivatives::automatic) {
+    d.motion = motion_from_recording(rec, DerivativeSource::exact, diff);
+    d.derivatives = "exact";
+  } else if (derivatives == FitDerivatives::offline) {
+    d.motion = offline_motion(rec, offline);
+    d.derivatives = "offline";
+  } else {
+    d.motion = motion_from_recording(rec, DerivativeSource::differentiator, diff);
+    d.derivatives = "deployed";
+  }
   d.reversals = count_reversals(d.motion, need.reversal_speed);
   if (d.reversals < need.min_reversals) {
     throw DataError(rec.source, 0, "x_in",

@@ -35,11 +35,14 @@ FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::st
                const FitWorkflowOptions& o) {
   FitRun run;
   run.initial_name = initial_name;
-  run.data = prepare_fit_data(rec, o.split, o.requirements, o.differentiator);
+  run.data = prepare_fit_data(rec, o.split, o.requirements, o.differentiator, o.derivatives,
+                              o.offline);
   run.noise = noise_floor(run.data.measured);
   auto start = initial.clone();
   if (auto note = adapt_scale_to_data(*start, run.data); !note.empty()) run.notes.push_back(note);
   run.fit = identify(*start, run.data, o.fit);
+  for (const auto& note : run.fit.notes)
+    run.notes.push_back(note);
   run.train = error_metrics(run.data, run.fit.simulated, SampleRole::train);
   run.validation = error_metrics(run.data, run.fit.simulated, SampleRole::validation);
   run.regimes = regime_errors(run.data, run.fit.simulated, SampleRole::validation);
@@ -123,8 +126,10 @@ nlohmann::json fit_report_json(const FitRun& run, const FitWorkflowOptions& o, d
 
   nlohmann::json r;
   r["tool"] = "tsm fit";
-  r["data"] = {{"source", d.source},     {"samples", d.size()},      {"duration_s", d.duration()},
-               {"radius_m", d.radius_m}, {"reversals", d.reversals}, {"noise_floor", run.noise}};
+  r["data"] = {{"source", d.source},         {"samples", d.size()},
+               {"duration_s", d.duration()}, {"radius_m", d.radius_m},
+               {"reversals", d.reversals},   {"noise_floor", run.noise},
+               {"derivatives", d.derivatives}};
   r["model"] = model;
   r["split"] = {{"rule", "alternate contiguous blocks, train first, after a warm-up"},
                 {"block_s", d.block_s},
@@ -144,7 +149,9 @@ nlohmann::json fit_report_json(const FitRun& run, const FitWorkflowOptions& o, d
                           {"notes", u["notes"]}};
   r["warnings"] = warnings;
   r["notes"] = run.notes;
-  r["optimiser"] = {{"library", "NLopt"},
+  r["optimiser"] = {{"library", run.fit.library},
+                    {"method", o.fit.method},
+                    {"screened_starts", run.fit.screened},
                     {"global", run.fit.global_algorithm},
                     {"local", run.fit.local_algorithm},
                     {"seed", o.fit.seed},

@@ -7,11 +7,13 @@
 #include <cstdio>
 #include <exception>
 #include <limits>
+#include <Eigen/Dense>
 #include <nlopt.hpp>
 #include <random>
 #include <stdexcept>
 #include <thread>
 
+#include "estimator/fit_metrics.hpp"
 #include "estimator/parameter_map.hpp"
 #include "estimator/simulate.hpp"
 #include "estimator/tsm_model.hpp"
@@ -181,7 +183,536 @@ double weighted_mse(std::span<const double> y, std::span<const double> f,
   return n > 0.0 ? sum / n : std::numeric_limits<double>::infinity();
 }
 
-FitResult identify(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+namespace {
+
+// ---------------------------------------------------------------------------
+// method "lm": informed multi-start + Levenberg-Marquardt.
+//
+// The model is smooth in its parameters for a fixed motion (the switches in
+// eqs. 4-11 depend on the motion, not on the parameters), so a Gauss-Newton
+// method with a finite-difference Jacobian converges in a few dozen model
+// runs per parameter where derivative-free searches need thousands; the
+// local optima that trapped those searches (lambda, kappa1 at their bounds)
+// are avoided by starting from what the data itself says about the levels
+// and the stiffness, over a small grid of the strongly nonlinear shapes.
+
+// Residuals r = [e_i / sqrt(N) on scored samples; sqrt(alpha) (u - u_ref)]:
+// |r|^2 = mean squared error + alpha |u - u_ref|^2.
+class LmProblem {
+ public:
+  LmProblem(const FrictionModel& proto, const ParameterMap& map, const Scored& data, double alpha,
+            int threads, SharedProgress& shared, bool full_rate)
+      : map_(map), data_(data), alpha_(alpha), shared_(shared), full_rate_(full_rate) {
+    for (std::size_t i = 0; i < data.weight.size(); ++i) {
+      if (data.weight[i] > 0.0) idx_.push_back(i);
+    }
+    scale_ = idx_.empty() ? 0.0 : 1.0 / std::sqrt(static_cast<double>(idx_.size()));
+    for (int k = 0; k < std::max(1, threads); ++k) {
+      models_.push_back(proto.clone());
+      buffers_.emplace_back(data.motion.size());
+      values_.emplace_back();
+    }
+  }
+
+  std::size_t rows() const { return idx_.size() + map_.size(); }
+  void set_reference(std::vector<double> u) { u_ref_ = std::move(u); }
+  long evaluations() const { return evaluations_.load(); }
+
+  // Residual vector at u with worker k's model; returns |r|^2 (1e30 when the
+  // model refuses the values or diverges).
+  double residuals(const std::vector<double>& u, Eigen::VectorXd& r, std::size_t k = 0) {
+    ++evaluations_;
+    shared_.evaluations.fetch_add(1, std::memory_order_relaxed);
+    r.resize(static_cast<Eigen::Index>(rows()));
+    map_.to_values(u, values_[k]);
+    try {
+      models_[k]->set_values(values_[k]);
+    } catch (const std::invalid_argument&) {
+      r.setConstant(1e15);
+      return 1e30;
+    }
+    simulate_friction_into(*models_[k], data_.motion, buffers_[k]);
+    const auto& f = buffers_[k];
+    double mse = 0.0;
+    for (std::size_t j = 0; j < idx_.size(); ++j) {
+      const double e = (data_.measured[idx_[j]] - f[idx_[j]]) * scale_;
+      r(static_cast<Eigen::Index>(j)) = e;
+      mse += e * e;
+    }
+    const double sa = std::sqrt(alpha_);
+    double cost = mse;
+    for (std::size_t j = 0; j < map_.size(); ++j) {
+      const double p = sa * (u[j] - (u_ref_.empty() ? u[j] : u_ref_[j]));
+      r(static_cast<Eigen::Index>(idx_.size() + j)) = p;
+      cost += p * p;
+    }
+    if (!std::isfinite(cost)) return 1e30;
+    if (full_rate_) shared_.offer(mse);
+    return cost;
+  }
+
+  // Forward-difference Jacobian of r at u (r0 = r(u)), columns spread over
+  // the workers; each column is computed the same way whatever the thread,
+  // so the result does not depend on the thread count.
+  void jacobian(const std::vector<double>& u, const Eigen::VectorXd& r0, Eigen::MatrixXd& jac) {
+    const std::size_t n = map_.size();
+    jac.resize(static_cast<Eigen::Index>(rows()), static_cast<Eigen::Index>(n));
+    const auto column = [&](std::size_t c, std::size_t k) {
+      std::vector<double> up = u;
+      double h = kStep;
+      if (up[c] + h > 1.0) h = -h;
+      up[c] += h;
+      Eigen::VectorXd r;
+      residuals(up, r, k);
+      jac.col(static_cast<Eigen::Index>(c)) = (r - r0) / h;
+    };
+    const std::size_t workers = std::min(models_.size(), n);
+    if (workers <= 1) {
+      for (std::size_t c = 0; c < n; ++c)
+        column(c, 0);
+      return;
+    }
+    std::vector<std::thread> pool;
+    for (std::size_t k = 0; k < workers; ++k) {
+      pool.emplace_back([&, k] {
+        for (std::size_t c = k; c < n; c += workers)
+          column(c, k);
+      });
+    }
+    for (auto& t : pool)
+      t.join();
+  }
+
+  static constexpr double kStep = 1e-5;  // in normalised units
+
+ private:
+  const ParameterMap& map_;
+  const Scored& data_;
+  double alpha_;
+  SharedProgress& shared_;
+  bool full_rate_;
+  std::vector<std::size_t> idx_;
+  double scale_ = 0.0;
+  std::vector<double> u_ref_;
+  std::vector<std::unique_ptr<FrictionModel>> models_;
+  std::vector<std::vector<double>> buffers_, values_;
+  std::atomic<long> evaluations_{0};
+};
+
+struct LmOutcome {
+  std::vector<double> u;
+  double cost = 0.0;
+  int iterations = 0;
+  std::string stop;
+};
+
+// Levenberg-Marquardt within the unit box: Marquardt's diagonal scaling, a
+// parameter at a bound whose gradient points outwards is held for the step
+// (an active set), trial points are clipped to the box.
+LmOutcome levenberg_marquardt(LmProblem& p, std::vector<double> u, int max_iterations) {
+  const std::size_t n = u.size();
+  Eigen::VectorXd r, r_try;
+  Eigen::MatrixXd jac;
+  LmOutcome out;
+  double cost = p.residuals(u, r);
+  double mu = 1e-3;
+  out.stop = "iteration budget used";
+  int small_steps = 0;
+  for (int it = 0; it < max_iterations; ++it) {
+    out.iterations = it + 1;
+    p.jacobian(u, r, jac);
+    const Eigen::MatrixXd a = jac.transpose() * jac;
+    const Eigen::VectorXd g = jac.transpose() * r;
+    std::vector<Eigen::Index> active;
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto jj = static_cast<Eigen::Index>(j);
+      const bool held = (u[j] <= 0.0 && g(jj) > 0.0) || (u[j] >= 1.0 && g(jj) < 0.0);
+      if (!held) active.push_back(jj);
+    }
+    if (active.empty()) {
+      out.stop = "every parameter held at a bound";
+      break;
+    }
+    const auto m = static_cast<Eigen::Index>(active.size());
+    Eigen::MatrixXd as(m, m);
+    Eigen::VectorXd gs(m);
+    double dmax = 0.0;
+    for (Eigen::Index i = 0; i < m; ++i) {
+      gs(i) = g(active[static_cast<std::size_t>(i)]);
+      for (Eigen::Index j = 0; j < m; ++j)
+        as(i, j) = a(active[static_cast<std::size_t>(i)], active[static_cast<std::size_t>(j)]);
+      dmax = std::max(dmax, as(i, i));
+    }
+    bool accepted = false;
+    double cost_new = cost;
+    std::vector<double> u_new;
+    for (int inner = 0; inner < 12; ++inner) {
+      Eigen::MatrixXd lhs = as;
+      for (Eigen::Index i = 0; i < m; ++i)
+        lhs(i, i) += mu * std::max(as(i, i), 1e-12 * dmax) + 1e-15;
+      const Eigen::VectorXd step = lhs.ldlt().solve(-gs);
+      u_new = u;
+      for (Eigen::Index i = 0; i < m; ++i) {
+        const auto j = static_cast<std::size_t>(active[static_cast<std::size_t>(i)]);
+        u_new[j] = std::clamp(u[j] + (std::isfinite(step(i)) ? step(i) : 0.0), 0.0, 1.0);
+      }
+      cost_new = p.residuals(u_new, r_try);
+      if (cost_new < cost) {
+        accepted = true;
+        mu = std::max(mu / 3.0, 1e-9);
+        break;
+      }
+      mu *= 4.0;
+      if (mu > 1e8) break;
+    }
+    if (!accepted) {
+      out.stop = "converged (no step reduces the cost)";
+      break;
+    }
+    const double decrease = (cost - cost_new) / cost;
+    u = u_new;
+    r = r_try;
+    cost = cost_new;
+    small_steps = decrease < 1e-6 ? small_steps + 1 : 0;
+    if (small_steps >= 2) {
+      out.stop = "converged (cost change < 1e-6)";
+      break;
+    }
+  }
+  out.u = std::move(u);
+  out.cost = cost;
+  return out;
+}
+
+double quantile_of(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[static_cast<std::size_t>(k)];
+}
+
+// What the data says about the tendon-sheath model's scale: the sliding
+// plateaus (median friction at high speed, each direction) give the levels,
+// the slope of F against x where F crosses zero after a reversal gives
+// gamma theta. Returns starting value vectors (parameters() order) over a
+// small grid of the shapes the data cannot give directly (theta's share of
+// the reversal slope against lambda's, the Stribeck decay).
+std::vector<std::vector<double>> informed_starts(const TsmFrictionModel& initial, const FitData& d,
+                                                 std::vector<std::string>& notes) {
+  const TsmModelSpec& spec = initial.spec();
+  std::vector<double> speed;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (d.role[i] != SampleRole::ignored) speed.push_back(std::fabs(d.motion[i].xd));
+  }
+  const double v95 = quantile_of(speed, 0.95);
+  const double v_fast = 0.5 * v95;
+  std::vector<double> fpos, fneg, vfast;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (d.role[i] == SampleRole::ignored) continue;
+    if (d.motion[i].xd > v_fast) fpos.push_back(d.measured[i]);
+    if (d.motion[i].xd < -v_fast) fneg.push_back(-d.measured[i]);
+    if (std::fabs(d.motion[i].xd) > v_fast) vfast.push_back(std::fabs(d.motion[i].xd));
+  }
+  if (fpos.size() < 20 || fneg.size() < 20) return {};
+  const double gamma = spec.gamma;
+  const double level_pos = std::max(0.02, quantile_of(fpos, 0.5) / gamma);
+  const double level_neg = std::max(0.02, quantile_of(fneg, 0.5) / gamma);
+  const double v_mid = quantile_of(vfast, 0.5);
+
+  // Reversal slopes: after each velocity reversal, regress F on x over the
+  // samples where |F| is below 40 % of the plateau (the steep part).
+  const double f_band = 0.4 * gamma * 0.5 * (level_pos + level_neg);
+  std::vector<double> slopes;
+  {
+    int state = 0;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    int cnt = 0;
+    const auto flush = [&] {
+      if (cnt >= 5) {
+        const double den = cnt * sxx - sx * sx;
+        if (den > 0.0) slopes.push_back(std::fabs((cnt * sxy - sx * sy) / den));
+      }
+      sx = sy = sxx = sxy = 0.0;
+      cnt = 0;
+    };
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      const auto& m = d.motion[i];
+      const int now = m.xd > 0.05 ? 1 : (m.xd < -0.05 ? -1 : 0);
+      if (now != 0 && now != state) {
+        flush();
+        state = now;
+      }
+      if (d.role[i] != SampleRole::ignored && std::fabs(d.measured[i]) < f_band && state != 0) {
+        sx += m.x;
+        sy += d.measured[i];
+        sxx += m.x * m.x;
+        sxy += m.x * d.measured[i];
+        ++cnt;
+      }
+    }
+    flush();
+  }
+  if (slopes.empty()) return {};
+  const double theta_slope = std::clamp(quantile_of(slopes, 0.5) / gamma, 0.2, 500.0);
+  char buf[240];
+  std::snprintf(buf, sizeof buf,
+                "informed starts: sliding plateaus %.3g N (xd > 0) and %.3g N (xd < 0) above "
+                "%.3g rad/s, reversal slope %.3g N/rad (theta about %.3g with gamma %.4g)",
+                gamma * level_pos, gamma * level_neg, v_fast, theta_slope * gamma, theta_slope,
+                gamma);
+  notes.push_back(buf);
+
+  std::vector<std::vector<double>> out;
+  const double theta_factors[] = {0.35, 1.0};
+  const double lambdas[] = {0.05, 0.2, 0.6};
+  const double kappas[] = {3.0, 12.0};
+  const bool has_stribeck = spec.has(TermKind::stribeck);
+  const bool has_lambda = spec.has(TermKind::reversal_offset);
+  for (double tf : theta_factors) {
+    for (double lam : lambdas) {
+      if (!has_lambda && lam != lambdas[0]) continue;
+      for (double k1 : kappas) {
+        if (!has_stribeck && k1 != kappas[0]) continue;
+        TsmModelSpec s = spec;
+        s.theta = theta_slope * tf;
+        const double mu1 = has_stribeck ? 0.5 * std::min(level_pos, level_neg) : 0.0;
+        const double strib = mu1 * std::exp(-k1 * v_mid);
+        for (auto& t : s.terms) {
+          switch (t.kind) {
+            case TermKind::coulomb:
+              t.p[0] = std::max(0.02, level_pos - strib);
+              break;
+            case TermKind::direction_asymmetry:
+              t.p[0] = std::max(0.02, level_neg - strib);
+              break;
+            case TermKind::stribeck:
+              t.p[0] = mu1;
+              t.p[1] = k1;
+              break;
+            case TermKind::reversal_offset:
+              t.p[0] = lam;
+              break;
+            default:
+              break;
+          }
+        }
+        if (!s.has(TermKind::direction_asymmetry)) {
+          for (auto& t : s.terms)
+            if (t.kind == TermKind::coulomb)
+              t.p[0] = std::max(0.02, 0.5 * (level_pos + level_neg) - strib);
+        }
+        try {
+          validate(s);
+        } catch (const std::invalid_argument&) {
+          continue;
+        }
+        std::vector<double> v;
+        for (const auto& p : TsmFrictionModel(s).parameters())
+          v.push_back(p.value);
+        out.push_back(std::move(v));
+      }
+    }
+  }
+  return out;
+}
+
+FitResult identify_lm(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+  const auto t_start = Clock::now();
+  std::vector<BoundsOverride> bounds;
+  for (const auto& p : initial.parameters()) {
+    if (p.unit == "s" && !p.fixed && !data.motion.empty())
+      bounds.push_back({p.name, data.motion.front().t, data.motion.back().t});
+  }
+  bounds.insert(bounds.end(), o.bounds.begin(), o.bounds.end());
+  const ParameterMap map(initial.parameters(), bounds);
+  if (map.size() == 0) throw std::invalid_argument("identify: the model has no free parameters");
+  const std::size_t n = map.size();
+  const Scored full = full_rate(data);
+  const Scored coarse = decimated(data, o.global_sample_period_s);
+  const double noise = noise_floor(data.measured);
+  const double alpha = o.prior_weight * (std::isfinite(noise) && noise > 0.0 ? noise * noise : 1.0);
+  const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
+  const int threads = std::max(1, o.threads > 0 ? o.threads : hw);
+
+  FitResult r;
+  // Starting points (full value vectors): the given values, the extra ones,
+  // then (global) the informed grid, else perturbations of the given values.
+  std::vector<std::vector<double>> starts;
+  starts.push_back(map.template_values());
+  for (const auto& e : o.extra_starts)
+    starts.push_back(e);
+  if (o.global_stage) {
+    const auto* tsm = dynamic_cast<const TsmFrictionModel*>(&initial);
+    std::vector<std::vector<double>> informed;
+    if (tsm != nullptr) informed = informed_starts(*tsm, data, r.notes);
+    for (auto& v : informed)
+      starts.push_back(std::move(v));
+    // Models without a known structure (baselines), or data where the
+    // plateaus cannot be read: random points, seeded.
+    if (informed.empty()) {
+      std::mt19937_64 rng(o.seed * 1000003ULL);
+      std::uniform_real_distribution<double> uni(0.0, 1.0);
+      for (int s = 0; s < std::max(8, 2 * o.starts); ++s) {
+        std::vector<double> u(n);
+        for (auto& v : u)
+          v = uni(rng);
+        std::vector<double> vals;
+        map.to_values(u, vals);
+        starts.push_back(std::move(vals));
+      }
+    }
+  } else {
+    std::mt19937_64 rng(o.seed * 1000003ULL);
+    std::normal_distribution<double> gauss(0.0, o.warm_perturbation);
+    const auto u0 = map.to_unit(map.template_values());
+    while (static_cast<int>(starts.size()) < o.starts) {
+      std::vector<double> u = u0;
+      for (auto& v : u)
+        v = std::clamp(v + gauss(rng), 0.0, 1.0);
+      std::vector<double> vals;
+      map.to_values(u, vals);
+      starts.push_back(std::move(vals));
+    }
+  }
+
+  SharedProgress shared;
+  const int total = static_cast<int>(starts.size());
+  // Screening: a short LM from every start on the decimated data, starts
+  // spread over the workers (each with its own problem and model clones).
+  struct Screened {
+    std::vector<double> u;
+    double cost = 0.0;
+    long evaluations = 0;
+  };
+  std::vector<Screened> screened(starts.size());
+  std::vector<std::exception_ptr> errors(starts.size());
+  std::atomic<int> next{0};
+  const bool screen = coarse.motion.size() < full.motion.size();
+  const auto screen_one = [&](int s) {
+    const auto u0 = map.to_unit(starts[static_cast<std::size_t>(s)]);
+    LmProblem p(initial, map, screen ? coarse : full, alpha, 1, shared, !screen);
+    p.set_reference(u0);
+    const LmOutcome lo = levenberg_marquardt(p, u0, o.screen_iterations);
+    screened[static_cast<std::size_t>(s)] = {lo.u, lo.cost, p.evaluations()};
+  };
+  std::vector<std::thread> pool;
+  for (int w = 0; w < std::min(threads, total); ++w) {
+    pool.emplace_back([&] {
+      for (int s = next.fetch_add(1); s < total; s = next.fetch_add(1)) {
+        try {
+          screen_one(s);
+        } catch (...) {
+          errors[static_cast<std::size_t>(s)] = std::current_exception();
+        }
+        shared.starts_done.fetch_add(1);
+      }
+    });
+  }
+  const auto report = [&](const char* stage, int done, int of) {
+    if (!o.progress) return;
+    FitProgress pr;
+    pr.stage = stage;
+    pr.starts_done = done;
+    pr.starts_total = of;
+    pr.evaluations = shared.evaluations.load();
+    const double best = shared.best_mse.load();
+    pr.best_rmse = std::isfinite(best) ? std::sqrt(best) : std::nan("");
+    pr.elapsed_s = seconds_since(t_start);
+    o.progress(pr);
+  };
+  while (shared.starts_done.load() < total) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(o.progress_interval_s));
+    report("screening", shared.starts_done.load(), total);
+  }
+  for (auto& t : pool)
+    t.join();
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+
+  // The best distinct candidates (ties to the lower index: deterministic).
+  std::vector<int> order(starts.size());
+  for (int s = 0; s < total; ++s)
+    order[static_cast<std::size_t>(s)] = s;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return screened[static_cast<std::size_t>(a)].cost < screened[static_cast<std::size_t>(b)].cost;
+  });
+  std::vector<int> chosen;
+  for (int s : order) {
+    if (static_cast<int>(chosen.size()) >= std::max(1, o.starts)) break;
+    const auto& u = screened[static_cast<std::size_t>(s)].u;
+    const bool distinct = std::all_of(chosen.begin(), chosen.end(), [&](int c) {
+      const auto& v = screened[static_cast<std::size_t>(c)].u;
+      double d2 = 0.0;
+      for (std::size_t j = 0; j < n; ++j)
+        d2 += (u[j] - v[j]) * (u[j] - v[j]);
+      return std::sqrt(d2) > 0.02;
+    });
+    if (distinct) chosen.push_back(s);
+  }
+
+  // Polish: LM on the full-rate data, Jacobian columns over all workers.
+  std::vector<std::vector<double>> best_u;
+  long evaluations = 0;
+  for (const auto& s : screened)
+    evaluations += s.evaluations;
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    const auto& sc = screened[static_cast<std::size_t>(chosen[c])];
+    LmProblem p(initial, map, full, alpha, threads, shared, true);
+    p.set_reference(map.to_unit(starts[static_cast<std::size_t>(chosen[c])]));
+    const auto t0 = Clock::now();
+    const LmOutcome lo = levenberg_marquardt(p, sc.u, o.polish_iterations);
+    StartOutcome out;
+    out.index = chosen[c];
+    out.global_rmse = std::sqrt(sc.cost);
+    std::vector<double> vals;
+    map.to_values(lo.u, vals);
+    auto m = initial.clone();
+    m->set_values(vals);
+    const auto f = simulate_friction(*m, data.motion);
+    out.rmse = std::sqrt(weighted_mse(data.measured, f, full.weight));
+    out.evaluations = p.evaluations();
+    out.seconds = seconds_since(t0);
+    out.stop_reason = lo.stop + " after " + std::to_string(lo.iterations) + " iterations";
+    evaluations += p.evaluations();
+    r.starts.push_back(out);
+    best_u.push_back(lo.u);
+    report("polish", static_cast<int>(c + 1), static_cast<int>(chosen.size()));
+  }
+  int best = 0;
+  for (std::size_t s = 1; s < r.starts.size(); ++s) {
+    if (r.starts[s].rmse < r.starts[static_cast<std::size_t>(best)].rmse) best = static_cast<int>(s);
+  }
+  map.to_values(best_u[static_cast<std::size_t>(best)], r.values);
+  r.model = initial.clone();
+  r.model->set_values(r.values);
+  r.simulated = simulate_friction(*r.model, data.motion);
+  r.train_rmse = std::sqrt(weighted_mse(data.measured, r.simulated, full.weight));
+  {
+    auto start_model = initial.clone();
+    auto start_sim = simulate_friction(*start_model, data.motion);
+    const double start_rmse = std::sqrt(weighted_mse(data.measured, start_sim, full.weight));
+    if (start_rmse < r.train_rmse) {
+      r.values.clear();
+      for (const auto& p : initial.parameters())
+        r.values.push_back(p.value);
+      r.model = std::move(start_model);
+      r.simulated = std::move(start_sim);
+      r.train_rmse = start_rmse;
+    }
+  }
+  r.best_start = best;
+  r.evaluations = evaluations;
+  r.screened = total;
+  r.global_algorithm = o.global_stage ? "informed multi-start screening" : "";
+  r.local_algorithm = "Levenberg-Marquardt (finite-difference Jacobian)";
+  r.library = "own Levenberg-Marquardt (Eigen)";
+  r.seconds = seconds_since(t_start);
+  report("done", static_cast<int>(chosen.size()), static_cast<int>(chosen.size()));
+  return r;
+}
+
+FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
   const auto t_start = Clock::now();
   // Time parameters (unit "s", e.g. a step time) are searched within the
   // recording, not over their catalog bounds, unless the caller narrows them.
@@ -351,9 +882,18 @@ FitResult identify(const FrictionModel& initial, const FitData& data, const FitO
     r.evaluations += s.evaluations;
   r.global_algorithm = o.global_stage ? o.global_algorithm : "";
   r.local_algorithm = nlopt::algorithm_name(local_alg);
+  r.library = "NLopt";
   r.seconds = seconds_since(t_start);
   report("done");
   return r;
+}
+}  // namespace
+
+FitResult identify(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+  if (o.method == "nlopt") return identify_nlopt(initial, data, o);
+  if (o.method != "lm")
+    throw std::invalid_argument("identify: unknown method '" + o.method + "' (lm or nlopt)");
+  return identify_lm(initial, data, o);
 }
 
 std::string adapt_scale_to_data(FrictionModel& model, const FitData& data) {

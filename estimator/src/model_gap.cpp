@@ -336,7 +336,9 @@ ResidualDiagnostics diagnose_residual(const FitData& d, const TsmFrictionModel& 
 
 GapResult find_model_gaps(const Recording& rec, const FrictionModel& base,
                           const std::string& base_name, const GapOptions& o) {
-  return find_model_gaps(prepare_fit_data(rec, o.split, o.requirements, o.differentiator), base,
+  return find_model_gaps(prepare_fit_data(rec, o.split, o.requirements, o.differentiator,
+                                          o.derivatives, o.offline),
+                         base,
                          base_name, o);
 }
 

@@ -16,6 +16,7 @@
 
 #include "estimator/differentiator.hpp"
 #include "estimator/motion.hpp"
+#include "estimator/offline_derivatives.hpp"
 #include "estimator/recording.hpp"
 
 namespace tsmh::estimator {
@@ -25,6 +26,21 @@ enum class SampleRole : std::uint8_t {
   train,       ///< scored by the identification cost
   validation,  ///< scored only by the report
 };
+
+/// Where the velocity and acceleration a fit sees come from.
+enum class FitDerivatives : std::uint8_t {
+  /// The file's exact xd_in/xdd_in when it has them, else `offline`.
+  automatic,
+  /// Zero-phase RTS smoothing of the recorded angle (offline_derivatives.hpp):
+  /// no lag, so the parameters found are the physical ones.
+  offline,
+  /// The deployed causal differentiator, as the haptic loop runs it (the
+  /// parameters then also absorb its lag; the behaviour before issue 14).
+  deployed,
+};
+
+/// Name for reports: "exact", "offline" or "deployed" (what was actually used).
+const char* derivatives_name(FitDerivatives d);
 
 struct SplitConfig {
   double block_s = 2.0;   ///< length of each block; shortened so each set has >= 3 blocks
@@ -50,6 +66,8 @@ struct FitData {
   std::vector<SampleRole> role;  ///< per sample
   double block_s = 0.0;          ///< block length actually used
   int reversals = 0;             ///< velocity reversals found (a data-quality figure)
+  /// Where xd, xdd came from: "exact" (file columns), "offline" or "deployed".
+  std::string derivatives;
 
   std::size_t size() const { return motion.size(); }
   std::size_t count(SampleRole r) const;
@@ -63,7 +81,9 @@ struct FitData {
 /// reader that checked it already): missing tau_in/tau_out/radius, non-finite
 /// values, too short, no motion.
 FitData prepare_fit_data(const Recording& rec, const SplitConfig& split = {},
-                         const DataRequirements& need = {}, const DifferentiatorConfig& diff = {});
+                         const DataRequirements& need = {}, const DifferentiatorConfig& diff = {},
+                         FitDerivatives derivatives = FitDerivatives::automatic,
+                         const OfflineDerivativeConfig& offline = {});
 
 /// Velocity reversals in `motion`: sign changes of xd between excursions
 /// beyond +-speed (a Schmitt trigger, so encoder noise near rest does not count).

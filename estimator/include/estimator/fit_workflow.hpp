@@ -43,6 +43,9 @@ struct FitWorkflowOptions {
   SplitConfig split;
   DataRequirements requirements;
   DifferentiatorConfig differentiator;
+  /// Where xd, xdd come from (default: exact columns, else offline smoothing).
+  FitDerivatives derivatives = FitDerivatives::automatic;
+  OfflineDerivativeConfig offline;
   bool uncertainty = true;
 };
 

@@ -37,7 +37,13 @@ struct FitProgress {
 };
 
 struct FitOptions {
+  /// "lm" (default): informed multi-start screening on decimated data, then
+  /// Levenberg-Marquardt on the full-rate data from the best `starts`
+  /// candidates (see identify()). "nlopt": the NLopt MLSL + BOBYQA path
+  /// configured by the global_* and *_evaluations fields below.
+  std::string method = "lm";
   std::uint64_t seed = 1;
+  /// lm: candidates polished on the full-rate data; nlopt: independent starts.
   int starts = 4;
   /// Worker threads; 0: std::thread::hardware_concurrency().
   int threads = 0;
@@ -63,6 +69,16 @@ struct FitOptions {
   /// still apply. Time parameters (unit "s", a step time) are always
   /// searched within the recording.
   std::vector<BoundsOverride> bounds;
+  /// lm: Levenberg-Marquardt iterations per screened start (decimated data)
+  /// and per polished candidate (full-rate data).
+  int screen_iterations = 10;
+  int polish_iterations = 25;
+  /// lm: weight of a weak prior pulling every free parameter (normalised
+  /// coordinates) towards its start, relative to the measurement-noise
+  /// variance: a full-range move costs this fraction of the noise variance.
+  /// It only decides directions the data leaves undetermined (e.g. mu2 vs
+  /// kappa2); the report names the parameters it held.
+  double prior_weight = 1e-3;
   /// Called from the calling thread every progress_interval_s while working.
   std::function<void(const FitProgress&)> progress;
   double progress_interval_s = 0.25;
@@ -86,8 +102,12 @@ struct FitResult {
   int best_start = 0;
   long evaluations = 0;
   double seconds = 0.0;
-  std::string global_algorithm;  ///< NLopt's name, empty when not used
+  std::string global_algorithm;  ///< NLopt's name or "informed multi-start"; empty when not used
   std::string local_algorithm;
+  std::string library;  ///< "NLopt" or "own Levenberg-Marquardt"
+  /// Starting points the lm method screened, and how they were chosen.
+  int screened = 0;
+  std::vector<std::string> notes;
 };
 
 /// Fits the free parameters of `initial` (cloned) to `data`. Throws

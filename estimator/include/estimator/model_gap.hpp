@@ -54,6 +54,9 @@ struct GapOptions {
   SplitConfig split;
   DataRequirements requirements;
   DifferentiatorConfig differentiator;
+  /// Where xd, xdd come from (default: exact columns, else offline smoothing).
+  FitDerivatives derivatives = FitDerivatives::automatic;
+  OfflineDerivativeConfig offline;
   /// Progress text, called from the calling thread.
   std::function<void(const std::string&)> progress;
 };

@@ -1,0 +1,171 @@
+// Accuracy sweep of `tsm fit` (issue 14) on the paper's model through
+// realistic sensors (encoder quantum 2 pi/40960 rad, 3 mN m noise per torque
+// channel, 40 s at 1 kHz), with the limits beside every figure. Not a ctest:
+// a whole sweep takes minutes on 2 cores.
+//
+//   accuracy_fit derivs SEED...        true parameters on offline/deployed
+//                                      derivatives vs the true friction
+//   accuracy_fit fit SEED...           fit per seed: fitted vs true friction
+//   accuracy_fit pipeline SEED...      fit on SEED, deployed causal estimator
+//                                      on recording SEED+5000 of the same sheath
+//
+// Figures are RMSE over t >= 0.5 s in % of the true friction's peak.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "estimator/fit_workflow.hpp"
+#include "estimator/offline_derivatives.hpp"
+#include "estimator/simulate.hpp"
+#include "estimator/synthetic.hpp"
+#include "estimator/tsm_model.hpp"
+
+using namespace tsmh::estimator;
+
+namespace {
+
+double peak_of(const std::vector<double>& v) {
+  double p = 0.0;
+  for (double x : v)
+    p = std::max(p, std::fabs(x));
+  return p;
+}
+
+// RMSE of a - b over t >= 0.5 s, % of peak.
+double pct(const Recording& r, const std::vector<double>& a, const std::vector<double>& b,
+           double peak) {
+  double s = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (r.t[i] < r.t.front() + 0.5) continue;
+    s += (a[i] - b[i]) * (a[i] - b[i]);
+    ++n;
+  }
+  return 100.0 * std::sqrt(s / static_cast<double>(n)) / peak;
+}
+
+SyntheticData world(std::uint64_t seed) {
+  SyntheticConfig c;
+  c.seed = seed;
+  c.exact_derivatives = true;  // for the limits only; the fit is given the file without them
+  return make_synthetic(TsmFrictionModel(paper_spec()), c);
+}
+
+Recording without_derivatives(Recording r) {
+  r.xd_in.clear();
+  r.xdd_in.clear();
+  return r;
+}
+
+std::vector<double> sim(const FrictionModel& m, const std::vector<Motion>& motion) {
+  auto c = m.clone();
+  return simulate_friction(*c, motion);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: accuracy_fit derivs|fit|pipeline SEED...\n");
+    return 2;
+  }
+  const std::string mode = argv[1];
+  std::vector<std::uint64_t> seeds;
+  for (int i = 2; i < argc; ++i)
+    seeds.push_back(std::strtoull(argv[i], nullptr, 10));
+  const TsmFrictionModel truth(paper_spec());
+  double worst = 0.0, worst_limit = 0.0;
+
+  if (mode == "derivs") {
+    const double psds[] = {3, 10, 30, 100};
+    const double sigmas[] = {0.0, 0.25, 0.5};
+    std::printf("seed  exact  deployed  offline[psd,sigmas] ...\n");
+    for (auto seed : seeds) {
+      const auto syn = world(seed);
+      const double peak = peak_of(syn.true_friction);
+      const auto& r = syn.recording;
+      std::printf("%4llu %.3f %.3f", static_cast<unsigned long long>(seed),
+                  pct(r, sim(truth, motion_from_recording(r, DerivativeSource::exact)),
+                      syn.true_friction, peak),
+                  pct(r, sim(truth, motion_from_recording(r, DerivativeSource::differentiator)),
+                      syn.true_friction, peak));
+      for (double q : psds)
+        for (double sg : sigmas) {
+          OfflineDerivativeConfig oc;
+          oc.jerk_psd = q;
+          oc.acc_sign_sigmas = sg;
+          std::printf("  [%g,%g] %.3f", q, sg,
+                      pct(r, sim(truth, offline_motion(r, oc)), syn.true_friction, peak));
+        }
+      std::printf("\n");
+    }
+    return 0;
+  }
+
+  if (mode == "fit") {
+    std::printf(
+        "seed | fitted (offline motion) vs true F | limit: true params, same motion | fitted on "
+        "exact motion vs true F | validation RMSE / floor (N) | verdict | fit s\n");
+    for (auto seed : seeds) {
+      const auto syn = world(seed);
+      const double peak = peak_of(syn.true_friction);
+      const Recording rec = without_derivatives(syn.recording);
+      FitWorkflowOptions o;
+      o.fit.seed = seed;
+      const auto t0 = std::chrono::steady_clock::now();
+      const FitRun run = run_fit(rec, TsmFrictionModel(paper_spec()), "paper", o);
+      const double secs =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double fitted = pct(rec, run.fit.simulated, syn.true_friction, peak);
+      const double limit = pct(rec, sim(truth, run.data.motion), syn.true_friction, peak);
+      const auto exact = motion_from_recording(syn.recording, DerivativeSource::exact);
+      const double fitted_exact = pct(rec, sim(*run.fit.model, exact), syn.true_friction, peak);
+      worst = std::max(worst, fitted);
+      worst_limit = std::max(worst_limit, limit);
+      std::printf("%4llu | %.3f %% | %.3f %% | %.3f %% | %.4g / %.4g = %.3f | %s | %.2f\n",
+                  static_cast<unsigned long long>(seed), fitted, limit, fitted_exact,
+                  run.validation.rmse, run.noise, run.validation.rmse / run.noise,
+                  run.verdict.grade.c_str(), secs);
+      if (run.verdict.grade != "good") std::printf("      reason: %s\n", run.verdict.reason.c_str());
+      for (const auto& w : run.uncertainty.warnings)
+        std::printf("      warning: %s\n", w.c_str());
+      std::fflush(stdout);
+    }
+    std::printf("worst: fitted %.3f %% of peak (limit %.3f %%)\n", worst, worst_limit);
+    return 0;
+  }
+
+  if (mode == "pipeline") {
+    std::printf(
+        "fit seed -> run seed | fitted, deployed estimator vs true F | limit: true params, same "
+        "estimator\n");
+    for (auto seed : seeds) {
+      const auto syn = world(seed);
+      FitWorkflowOptions o;
+      o.fit.seed = seed;
+      o.uncertainty = false;
+      const FitRun run =
+          run_fit(without_derivatives(syn.recording), TsmFrictionModel(paper_spec()), "paper", o);
+      const auto other = world(seed + 5000);
+      const double peak = peak_of(other.true_friction);
+      const Recording rec = without_derivatives(other.recording);
+      // What `tsm simulate` does by default: the deployed causal differentiator.
+      const auto motion = motion_from_recording(rec, DerivativeSource::automatic);
+      const double fitted = pct(rec, sim(*run.fit.model, motion), other.true_friction, peak);
+      const double limit = pct(rec, sim(truth, motion), other.true_friction, peak);
+      worst = std::max(worst, fitted);
+      worst_limit = std::max(worst_limit, limit);
+      std::printf("%4llu -> %llu | %.3f %% | %.3f %%\n", static_cast<unsigned long long>(seed),
+                  static_cast<unsigned long long>(seed + 5000), fitted, limit);
+      std::fflush(stdout);
+    }
+    std::printf("worst: %.3f %% of peak (limit %.3f %%)\n", worst, worst_limit);
+    return 0;
+  }
+  std::fprintf(stderr, "unknown mode %s\n", mode.c_str());
+  return 2;
+}
