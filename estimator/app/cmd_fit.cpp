@@ -30,6 +30,8 @@ struct FitCliOptions {
   int starts = 4;
   int threads = 0;
   double block_s = 2.0;
+  std::string derivatives = "auto";
+  std::string method = "lm";
 };
 
 std::string progress_text(const estimator::FitProgress& p) {
@@ -53,6 +55,8 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   wo.fit.starts = o.starts;
   wo.fit.threads = o.threads;
   wo.split.block_s = o.block_s;
+  wo.fit.method = o.method;
+  wo.derivatives = estimator::derivatives_from_name(o.derivatives);
   ProgressLine line("tsm fit");
   wo.fit.progress = [&](const estimator::FitProgress& p) { line.update(progress_text(p)); };
   const estimator::FitRun run = estimator::run_fit(rec, *initial, o.model, wo);
@@ -80,6 +84,9 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
 
   for (const auto& w : run.uncertainty.warnings)
     std::cerr << "tsm fit: warning: " << w << "\n";
+  for (const auto& n : run.notes)
+    std::cerr << "tsm fit: note: " << n << "\n";
+  std::cerr << "tsm fit: verdict " << run.verdict.grade << ": " << run.verdict.reason << "\n";
   std::fprintf(stderr,
                "tsm fit: validation RMSE %.4g N, p2p %.4g N, fit %.1f %% (%s); %ld model runs in "
                "%.1f s -> %s%s%s\n",
@@ -114,6 +121,15 @@ void add_fit_command(CLI::App& app, Context& ctx) {
   cmd->add_option("--block", opts->block_s,
                   "Length of the alternating train/validation blocks, s (default 2)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--derivatives", opts->derivatives,
+                  "Velocity/acceleration for the fit: auto (the file's xd_in/xdd_in, else "
+                  "offline), offline (zero-phase smoother of x_in), deployed (the online "
+                  "differentiator)")
+      ->check(CLI::IsMember({"auto", "offline", "deployed"}));
+  cmd->add_option("--method", opts->method,
+                  "Optimiser: lm (informed multi-start + Levenberg-Marquardt, default) or nlopt "
+                  "(MLSL + BOBYQA)")
+      ->check(CLI::IsMember({"lm", "nlopt"}));
   add_lcm_log_options(*cmd, ctx.lcm_log);
   cmd->callback([opts, &ctx] { run_fit_command(*opts, ctx); });
 }

@@ -29,6 +29,7 @@ struct GapCliOptions {
   int max_effects = 4;
   std::vector<std::string> candidates;
   int threads = 0;
+  std::string derivatives = "auto";
 };
 
 void run_gap_command(const GapCliOptions& o, const Context& ctx) {
@@ -45,6 +46,7 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   go.margin = o.margin;
   go.max_effects = o.max_effects;
   go.candidates = o.candidates;
+  go.derivatives = estimator::derivatives_from_name(o.derivatives);
   ProgressLine line("tsm gap");
   go.progress = [&](const std::string& s) { line.update(s); };
   const estimator::GapResult g = estimator::find_model_gaps(rec, *base, o.base, go);
@@ -126,6 +128,10 @@ void add_gap_command(CLI::App& app, Context& ctx) {
       ->delimiter(',');
   cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 64));
+  cmd->add_option("--derivatives", opts->derivatives,
+                  "Velocity/acceleration: auto (the file's xd_in/xdd_in, else offline), offline "
+                  "(zero-phase smoother of x_in), deployed (the online differentiator)")
+      ->check(CLI::IsMember({"auto", "offline", "deployed"}));
   add_lcm_log_options(*cmd, ctx.lcm_log);
   cmd->callback([opts, &ctx] { run_gap_command(*opts, ctx); });
 }

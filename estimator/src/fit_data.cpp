@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "estimator/simulate.hpp"
 
@@ -40,6 +41,13 @@ const char* derivatives_name(FitDerivatives d) {
       return "deployed";
   }
   return "?";
+}
+
+FitDerivatives derivatives_from_name(const std::string& name) {
+  if (name == "auto" || name == "automatic") return FitDerivatives::automatic;
+  if (name == "offline") return FitDerivatives::offline;
+  if (name == "deployed") return FitDerivatives::deployed;
+  throw std::invalid_argument("derivatives must be auto, offline or deployed, not '" + name + "'");
 }
 
 std::size_t FitData::count(SampleRole r) const {

@@ -7,27 +7,90 @@
 #include "number_text.hpp"
 
 namespace tsmh::estimator {
-FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double noise) {
+namespace {
+
+// What data would pin a parameter down (by the term it belongs to).
+std::string data_that_helps(const std::string& name) {
+  const auto has = [&](const char* part) { return name.find(part) != std::string::npos; };
+  if (has("theta") || has("sigma"))
+    return "reversals followed by long excursions (the hysteresis loop's sides)";
+  if (has("lambda")) return "reversals at several accelerations, including slow creeping ones";
+  if (has("rho")) return "steady sliding at constant speed in both directions";
+  if (has("mu1") || has("kappa1")) return "sliding at several speeds, slow (< 0.2 rad/s) and fast";
+  if (has("acceleration_dependence"))
+    return "the same speeds reached while accelerating and while decelerating, at several "
+           "accelerations";
+  if (has("load")) return "the same motion at several loads";
+  if (has("position")) return "motion over the whole stroke";
+  if (has("time")) return "a longer recording";
+  return "motion that varies this term's variable more";
+}
+
+}  // namespace
+
+FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double noise,
+                     const UncertaintyReport* u, const std::vector<RegimeError>* regimes,
+                     double good_ratio) {
   FitVerdict v;
-  const std::string numbers = "validation fit " + num(val.fit_percent) + " %, RMSE " +
-                              num(val.rmse) + " N (train " + num(train.rmse) +
-                              " N, measurement noise about " + num(noise) + " N)";
+  const double ratio = noise > 0.0 ? val.rmse / noise : std::nan("");
+  std::string text = "validation RMSE " + num(val.rmse) + " N against a noise floor of " +
+                     num(noise) +
+                     " N estimated from the measured friction's high-frequency part (ratio " +
+                     num(ratio) + ", good needs <= " + num(good_ratio) + "); train RMSE " +
+                     num(train.rmse) + " N, validation fit " + num(val.fit_percent) + " %";
+  std::vector<std::string> problems;
   const bool overfit = val.rmse > 1.5 * train.rmse;
-  if (!(val.fit_percent >= 50.0)) {
+  const bool above_floor = !(ratio <= good_ratio);
+  if (above_floor) {
+    const double excess = std::sqrt(std::max(0.0, val.rmse * val.rmse - noise * noise));
+    std::string where;
+    if (regimes != nullptr) {
+      const RegimeError* worst = nullptr;
+      for (const auto& r : *regimes) {
+        if (r.metrics.samples > 0 && (worst == nullptr || r.concentration > worst->concentration))
+          worst = &r;
+      }
+      if (worst != nullptr)
+        where = ", most in " + worst->name + " (" + worst->where + ": RMSE " +
+                num(worst->metrics.rmse) + " N, " + num(worst->concentration) +
+                "x its share)";
+    }
+    problems.push_back("the model leaves about " + num(excess) +
+                       " N RMS beyond the noise unexplained" + where +
+                       ": an effect the model lacks (run tsm gap to name it), or motion too "
+                       "fast for the sample rate");
+  }
+  int at_bound = 0;
+  if (u != nullptr) {
+    for (const auto& p : u->parameters) {
+      if (p.fixed || !p.at_bound) continue;
+      ++at_bound;
+      const bool low = std::fabs(p.value - p.lower) <= std::fabs(p.value - p.upper);
+      problems.push_back(p.name + " = " + num(p.value) + " at its " +
+                         (low ? "lower" : "upper") + " bound (" + num(low ? p.lower : p.upper) +
+                         "): the data do not pin it down or want it beyond its range; data "
+                         "that would help: " + data_that_helps(p.name));
+    }
+  }
+  if (overfit)
+    problems.push_back("validation RMSE " + num(val.rmse) + " N is over 1.5x the train RMSE " +
+                       num(train.rmse) +
+                       " N: over-fitted, or the friction changes over the recording");
+  if (!(val.fit_percent >= 50.0) || ratio > 3.0) {
     v.grade = "poor";
-    v.reason = numbers + ": the model explains little of the measured friction";
-  } else if (val.fit_percent >= 80.0 && !overfit) {
+  } else if (!above_floor && at_bound == 0 && !overfit) {
     v.grade = "good";
-    v.reason =
-        numbers + (val.rmse <= 1.5 * noise ? ": the residual is close to the measurement noise"
-                                           : ": the model follows the measured friction closely");
   } else {
     v.grade = "fair";
-    v.reason = numbers + (overfit ? ": much worse on validation than on train data (over-fit, or "
-                                    "the friction changes over the record)"
-                                  : ": parts of the friction are not explained (tsm gap finds "
-                                    "where)");
   }
+  if (problems.empty()) {
+    text += ": the residual is at the measurement noise";
+  } else {
+    text += ". Not good because: ";
+    for (std::size_t i = 0; i < problems.size(); ++i)
+      text += (i ? "; " : "") + problems[i];
+  }
+  v.reason = text;
   return v;
 }
 
@@ -46,8 +109,20 @@ FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::st
   run.train = error_metrics(run.data, run.fit.simulated, SampleRole::train);
   run.validation = error_metrics(run.data, run.fit.simulated, SampleRole::validation);
   run.regimes = regime_errors(run.data, run.fit.simulated, SampleRole::validation);
-  if (o.uncertainty) run.uncertainty = estimate_uncertainty(*run.fit.model, run.data);
-  run.verdict = judge_fit(run.train, run.validation, run.noise);
+  if (o.uncertainty) {
+    run.uncertainty = estimate_uncertainty(*run.fit.model, run.data);
+    // The fit's weak prior holds what the data leave undetermined; say which.
+    std::string held;
+    for (const auto& p : run.uncertainty.parameters) {
+      if (!p.fixed && !p.at_bound && !p.well_identified) held += (held.empty() ? "" : ", ") + p.name;
+    }
+    if (!held.empty() && o.fit.method == "lm")
+      run.notes.push_back("regularised: " + held +
+                          " poorly determined by this data; the fit's weak prior kept them near "
+                          "their start (their combination that the data do determine is fitted)");
+  }
+  run.verdict = judge_fit(run.train, run.validation, run.noise,
+                          o.uncertainty ? &run.uncertainty : nullptr, &run.regimes);
   return run;
 }
 

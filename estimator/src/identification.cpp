@@ -492,6 +492,20 @@ std::vector<std::vector<double>> informed_starts(const TsmFrictionModel& initial
             case TermKind::reversal_offset:
               t.p[0] = lam;
               break;
+            case TermKind::acceleration_dependence:
+              // An amplitude and its rate both at 0 (a "flat" start) is a
+              // saddle: mu2 (1 - e^(-kappa2 |xdd|)) has no gradient in either.
+              // Start such pairs at small values of the paper's order.
+              if (!(t.p[0] > 0.0) || !(t.p[1] > 0.0)) {
+                t.p[0] = 0.05 * level_pos;
+                t.p[1] = 0.03;
+              }
+              if (!(t.p[2] > 0.0) || !(t.p[3] > 0.0)) {
+                t.p[2] = 0.1 * level_neg;
+                t.p[3] = 10.0;
+              }
+              if (!(t.p[4] > 0.1)) t.p[4] = 6.0;
+              break;
             default:
               break;
           }

@@ -3,7 +3,7 @@
 // world, garbage refused, parameter uncertainty, and the CLI's outputs.
 //
 // Acceptance seeds 101, 202, 303 were not used while developing the fit
-// (development used 11-13, 21-25 and 31-50).
+// (development used 11-13, 21-25 and 31-50; for issue 14's fit, 1-6).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -63,9 +63,9 @@ TsmModelSpec flat_start() {
 }
 
 struct Acceptance {
-  double identified_pct;  // fitted vs true model, both on the deployed motion
-  double deployed_pct;    // fitted (deployed motion) vs the true friction
-  double floor_pct;       // true parameters (deployed motion) vs the true friction
+  double identified_pct;  // fitted vs true model, both on the fit's (offline) motion
+  double fitted_pct;      // fitted (offline motion) vs the true friction
+  double limit_pct;       // true parameters (offline motion) vs the true friction
   double exact_pct;       // fitted on the exact motion vs the true friction
   FitRun run;
 };
@@ -73,41 +73,42 @@ struct Acceptance {
 Acceptance accept(std::uint64_t seed, const TsmModelSpec& start) {
   SyntheticConfig c;
   c.seed = seed;
-  c.exact_derivatives = true;  // for the exact-motion comparison only; the fit ignores them
+  c.exact_derivatives = true;  // for the exact-motion comparison only
   const TsmFrictionModel truth(paper_spec());
   const auto syn = make_synthetic(truth, c);
+  Recording rec = syn.recording;  // what a user records: no derivative columns
+  rec.xd_in.clear();
+  rec.xdd_in.clear();
   FitWorkflowOptions o;
   o.fit.seed = seed;
-  Acceptance a{0, 0, 0, 0, run_fit(syn.recording, TsmFrictionModel(start), "test", o)};
+  Acceptance a{0, 0, 0, 0, run_fit(rec, TsmFrictionModel(start), "test", o)};
   const FitData& d = a.run.data;
   const double peak = peak_of(syn.true_friction);
   auto t = truth.clone();
-  const auto true_deployed = simulate_friction(*t, d.motion);
+  const auto true_offline = simulate_friction(*t, d.motion);
   const auto exact_motion = motion_from_recording(syn.recording, DerivativeSource::exact);
   const auto fitted_exact = simulate_friction(*a.run.fit.model, exact_motion);
-  a.identified_pct = 100.0 * validation_rmse(d, true_deployed, a.run.fit.simulated) / peak;
-  a.deployed_pct = 100.0 * validation_rmse(d, syn.true_friction, a.run.fit.simulated) / peak;
-  a.floor_pct = 100.0 * validation_rmse(d, syn.true_friction, true_deployed) / peak;
+  a.identified_pct = 100.0 * validation_rmse(d, true_offline, a.run.fit.simulated) / peak;
+  a.fitted_pct = 100.0 * validation_rmse(d, syn.true_friction, a.run.fit.simulated) / peak;
+  a.limit_pct = 100.0 * validation_rmse(d, syn.true_friction, true_offline) / peak;
   a.exact_pct = 100.0 * validation_rmse(d, syn.true_friction, fitted_exact) / peak;
   return a;
 }
 
 void check(const Acceptance& a) {
   ::testing::Test::RecordProperty("identified_pct_of_peak", std::to_string(a.identified_pct));
-  ::testing::Test::RecordProperty("deployed_pct_of_peak", std::to_string(a.deployed_pct));
-  ::testing::Test::RecordProperty("differentiator_floor_pct", std::to_string(a.floor_pct));
+  ::testing::Test::RecordProperty("fitted_pct_of_peak", std::to_string(a.fitted_pct));
+  ::testing::Test::RecordProperty("true_params_same_motion_pct", std::to_string(a.limit_pct));
   ::testing::Test::RecordProperty("exact_motion_pct_of_peak", std::to_string(a.exact_pct));
   ::testing::Test::RecordProperty("validation_fit_percent",
                                   std::to_string(a.run.validation.fit_percent));
-  // The identified model behaves like the true one on the same (deployed)
-  // motion: within 5 % of the friction's peak.
-  EXPECT_LE(a.identified_pct, 5.0);
-  // The issue's criterion: the fitted model (run as deployed, through the
-  // differentiator) against the true friction, within 5 % of its peak...
-  EXPECT_LE(a.deployed_pct, 5.0);
-  // ...and no worse than the true parameters themselves (the differentiator's
-  // acceleration-sign delay sets that floor; docs/identification.md).
-  EXPECT_LE(a.deployed_pct, a.floor_pct + 1.0);
+  EXPECT_EQ(a.run.data.derivatives, "offline");
+  // Issue 14: the fitted friction within 1 % of the true friction's peak...
+  EXPECT_LE(a.fitted_pct, 1.0);
+  // ...and on exact motion too (the parameters are the physical ones)...
+  EXPECT_LE(a.exact_pct, 1.0);
+  // ...no worse than the true parameters on the same derivatives, beyond 0.2 %.
+  EXPECT_LE(a.fitted_pct, a.limit_pct + 0.2);
   EXPECT_EQ(a.run.verdict.grade, "good") << a.run.verdict.reason;
 }
 
@@ -130,11 +131,20 @@ TEST(Identification, DahlWorldIsFittedWellByThePaperModel) {
   const auto syn = make_synthetic(truth, c);
   const FitRun run = run_fit(syn.recording, TsmFrictionModel(paper_spec()), "paper");
   RecordProperty("validation_fit_percent", std::to_string(run.validation.fit_percent));
-  EXPECT_EQ(run.verdict.grade, "good") << run.verdict.reason;
   EXPECT_GT(run.validation.fit_percent, 90.0);
   const double vs_truth = validation_rmse(run.data, syn.true_friction, run.fit.simulated);
   RecordProperty("rmse_vs_truth_N", std::to_string(vs_truth));
   EXPECT_LE(vs_truth, 0.05 * peak_of(syn.true_friction));
+  // The paper's model (n = 2) cannot take Dahl's shape (n = 1) exactly: the
+  // residual stays above the noise floor, and the verdict must say so with
+  // the figures instead of calling it good (issue 14).
+  const double ratio = run.validation.rmse / run.noise;
+  RecordProperty("rmse_over_noise_floor", std::to_string(ratio));
+  if (ratio > 1.2) {
+    EXPECT_NE(run.verdict.grade, "good") << run.verdict.reason;
+    EXPECT_NE(run.verdict.reason.find("beyond the noise unexplained"), std::string::npos)
+        << run.verdict.reason;
+  }
 }
 
 TEST(Identification, GarbageWithoutMotionIsRefusedWithAReason) {
@@ -168,11 +178,16 @@ TEST(Identification, DeterministicForASeedWhateverTheThreads) {
   const auto b = identify(TsmFrictionModel(paper_spec()), d, o);
   EXPECT_EQ(a.values, b.values);
   EXPECT_EQ(a.best_start, b.best_start);
+  // The nlopt method too (its starts are random, seeded).
+  o.method = "nlopt";
+  o.threads = 1;
+  const auto c1 = identify(TsmFrictionModel(paper_spec()), d, o);
+  o.threads = 2;
+  const auto c2 = identify(TsmFrictionModel(paper_spec()), d, o);
+  EXPECT_EQ(c1.values, c2.values);
   o.seed = 78;
   const auto other = identify(TsmFrictionModel(paper_spec()), d, o);
-  // The seed changes the random starts and the global stage's samples (the
-  // polished optimum may well be the same: this data has one clear optimum).
-  EXPECT_NE(other.starts[1].global_rmse, a.starts[1].global_rmse) << "the seed must matter";
+  EXPECT_NE(other.starts[1].global_rmse, c1.starts[1].global_rmse) << "the seed must matter";
   // The result is never worse than the starting values.
   auto start = TsmFrictionModel(paper_spec());
   const auto f0 = simulate_friction(start, d.motion);
@@ -193,7 +208,11 @@ TEST(Identification, WarmRefitOnlyPolishes) {
   o.coarse_local_evaluations = 40;
   const auto r = identify(TsmFrictionModel(paper_spec()), d, o);
   EXPECT_TRUE(r.global_algorithm.empty());
-  for (const auto& s : r.starts)
+  // No informed grid: only the given values and one perturbation of them.
+  EXPECT_EQ(r.screened, 2);
+  o.method = "nlopt";
+  const auto n = identify(TsmFrictionModel(paper_spec()), d, o);
+  for (const auto& s : n.starts)
     EXPECT_LE(s.evaluations, 80);
 }
 
@@ -301,7 +320,9 @@ TEST(FitCommand, WritesParamsReportAndPlots) {
   EXPECT_TRUE(rep["seconds"].is_number());
   EXPECT_EQ(rep["regimes"].size(), 13U);
   EXPECT_FALSE(rep["parameters"].empty());
-  EXPECT_EQ(rep["optimiser"]["library"], "NLopt");
+  EXPECT_EQ(rep["optimiser"]["method"], "lm");
+  EXPECT_TRUE(rep["optimiser"]["library"].is_string());
+  EXPECT_EQ(rep["data"]["derivatives"], "offline");
   for (const auto& p : rep["plots"])
     EXPECT_TRUE(fs::exists(dir / "rep" / p.get<std::string>())) << p;
   EXPECT_EQ(rep["plots"].size(), 3U) << rep["warnings"];

@@ -41,6 +41,8 @@ enum class FitDerivatives : std::uint8_t {
 
 /// Name for reports: "exact", "offline" or "deployed" (what was actually used).
 const char* derivatives_name(FitDerivatives d);
+/// "auto", "offline" or "deployed"; throws std::invalid_argument otherwise.
+FitDerivatives derivatives_from_name(const std::string& name);
 
 struct SplitConfig {
   double block_s = 2.0;   ///< length of each block; shortened so each set has >= 3 blocks

@@ -21,9 +21,16 @@ struct FitVerdict {
   std::string reason;  ///< one sentence with the numbers
 };
 
-/// good: validation fit >= 80 % and validation RMSE within 1.5x train RMSE
-/// (no sign of over-fitting); fair: fit >= 50 %; poor otherwise.
-FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& validation, double noise);
+/// good: validation RMSE within `good_ratio` (1.2) x the noise floor
+/// estimated from the data (`noise`), no free parameter at a bound, and no
+/// sign of over-fitting (validation RMSE within 1.5x train). poor: fit < 50 %
+/// or RMSE above 3x the floor. fair otherwise. The reason gives the raw
+/// figures beside the ratio, says what is wrong and what data would help.
+/// `uncertainty` (optional) supplies the parameters at a bound, `regimes`
+/// (optional) where the residual concentrates.
+FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& validation, double noise,
+                     const UncertaintyReport* uncertainty = nullptr,
+                     const std::vector<RegimeError>* regimes = nullptr, double good_ratio = 1.2);
 
 struct FitRun {
   FitData data;
