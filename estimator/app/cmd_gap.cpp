@@ -74,6 +74,20 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
     plot_error = r.error;
     plots.insert(plots.end(), r.files.begin(), r.files.end());
   }
+  // The shape of each effect found: the friction it adds against its variable.
+  for (std::size_t k = 0; k < g.effects.size() && plot_error.empty(); ++k) {
+    const auto& e = g.effects[k];
+    const std::string unit = e.variable == "x"      ? "x (rad)"
+                             : e.variable == "load" ? "load |tau_in|/R (N)"
+                             : e.variable == "t"    ? "t (s)"
+                                                    : "|xd| (rad/s)";
+    const auto r = estimator::plot_xy(dir.staging(),
+                                      "gap_effect" + std::to_string(k + 1) + "_" + e.name, e.shape,
+                                      unit, "added friction (N)",
+                                      e.name + " (" + e.form + "): friction added vs " + unit);
+    plot_error = r.error;
+    plots.insert(plots.end(), r.files.begin(), r.files.end());
+  }
   if (!plot_error.empty()) std::cerr << "tsm gap: warning: plots: " << plot_error << "\n";
 
   std::vector<std::string> header = {"final model of tsm gap on " + g.data.source + " (base " +

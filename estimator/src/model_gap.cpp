@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <numbers>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -37,6 +39,8 @@ std::vector<std::size_t> amplitude_params(TermKind kind) {
       return {0, 1};
     case TermKind::time_varying:
       return {0, 1};  // drift, step (at the scanned step time)
+    case TermKind::position_ripple:
+      return {0, 1};  // sine and cosine amplitudes (at the scanned wavenumber)
     case TermKind::acceleration_dependence:
       return {0, 2};  // mu2, mu3
     default:
@@ -160,6 +164,81 @@ std::vector<double> seed_values(const TsmFrictionModel& neutral,
   return v;
 }
 
+// A setting of a candidate's shape parameters (a step time, a wavenumber, a
+// bump's place and width) to scan by first-order projection: shapes are
+// choices a local optimiser cannot move far, so the refit starts from the
+// best few, each searched within bounds around it.
+struct Shape {
+  std::vector<std::pair<std::size_t, double>> set;  // parameter index within the term, value
+  std::vector<BoundsOverride> bounds;
+  double key = 0.0;  // for keeping chosen shapes apart
+};
+
+std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_separation) {
+  std::vector<Shape> out;
+  const double t0 = d.motion.front().t, t1 = d.motion.back().t;
+  double xmin = d.motion.front().x, xmax = xmin;
+  std::vector<double> load;
+  for (const auto& m : d.motion) {
+    xmin = std::min(xmin, m.x);
+    xmax = std::max(xmax, m.x);
+    load.push_back(m.load);
+  }
+  const double span = std::max(xmax - xmin, 1e-3);
+  const auto q = [](std::vector<double> v, double f) {
+    const auto k = static_cast<std::ptrdiff_t>(f * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[static_cast<std::size_t>(k)];
+  };
+  switch (kind) {
+    case TermKind::time_varying: {
+      // Step time over the record (5 %..95 %), each searched within +-5 %.
+      min_separation = 0.1 * (t1 - t0);
+      const double half = 0.05 * (t1 - t0);
+      for (int k = 0; k <= 36; ++k) {
+        const double ts = t0 + (0.05 + 0.9 * k / 36.0) * (t1 - t0);
+        out.push_back({{{2, ts}}, {{qualified(kind, 2), ts - half, ts + half}}, ts});
+      }
+      break;
+    }
+    case TermKind::position_ripple: {
+      // 1 to 12 periods over the stroke, each searched within +-15 %.
+      min_separation = 1.5 * 2.0 * std::numbers::pi / span;
+      for (int j = 1; j <= 12; ++j) {
+        const double k = 2.0 * std::numbers::pi * j / span;
+        out.push_back({{{2, k}}, {{qualified(kind, 2), 0.85 * k, 1.15 * k}}, k});
+      }
+      break;
+    }
+    case TermKind::position_bump: {
+      // 12 places along the stroke, two widths; each place searched within
+      // +-1/8 of the stroke.
+      min_separation = span / 6.0;
+      for (int i = 0; i < 12; ++i) {
+        const double c = xmin + (i + 0.5) / 12.0 * span;
+        for (double w : {span / 25.0, span / 10.0}) {
+          out.push_back({{{1, c}, {2, w}},
+                         {{qualified(kind, 1), c - span / 8.0, c + span / 8.0},
+                          {qualified(kind, 2), span / 100.0, span / 2.0}},
+                         c});
+        }
+      }
+      break;
+    }
+    case TermKind::load_saturating: {
+      min_separation = 0.0;
+      for (double f : {0.5, 0.9}) {
+        const double l = std::max(q(load, f), 0.2);
+        out.push_back({{{1, l}}, {}, l});
+      }
+      break;
+    }
+    default:
+      break;
+  }
+  return out;
+}
+
 Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
                            std::span<const double> f_cur, std::span<const double> residual,
                            TermKind kind) {
@@ -170,11 +249,13 @@ Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
   std::vector<std::size_t> amp;
   for (std::size_t k : amplitude_params(kind))
     amp.push_back(index_of(params, qualified(kind, k)));
-  std::vector<std::vector<double>> regs;
-  for (std::size_t i : amp)
-    regs.push_back(sensitivity(neutral, i, d.motion, f_cur));
 
-  if (kind != TermKind::time_varying) {
+  double min_separation = 0.0;
+  const std::vector<Shape> shapes = shapes_to_scan(d, kind, min_separation);
+  if (shapes.empty()) {
+    std::vector<std::vector<double>> regs;
+    for (std::size_t i : amp)
+      regs.push_back(sensitivity(neutral, i, d.motion, f_cur));
     const Projection proj = project(d, residual, regs);
     p.explained = proj.explained;
     TsmFrictionModel seeded = neutral;
@@ -183,43 +264,47 @@ Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
     return p;
   }
 
-  // The step regressor depends on the step time: scan it over the record
-  // (5 %..95 %) and keep the three best times at least 10 % apart.
-  const std::size_t i_step = index_of(params, qualified(kind, 1));
-  const std::size_t i_time = index_of(params, qualified(kind, 2));
-  const auto at_time = [&](double ts) {
+  const auto with_shape = [&](const Shape& sh) {
     std::vector<double> v = values_of(neutral);
-    v[i_time] = ts;
+    for (const auto& [k, value] : sh.set)
+      v[index_of(params, qualified(kind, k))] = value;
     TsmFrictionModel m = neutral;
     m.set_values(v);
     return m;
   };
-  std::vector<std::pair<double, double>> scan;  // explained, time
-  for (int k = 0; k <= 36; ++k) {
-    const double ts = t0 + (0.05 + 0.9 * k / 36.0) * (t1 - t0);
-    const TsmFrictionModel m = at_time(ts);
-    scan.push_back(
-        {project(d, residual, {regs[0], sensitivity(m, i_step, d.motion, f_cur)}).explained, ts});
+  // time_varying's drift does not depend on the step time: one regressor.
+  std::vector<double> drift;
+  if (kind == TermKind::time_varying) drift = sensitivity(neutral, amp[0], d.motion, f_cur);
+  std::vector<std::pair<double, std::size_t>> scan;  // explained, shape
+  std::vector<Projection> projections;
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    const TsmFrictionModel m = with_shape(shapes[s]);
+    std::vector<std::vector<double>> regs;
+    for (std::size_t a = 0; a < amp.size(); ++a) {
+      if (kind == TermKind::time_varying && a == 0)
+        regs.push_back(drift);
+      else
+        regs.push_back(sensitivity(m, amp[a], d.motion, f_cur));
+    }
+    projections.push_back(project(d, residual, regs));
+    scan.push_back({projections.back().explained, s});
   }
   std::stable_sort(scan.begin(), scan.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
-  std::vector<double> steps;
-  for (const auto& [e, ts] : scan) {
-    const bool apart = std::all_of(steps.begin(), steps.end(),
-                                   [&](double s) { return std::fabs(s - ts) > 0.1 * (t1 - t0); });
-    if (apart && steps.size() < 3) steps.push_back(ts);
+  std::vector<std::size_t> chosen;
+  const std::size_t keep = kind == TermKind::load_saturating ? 2 : 2;
+  for (const auto& [e, s] : scan) {
+    const bool apart = std::all_of(chosen.begin(), chosen.end(), [&](std::size_t c) {
+      return std::fabs(shapes[c].key - shapes[s].key) > min_separation;
+    });
+    if (apart && chosen.size() < keep) chosen.push_back(s);
   }
   p.explained = scan.front().first;
-  const double half_window = 0.05 * (t1 - t0);
-  for (double ts : steps) {
-    const TsmFrictionModel m = at_time(ts);
-    const Projection proj =
-        project(d, residual, {regs[0], sensitivity(m, i_step, d.motion, f_cur)});
+  for (std::size_t s : chosen) {
+    const TsmFrictionModel m = with_shape(shapes[s]);
     TsmFrictionModel seeded = m;
-    seeded.set_values(seed_values(m, amp, proj));
-    p.variants.push_back({seeded.spec(),
-                          {values_of(m)},
-                          {{qualified(kind, 2), ts - half_window, ts + half_window}}});
+    seeded.set_values(seed_values(m, amp, projections[s]));
+    p.variants.push_back({seeded.spec(), {values_of(m)}, shapes[s].bounds});
   }
   return p;
 }
@@ -244,11 +329,51 @@ std::vector<TermKind> candidate_kinds(const GapOptions& o) {
     return out;
   }
   for (const auto& name : o.candidates) {
-    const auto kind = term_kind_from_name(name);
-    if (!kind) throw std::invalid_argument("unknown candidate effect '" + name + "'");
-    out.push_back(*kind);
+    // A family name (position_dependent, load_dependent) brings all its forms.
+    bool found = false;
+    for (const auto& info : term_catalog()) {
+      if (info.name == name || term_family(info.kind) == name) {
+        if (std::find(out.begin(), out.end(), info.kind) == out.end()) out.push_back(info.kind);
+        found = true;
+      }
+    }
+    if (!found) throw std::invalid_argument("unknown candidate effect '" + name + "'");
   }
   return out;
+}
+
+bool has_family(const TsmModelSpec& spec, TermKind kind) {
+  return std::any_of(spec.terms.begin(), spec.terms.end(),
+                     [&](const Term& t) { return term_family(t.kind) == term_family(kind); });
+}
+
+// The experiment that tells two effects apart: vary one's variable while
+// the other's stays the same.
+std::string separating_experiment(const std::string& a, const std::string& b) {
+  const auto pair = [&](const char* x, const char* y) {
+    return (a == x && b == y) || (a == y && b == x);
+  };
+  if (pair("load_dependent", "position_dependent"))
+    return "contact at several positions (press the tissue at different angles), or free motion "
+           "plus contact in one recording, so the same angles occur with different loads";
+  if (pair("load_dependent", "time_varying"))
+    return "the same loads early and late in the recording (alternate contact and free motion)";
+  if (pair("position_dependent", "time_varying"))
+    return "the whole stroke covered early and late in the recording";
+  if (pair("viscous", "load_dependent"))
+    return "the same speeds at several loads (free motion and contact at each speed)";
+  if (pair("viscous", "position_dependent"))
+    return "fast and slow motion over the same part of the stroke";
+  if (pair("viscous", "time_varying")) return "the same speeds early and late in the recording";
+  return "a recording in which the variables of " + a + " and " + b + " vary independently";
+}
+
+// The variable a family's added term is plotted against.
+const char* variable_of(std::string_view family) {
+  if (family == "position_dependent") return "x";
+  if (family == "load_dependent") return "load";
+  if (family == "time_varying") return "t";
+  return "speed";
 }
 
 std::vector<double> residual_of(const FitData& d, std::span<const double> f) {
@@ -404,7 +529,7 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     }
     std::vector<TermKind> todo;
     for (TermKind k : kinds) {
-      if (!current->spec().has(k)) todo.push_back(k);
+      if (!current->spec().has(k) && !has_family(current->spec(), k)) todo.push_back(k);
     }
     if (todo.empty()) {
       g.stop_reason = "every candidate is already in the model";
@@ -436,7 +561,11 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
             fo.seed = o.base_fit.seed + 101 * (c + 1) + 7 * v;
             fo.global_stage = false;
             fo.threads = 1;
-            fo.starts = 1 + static_cast<int>(var.extra_starts.size());
+            // LM: every start (seeded, neutral) is screened on the decimated
+            // data; the better one is polished on the full-rate data.
+            fo.starts = o.base_fit.method == "lm" ? 1 : 1 + static_cast<int>(var.extra_starts.size());
+            fo.method = o.base_fit.method;
+            fo.polish_iterations = o.refit_polish_iterations;
             fo.extra_starts = var.extra_starts;
             fo.bounds = var.bounds;
             fo.coarse_local_evaluations = o.refit_coarse_evaluations;
@@ -448,6 +577,7 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
           const FitResult& fit = *best;
           CandidateTrial& t = round.trials[c];
           t.name = std::string(term_info(todo[c]).name);
+          t.family = std::string(term_family(todo[c]));
           t.explained = p.explained;
           t.validation = error_metrics(d, fit.simulated, SampleRole::validation);
           t.train_mse = fit.train_rmse * fit.train_rmse;
@@ -508,6 +638,10 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
       say("re-identifying the model with " + win.name);
       FitOptions ro = o.base_fit;
       ro.progress = nullptr;
+      // From the refit, not from the informed grid: the base was already
+      // global, and the refit moved every parameter with the new term.
+      ro.global_stage = false;
+      ro.starts = 1;
       FitResult re = identify(*next_model, d, ro);
       g.evaluations += re.evaluations;
       if (re.train_rmse < std::sqrt(win.train_mse)) {
@@ -519,7 +653,8 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     const auto regimes_after = regime_errors(d, f_cur, SampleRole::validation);
 
     EffectFound e;
-    e.name = win.name;
+    e.name = std::string(term_family(kind));
+    e.form = win.name;
     e.meaning = std::string(term_info(kind).meaning);
     e.where = std::string(term_info(kind).where);
     const std::string own = own_regimes(kind, regimes_cur);
@@ -528,6 +663,25 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     if (!fell.empty()) e.where += "; residual fell most at " + fell;
     e.gap_after = gap_after;
     e.gain = 1.0 - gap_after.rmse / gap_cur.rmse;
+    {
+      // The shape found: the added friction against its variable.
+      const auto& spec = next_model->spec();
+      const bool asym = spec.has(TermKind::direction_asymmetry);
+      e.variable = variable_of(term_family(kind));
+      for (const auto& t : spec.terms) {
+        if (t.kind != kind) continue;
+        const std::size_t stride = std::max<std::size_t>(1, d.size() / 400);
+        for (std::size_t i = 0; i < d.size(); i += stride) {
+          const Motion& m = d.motion[i];
+          const double v = e.variable == std::string("x")      ? m.x
+                           : e.variable == std::string("load") ? m.load
+                           : e.variable == std::string("t")    ? m.t
+                                                               : std::fabs(m.xd);
+          e.shape.push_back({v, spec.gamma * term_level(t, m, asym)});
+        }
+      }
+      std::sort(e.shape.begin(), e.shape.end());
+    }
     const auto params = next_model->parameters();
     for (std::size_t k = 0; k < term_info(kind).params.size(); ++k) {
       const auto name = qualified(kind, k);
@@ -540,6 +694,44 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     gap_cur = gap_after;
     regimes_cur = regimes_after;
     g.rounds.push_back(std::move(round));
+  }
+
+  // Confounds: a rival family that qualified in the round an effect was
+  // named, nearly as well, and was never named afterwards explained the same
+  // residual. Never one confident name: both are reported, with the
+  // experiment that would separate them.
+  {
+    std::size_t effect_index = 0;
+    for (const auto& round : g.rounds) {
+      if (round.accepted < 0) continue;
+      const auto& win = round.trials[static_cast<std::size_t>(round.accepted)];
+      std::map<std::string, double> best_gain;
+      for (const auto& t : round.trials) {
+        if (t.family == win.family) continue;
+        best_gain[t.family] = std::max(best_gain.count(t.family) ? best_gain[t.family] : -1e9, t.gain);
+      }
+      for (const auto& [family, gain] : best_gain) {
+        if (gain < o.margin || gain < o.confound_ratio * win.gain) continue;
+        const bool named_later = std::any_of(g.effects.begin(), g.effects.end(),
+                                             [&](const EffectFound& e) { return e.name == family; });
+        if (named_later) continue;
+        Confound c;
+        c.named = win.family;
+        c.rival = family;
+        c.named_gain = win.gain;
+        c.rival_gain = gain;
+        c.experiment = separating_experiment(c.named, c.rival);
+        c.warning = c.named + " and " + c.rival +
+                    " are confounded in this recording: each alone shrinks the gap (" +
+                    pct(c.named_gain) + " and " + pct(c.rival_gain) + "), and " + c.rival +
+                    " adds nothing once " + c.named + " is in. " + c.named +
+                    " fitted slightly better, but the data cannot tell them apart; to separate "
+                    "them, record " + c.experiment;
+        if (effect_index < g.effects.size()) g.effects[effect_index].confounded_with.push_back(family);
+        g.confounds.push_back(std::move(c));
+      }
+      ++effect_index;
+    }
   }
 
   g.final_model = current->clone();
@@ -592,7 +784,15 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
     nlohmann::json params = nlohmann::json::object();
     for (const auto& [name, value] : e.parameters)
       params[name] = value;
+    nlohmann::json shape = nlohmann::json::array();
+    for (const auto& [v, f] : e.shape)
+      shape.push_back({v, f});
     effects.push_back({{"name", e.name},
+                       {"form", e.form},
+                       {"variable", e.variable},
+                       {"shape", shape},
+                       {"confounded_with", e.confounded_with},
+                       {"confident", e.confounded_with.empty()},
                        {"where", e.where},
                        {"meaning", e.meaning},
                        {"gap_after", gap(e.gap_after)},
@@ -604,6 +804,7 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
     nlohmann::json trials = nlohmann::json::array();
     for (const auto& t : r.trials) {
       trials.push_back({{"name", t.name},
+                        {"family", t.family},
                         {"explained_first_order", t.explained},
                         {"validation", gap(t.validation)},
                         {"gain", t.gain},
@@ -615,6 +816,16 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
   }
   nlohmann::json warnings = nlohmann::json::array();
   if (!plot_error.empty()) warnings.push_back("plots: " + plot_error);
+  nlohmann::json confounds = nlohmann::json::array();
+  for (const auto& c : g.confounds) {
+    warnings.push_back(c.warning);
+    confounds.push_back({{"named", c.named},
+                         {"rival", c.rival},
+                         {"named_gain", c.named_gain},
+                         {"rival_gain", c.rival_gain},
+                         {"experiment", c.experiment},
+                         {"warning", c.warning}});
+  }
   return {{"tool", "tsm gap"},
           {"base", g.base_name},
           {"gap_base", gap(g.gap_base)},
@@ -642,6 +853,8 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
           {"diagnostics_final", diagnostics(g.diagnostics_final)},
           {"rounds", rounds},
           {"stop_reason", g.stop_reason},
+          {"confounds", confounds},
+          {"noise_floor_ratio", g.noise > 0.0 ? g.gap_final.rmse / g.noise : 0.0},
           {"params_file", "params.yaml"},
           {"plots", plots},
           {"warnings", warnings},
@@ -709,7 +922,8 @@ std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
   if (g.effects.empty()) s << "No missing effect found: " << g.stop_reason << ".\n";
   for (std::size_t k = 0; k < g.effects.size(); ++k) {
     const auto& e = g.effects[k];
-    s << "Effect " << k + 1 << ": " << e.name << " -- " << e.meaning << ".\n  Where: " << e.where
+    s << "Effect " << k + 1 << ": " << e.name << " (form " << e.form << ") -- " << e.meaning
+      << ".\n  Where: " << e.where
       << ".\n  Why: adding it shrinks the validation gap by " << pct(e.gain)
       << " (the acceptance margin is " << pct(o.margin) << "); now " << metrics(e.gap_after)
       << ".\n  Fitted:";
@@ -717,9 +931,13 @@ std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
       s << " " << name << " = " << num(value, 4) << ";";
     s << "\n";
   }
+  for (const auto& c : g.confounds)
+    s << "\nWARNING: " << c.warning << ".\n";
   s << "\nGap before: " << metrics(g.gap_base) << "\nGap after:  " << metrics(g.gap_final) << " ("
     << (g.gap_base.rmse > 0 ? pct(1.0 - g.gap_final.rmse / g.gap_base.rmse) : "-")
-    << " smaller RMSE)\nStopped: " << g.stop_reason << ".\n";
+    << " smaller RMSE); noise floor " << num(g.noise) << " N, final / floor "
+    << num(g.noise > 0.0 ? g.gap_final.rmse / g.noise : 0.0) << "\nStopped: " << g.stop_reason
+    << ".\n";
   return s.str();
 }
 

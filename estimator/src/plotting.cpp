@@ -274,4 +274,33 @@ PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const R
   return out;
 }
 
+PlotOutcome plot_xy(const fs::path& dir, const std::string& name,
+                    const std::vector<std::pair<double, double>>& points, const std::string& xlabel,
+                    const std::string& ylabel, const std::string& title) {
+  PlotOutcome out;
+  const std::string term = plot_terminal();
+  const std::string ext = extension(term);
+  const fs::path dat = dir / (name + ".csv");
+  {
+    std::ofstream f(dat);
+    f << "x,y\n";
+    for (const auto& [x, y] : points)
+      f << x << "," << y << "\n";
+  }
+  std::ostringstream s;
+  s << "set datafile separator ','\n"
+    << terminal_line(term, 900, 500) << "set output " << quoted(name + ext) << "\nset title "
+    << quoted(title) << "\nset xlabel " << quoted(xlabel) << "\nset ylabel " << quoted(ylabel)
+    << "\nset grid\nset key off\nplot " << quoted(dat.filename().string())
+    << " using 1:2 every ::1 with points pt 7 ps 0.4\n";
+  const fs::path script = dir / (name + ".gp");
+  {
+    std::ofstream f(script);
+    f << s.str();
+  }
+  out.error = run_gnuplot(script);
+  if (out.error.empty()) out.files = {name + ext};
+  return out;
+}
+
 }  // namespace tsmh::estimator

@@ -26,6 +26,15 @@ constexpr ParamSpec kTime[] = {{"drift", 0.0, -1.0, 1.0, "level/s"},
                                {"t_step", 0.0, 0.0, 1e6, "s"},
                                {"t0", 0.0, -1e9, 1e9, "s", false}};
 
+constexpr ParamSpec kRipple[] = {{"a_sin", 0.0, -10.0, 10.0, "level"},
+                                  {"a_cos", 0.0, -10.0, 10.0, "level"},
+                                  {"wavenumber", 6.0, 0.3, 60.0, "1/rad"}};
+constexpr ParamSpec kBump[] = {{"amp", 0.0, -10.0, 10.0, "level"},
+                               {"center", 0.0, -100.0, 100.0, "rad"},
+                               {"width", 0.1, 0.005, 10.0, "rad"}};
+constexpr ParamSpec kLoadSat[] = {{"c_sat", 0.0, -1.0, 5.0, "level/N"},
+                                  {"l_sat", 10.0, 0.1, 1000.0, "N"}};
+
 constexpr TermInfo kCatalog[] = {
     {TermKind::coulomb, "coulomb", "Coulomb sliding level rho1 (eqs. 6, 7)",
      "everywhere in sliding", kCoulomb},
@@ -52,6 +61,15 @@ constexpr TermInfo kCatalog[] = {
     {TermKind::time_varying, "time_varying",
      "friction drifts or steps over time (sheath re-routed, wear, temperature)",
      "late vs early in the recording", kTime},
+    {TermKind::position_ripple, "position_ripple",
+     "friction varies periodically with the pulley angle (a ripple along the stroke)",
+     "periodic in the angle", kRipple, "position_dependent"},
+    {TermKind::position_bump, "position_bump",
+     "friction rises or falls locally around one angle (a kink in the sheath)",
+     "around one angle of the stroke", kBump, "position_dependent"},
+    {TermKind::load_saturating, "load_saturating",
+     "capstan effect that levels off: friction grows with the load up to a limit",
+     "high |tau_in|, in contact", kLoadSat, "load_dependent"},
 };
 
 }  // namespace
@@ -62,6 +80,11 @@ std::span<const TermInfo> term_catalog() {
 
 const TermInfo& term_info(TermKind kind) {
   return kCatalog[static_cast<int>(kind)];
+}
+
+std::string_view term_family(TermKind kind) {
+  const auto& info = term_info(kind);
+  return info.family.empty() ? info.name : info.family;
 }
 
 std::optional<TermKind> term_kind_from_name(std::string_view name) {
@@ -107,6 +130,14 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
       return (p[0] + p[1] * m.x) * m.x;
     case TermKind::time_varying:
       return p[0] * (m.t - p[3]) + (m.t >= p[2] ? p[1] : 0.0);
+    case TermKind::position_ripple:
+      return p[0] * std::sin(p[2] * m.x) + p[1] * std::cos(p[2] * m.x);
+    case TermKind::position_bump: {
+      const double u = (m.x - p[1]) / p[2];
+      return p[0] * std::exp(-0.5 * u * u);
+    }
+    case TermKind::load_saturating:
+      return p[0] * p[1] * std::tanh(m.load / p[1]);
   }
   return 0.0;
 }

@@ -79,6 +79,10 @@ void validate(const TsmModelSpec& s) {
     if (s.terms[i].kind == TermKind::acceleration_dependence && s.terms[i].p[4] <= 0.0) {
       bad("terms.acceleration_dependence.kappa4", "must be > 0 (divisor of f2, eq. 9)");
     }
+    if (s.terms[i].kind == TermKind::position_bump && s.terms[i].p[2] <= 0.0)
+      bad("terms.position_bump.width", "must be > 0");
+    if (s.terms[i].kind == TermKind::load_saturating && s.terms[i].p[1] <= 0.0)
+      bad("terms.load_saturating.l_sat", "must be > 0");
   }
 }
 

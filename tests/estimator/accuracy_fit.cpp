@@ -8,6 +8,11 @@
 //   accuracy_fit fit SEED...           fit per seed: fitted vs true friction
 //   accuracy_fit pipeline SEED...      fit on SEED, deployed causal estimator
 //                                      on recording SEED+5000 of the same sheath
+//   accuracy_fit gap CASE SEED...      tsm gap on a hidden effect; CASE one of
+//                                      null viscous load position time
+//                                      load+position viscous+time (the form of
+//                                      each effect changes with the seed)
+//   accuracy_fit csv-gap FILE...       tsm gap on recordings (virtual slave)
 //
 // Figures are RMSE over t >= 0.5 s in % of the true friction's peak.
 #include <algorithm>
@@ -19,6 +24,8 @@
 #include <vector>
 
 #include "estimator/fit_workflow.hpp"
+#include "estimator/model_gap.hpp"
+#include "estimator/model_io.hpp"
 #include "estimator/offline_derivatives.hpp"
 #include "estimator/simulate.hpp"
 #include "estimator/synthetic.hpp"
@@ -70,13 +77,13 @@ std::vector<double> sim(const FrictionModel& m, const std::vector<Motion>& motio
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: accuracy_fit derivs|fit|pipeline SEED...\n");
+    std::fprintf(stderr, "usage: accuracy_fit derivs|fit|pipeline SEED... | gap CASE SEED... | csv-gap FILE...\n");
     return 2;
   }
   const std::string mode = argv[1];
   std::vector<std::uint64_t> seeds;
   for (int i = 2; i < argc; ++i)
-    seeds.push_back(std::strtoull(argv[i], nullptr, 10));
+    seeds.push_back(std::strtoull(argv[i], nullptr, 10));  // (gap: argv[2] is the case)
   const TsmFrictionModel truth(paper_spec());
   double worst = 0.0, worst_limit = 0.0;
 
@@ -164,6 +171,99 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
     std::printf("worst: %.3f %% of peak (limit %.3f %%)\n", worst, worst_limit);
+    return 0;
+  }
+  if (mode == "gap" || mode == "csv-gap") {
+    std::vector<std::string> inputs;
+    std::string which;
+    if (mode == "gap") {
+      which = argv[2];
+      seeds.erase(seeds.begin());
+    } else {
+      for (int i = 2; i < argc; ++i)
+        inputs.push_back(argv[i]);
+    }
+    const std::size_t runs = mode == "gap" ? seeds.size() : inputs.size();
+    std::printf("case seed | hidden | named | gap base -> final (N) | noise floor (N) | final / "
+                "floor | confounds | s\n");
+    for (std::size_t k = 0; k < runs; ++k) {
+      Recording rec;
+      std::string hidden;
+      if (mode == "gap") {
+        const auto seed = seeds[k];
+        TsmModelSpec spec = paper_spec();
+        const int form = static_cast<int>(seed % 3);
+        const auto add = [&](const std::string& family) {
+          if (family == "viscous") {
+            spec.add(TermKind::viscous).p[0] = 0.1;
+            hidden += "viscous(c_v 0.1) ";
+          } else if (family == "load") {
+            if (form == 1) {
+              spec.add(TermKind::load_saturating).p = {0.04, 5.0};
+              hidden += "load_dependent(saturating 0.04, 5 N) ";
+            } else {
+              spec.add(TermKind::load_dependent).p[0] = 0.02;
+              hidden += "load_dependent(linear 0.02) ";
+            }
+          } else if (family == "position") {
+            if (form == 0) {
+              spec.add(TermKind::position_dependent).p = {0.1, 0.1};
+              hidden += "position_dependent(slope 0.1, 0.1) ";
+            } else if (form == 1) {
+              spec.add(TermKind::position_ripple).p = {0.08, 0.0, 9.4};
+              hidden += "position_dependent(ripple 0.08, k 9.4) ";
+            } else {
+              spec.add(TermKind::position_bump).p = {0.15, 0.3, 0.15};
+              hidden += "position_dependent(bump 0.15 at 0.3, w 0.15) ";
+            }
+          } else if (family == "time") {
+            if (form == 2) {
+              spec.add(TermKind::time_varying).p = {0.004, 0.0, 1e6, 0.0};
+              hidden += "time_varying(drift 0.004/s) ";
+            } else {
+              spec.add(TermKind::time_varying).p = {0.0, 0.1, 25.0, 0.0};
+              hidden += "time_varying(step 0.1 at 25 s) ";
+            }
+          }
+        };
+        std::string rest = which;
+        while (!rest.empty()) {
+          const auto plus = rest.find('+');
+          const std::string part = rest.substr(0, plus);
+          if (part != "null") add(part);
+          rest = plus == std::string::npos ? "" : rest.substr(plus + 1);
+        }
+        SyntheticConfig c;
+        c.seed = seed;
+        rec = make_synthetic(TsmFrictionModel(spec), c).recording;
+        if (hidden.empty()) hidden = "nothing";
+      } else {
+        rec = read_recording_csv(inputs[k]);
+        hidden = inputs[k];
+      }
+      const auto t0 = std::chrono::steady_clock::now();
+      const GapResult g = find_model_gaps(rec, TsmFrictionModel(paper_spec()), "paper");
+      const double secs =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::string named, conf;
+      for (const auto& e : g.effects)
+        named += e.name + "[" + e.form + "] ";
+      for (const auto& c : g.confounds)
+        conf += c.named + "~" + c.rival + " ";
+      if (named.empty()) named = "none";
+      if (conf.empty()) conf = "-";
+      std::printf("%s %llu | %s| %s| %.3f -> %.3f | %.3f | %.3f | %s | %.1f\n", which.c_str(),
+                  static_cast<unsigned long long>(mode == "gap" ? seeds[k] : k), hidden.c_str(),
+                  named.c_str(), g.gap_base.rmse, g.gap_final.rmse, g.noise,
+                  g.gap_final.rmse / g.noise, conf.c_str(), secs);
+      for (const auto& r : g.rounds) {
+        std::printf("      round:");
+        for (const auto& t : r.trials)
+          std::printf(" %s %.1f%%", t.name.c_str(), 100.0 * t.gain);
+        std::printf("\n");
+      }
+      std::fflush(stdout);
+    }
     return 0;
   }
   std::fprintf(stderr, "unknown mode %s\n", mode.c_str());

@@ -45,6 +45,12 @@ struct GapOptions {
   /// decimated data, then on the full-rate data.
   int refit_coarse_evaluations = 300;
   int refit_evaluations = 100;
+  /// lm: Levenberg-Marquardt iterations of each candidate's full-rate polish.
+  int refit_polish_iterations = 3;
+  /// A rival effect that shrank the gap by at least the margin and by at
+  /// least this fraction of the named effect's shrink, and added nothing
+  /// once that was in, is reported as confounded with it.
+  double confound_ratio = 0.5;
   /// After accepting an effect, identify the augmented model again globally
   /// (base_fit's settings, starting from the refit), kept when it fits the
   /// train data better.
@@ -75,7 +81,8 @@ struct ResidualDiagnostics {
 };
 
 struct CandidateTrial {
-  std::string name;
+  std::string name;    ///< the term (form) tried
+  std::string family;  ///< the effect it is a form of (term_family)
   double explained = 0.0;   ///< first-order: fraction of the residual its regressors explain
   ErrorMetrics validation;  ///< after the refit
   double train_mse = 0.0;
@@ -96,12 +103,31 @@ struct GapRound {
 };
 
 struct EffectFound {
-  std::string name;
+  std::string name;     ///< the effect (term family): viscous, load_dependent, ...
+  std::string form;     ///< the term that expressed it (e.g. position_ripple)
+  std::string variable;  ///< what the added term depends on: x, load, t or speed
+  /// The added friction (N, gamma x the term's level) against `variable`,
+  /// sorted by the variable, thinned to a few hundred points.
+  std::vector<std::pair<double, double>> shape;
+  /// Other effects that explained the same residual (see Confound).
+  std::vector<std::string> confounded_with;
   std::string meaning;  ///< the catalog's physical meaning
   std::string where;    ///< where its absence shows, and where the residual fell most
   ErrorMetrics gap_after;
   double gain = 0.0;
   std::vector<std::pair<std::string, double>> parameters;  ///< the term's fitted values
+};
+
+/// Two effects that explained the same residual: both shrank the gap by at
+/// least the margin when tried, the workflow named one, and the other added
+/// nothing after it. The data cannot tell them apart.
+struct Confound {
+  std::string named;  ///< the effect the workflow kept
+  std::string rival;  ///< the other one
+  double named_gain = 0.0;
+  double rival_gain = 0.0;  ///< when tried in the same round
+  std::string warning;      ///< for people, with the separating experiment
+  std::string experiment;   ///< the experiment that separates them
 };
 
 struct GapResult {
@@ -117,6 +143,7 @@ struct GapResult {
 
   std::vector<GapRound> rounds;
   std::vector<EffectFound> effects;
+  std::vector<Confound> confounds;
 
   std::unique_ptr<FrictionModel> final_model;
   std::vector<double> final_simulated;

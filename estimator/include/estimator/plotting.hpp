@@ -43,6 +43,12 @@ struct RegimeBars {
 PlotOutcome plot_regimes(const std::filesystem::path& dir, const std::string& prefix,
                          const RegimeBars& bars, const std::string& title);
 
+/// A curve y(x) as points: NAME.png with NAME.csv and NAME.gp beside it
+/// (e.g. the friction a gap effect adds against its variable).
+PlotOutcome plot_xy(const std::filesystem::path& dir, const std::string& name,
+                    const std::vector<std::pair<double, double>>& points, const std::string& xlabel,
+                    const std::string& ylabel, const std::string& title);
+
 /// Runs gnuplot on a script file; returns "" or what went wrong (with
 /// gnuplot's own message).
 std::string run_gnuplot(const std::filesystem::path& script);

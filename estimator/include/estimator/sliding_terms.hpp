@@ -29,6 +29,12 @@ enum class TermKind : std::uint8_t {
   load_dependent,           ///< c_load |tau_in|/R: capstan, friction grows with tension
   position_dependent,       ///< p1 x + p2 x^2: friction varies along the stroke
   time_varying,             ///< drift (t - t0) + step [t >= t_step]: sheath re-routed, wear
+  // Further forms of the same physical effects (issue 14: real effects do not
+  // come in one form). Each belongs to a family (TermInfo::family), the name
+  // under which tsm gap reports it.
+  position_ripple,  ///< a sin(k x) + b cos(k x): periodic friction along the stroke (family position)
+  position_bump,    ///< amp exp(-((x - center)/width)^2 / 2): a local kink in the sheath
+  load_saturating,  ///< c_sat l_sat tanh(load / l_sat): capstan growth that levels off
 };
 
 inline constexpr int kMaxTermParams = 5;
@@ -48,7 +54,13 @@ struct TermInfo {
   std::string_view meaning;  ///< the physical effect, one line
   std::string_view where;    ///< where in the data its absence shows
   std::span<const ParamSpec> params;
+  /// The physical effect this term is a form of (tsm gap names effects by
+  /// family); empty: the term's own name.
+  std::string_view family = {};
 };
+
+/// The family name of a term: its `family`, or its own name.
+std::string_view term_family(TermKind kind);
 
 /// The whole catalog, in declaration order of TermKind.
 std::span<const TermInfo> term_catalog();
