@@ -292,7 +292,9 @@ Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
   std::stable_sort(scan.begin(), scan.end(),
                    [](const auto& a, const auto& b) { return a.first > b.first; });
   std::vector<std::size_t> chosen;
-  const std::size_t keep = kind == TermKind::load_saturating ? 2 : 2;
+  // The scans pick the right shape reliably; time keeps two step times
+  // (a step and a drift look alike to first order).
+  const std::size_t keep = kind == TermKind::time_varying ? 2 : 1;
   for (const auto& [e, s] : scan) {
     const bool apart = std::all_of(chosen.begin(), chosen.end(), [&](std::size_t c) {
       return std::fabs(shapes[c].key - shapes[s].key) > min_separation;
@@ -553,6 +555,20 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
       for (std::size_t c = next.fetch_add(1); c < todo.size(); c = next.fetch_add(1)) {
         try {
           const Prepared p = prepare_candidate(d, *current, f_cur, residual, todo[c]);
+          if (p.explained < o.min_explained) {
+            // Its regressors explain next to nothing of the residual: a
+            // refit cannot shrink the gap (saves most of a null round).
+            CandidateTrial& t = round.trials[c];
+            t.name = std::string(term_info(todo[c]).name);
+            t.family = std::string(term_family(todo[c]));
+            t.explained = p.explained;
+            t.validation = gap_cur;
+            t.train_mse = mse_cur;
+            t.skipped = true;
+            t.bic = bic_cur;
+            done.fetch_add(1);
+            continue;
+          }
           std::optional<FitResult> best;
           long evaluations = 0;
           for (std::size_t v = 0; v < p.variants.size(); ++v) {
@@ -584,7 +600,30 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
           t.bic = bic(t.train_mse, n_eff, free_count(*fit.model));
           t.delta_bic = t.bic - bic_cur;
           t.gain = 1.0 - t.validation.rmse / gap_cur.rmse;
-          t.qualifies = t.gain >= o.margin;
+          {
+            // Significance: the drop in squared error per validation sample,
+            // against its spread over the effective number of samples.
+            std::vector<double> drop;
+            for (std::size_t i = 0; i < d.size(); ++i) {
+              if (d.role[i] != SampleRole::validation) continue;
+              const double eb = d.measured[i] - f_cur[i], ea = d.measured[i] - fit.simulated[i];
+              drop.push_back(eb * eb - ea * ea);
+            }
+            double mean = 0.0, var = 0.0;
+            for (double v : drop)
+              mean += v;
+            mean /= static_cast<double>(drop.size());
+            for (double v : drop)
+              var += (v - mean) * (v - mean);
+            var /= static_cast<double>(drop.size());
+            const double se =
+                std::sqrt(var * correlation_time(drop) / static_cast<double>(drop.size()));
+            t.z = se > 0.0 ? mean / se : 0.0;
+            const double excess = gap_cur.rmse * gap_cur.rmse - g.noise * g.noise;
+            t.excess_share = excess > 0.0 ? mean / excess : 0.0;
+          }
+          t.qualifies = t.gain > 0.0 && (t.gain >= o.margin || (t.z >= o.min_z &&
+                                                                t.excess_share >= o.min_excess_share));
           t.values = fit.values;
           t.evaluations = evaluations;
         } catch (...) {
@@ -615,7 +654,7 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
                      [](const auto& a, const auto& b) { return a.gain > b.gain; });
     if (!round.trials.front().qualifies) {
       const auto& best = round.trials.front();
-      g.stop_reason = "no candidate shrinks the validation gap by >= " + pct(o.margin) +
+      g.stop_reason = "no candidate qualifies (shrinks the validation gap by >= " + pct(o.margin) + " or significantly" +
                       " (best: " + best.name + ", " + pct(best.gain) + ")";
       round.stop_reason = g.stop_reason;
       g.rounds.push_back(std::move(round));
@@ -809,6 +848,9 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
                         {"validation", gap(t.validation)},
                         {"gain", t.gain},
                         {"delta_bic", t.delta_bic},
+                        {"z", t.z},
+                        {"skipped", t.skipped},
+                        {"excess_share", t.excess_share},
                         {"qualifies", t.qualifies},
                         {"accepted", t.accepted}});
     }
@@ -844,9 +886,13 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
            {{"margin", o.margin},
             {"rule",
              "accept the candidate with the largest validation-RMSE reduction when it is "
-             ">= margin; stop when none is, or when the gap is within noise_stop x the "
+             ">= margin, or when its improvement is significant (z >= min_z) and removes >= "
+             "min_excess_share of the MSE above the noise floor; stop when none qualifies, or "
+             "when the gap is within noise_stop x the "
              "noise floor. BIC (effective sample size) is reported with every trial"},
-            {"noise_stop", o.noise_stop}}},
+            {"noise_stop", o.noise_stop},
+            {"min_z", o.min_z},
+            {"min_excess_share", o.min_excess_share}}},
           {"regimes_base", regimes(g.regimes_base)},
           {"regimes_final", regimes(g.regimes_final)},
           {"diagnostics_base", diagnostics(g.diagnostics_base)},

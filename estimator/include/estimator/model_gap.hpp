@@ -39,7 +39,17 @@ struct GapOptions {
   /// A candidate must shrink the validation RMSE by at least this fraction.
   double margin = 0.10;
   /// Stop when the validation RMSE is within this factor of the noise floor.
-  double noise_stop = 1.1;
+  double noise_stop = 1.0;
+  /// A candidate with a smaller gain still qualifies when its improvement is
+  /// significant (z-score of the per-sample drop in squared validation error,
+  /// over its correlation time, >= min_z) and it explains at least
+  /// min_excess_share of the validation MSE above the noise floor: with the
+  /// base at the floor a real effect can be small against the noise.
+  double min_z = 6.0;
+  double min_excess_share = 0.3;
+  /// Candidates whose regressors explain less than this share of the
+  /// residual (first order) are not refitted.
+  double min_explained = 0.01;
   int max_effects = 4;
   /// Budget of each candidate's local refit (per start): BOBYQA on the
   /// decimated data, then on the full-rate data.
@@ -89,6 +99,9 @@ struct CandidateTrial {
   double bic = 0.0;        ///< effective-sample BIC on train data (lower is better)
   double delta_bic = 0.0;  ///< vs the current model
   double gain = 0.0;       ///< relative validation RMSE reduction (0.3 = 30 % smaller)
+  double z = 0.0;          ///< significance of the reduction (see GapOptions::min_z)
+  double excess_share = 0.0;  ///< share of the MSE above the noise floor it removed
+  bool skipped = false;  ///< not refitted: its first-order share was below min_explained
   bool qualifies = false;
   bool accepted = false;
   std::vector<double> values;  ///< fitted parameter values (parameters() order)
