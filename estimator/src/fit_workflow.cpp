@@ -76,7 +76,7 @@ FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double 
     problems.push_back("validation RMSE " + num(val.rmse) + " N is over 1.5x the train RMSE " +
                        num(train.rmse) +
                        " N: over-fitted, or the friction changes over the recording");
-  if (!(val.fit_percent >= 50.0) || ratio > 3.0) {
+  if (!(val.fit_percent >= 50.0)) {
     v.grade = "poor";
   } else if (!above_floor && at_bound == 0 && !overfit) {
     v.grade = "good";

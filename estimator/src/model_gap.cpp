@@ -432,6 +432,71 @@ std::string where_it_fell(const std::vector<RegimeError>& before,
   return text;
 }
 
+
+// Adds a prepared candidate to `current` and refits it locally (each variant
+// of its shapes; the best train fit counts); scores the validation gap
+// against `gap_cur`: the relative gain, and the significance of the drop in
+// squared error (z over the correlation time; the share of the MSE above the
+// noise floor it removes). BIC is left to the caller.
+CandidateTrial refit_candidate(const FitData& d, const TsmFrictionModel& current,
+                               std::span<const double> f_cur, const ErrorMetrics& gap_cur,
+                               double noise, const Prepared& p, const GapOptions& o,
+                               std::uint64_t seed) {
+  std::optional<FitResult> best;
+  long evaluations = 0;
+  for (std::size_t v = 0; v < p.variants.size(); ++v) {
+    const Variant& var = p.variants[v];
+    FitOptions fo;
+    fo.seed = seed + 7 * v;
+    fo.global_stage = false;
+    fo.threads = 1;
+    // LM: every start (seeded, neutral) is screened on the decimated data;
+    // the better one is polished on the full-rate data.
+    fo.starts = o.base_fit.method == "lm" ? 1 : 1 + static_cast<int>(var.extra_starts.size());
+    fo.method = o.base_fit.method;
+    fo.polish_iterations = o.refit_polish_iterations;
+    fo.extra_starts = var.extra_starts;
+    fo.bounds = var.bounds;
+    fo.coarse_local_evaluations = o.refit_coarse_evaluations;
+    fo.local_evaluations = o.refit_evaluations;
+    FitResult r = identify(TsmFrictionModel(var.seeded), d, fo);
+    evaluations += r.evaluations;
+    if (!best || r.train_rmse < best->train_rmse) best = std::move(r);
+  }
+  (void)current;
+  const FitResult& fit = *best;
+  CandidateTrial t;
+  t.name = std::string(term_info(p.kind).name);
+  t.family = std::string(term_family(p.kind));
+  t.explained = p.explained;
+  t.validation = error_metrics(d, fit.simulated, SampleRole::validation);
+  t.train_mse = fit.train_rmse * fit.train_rmse;
+  t.free_parameters = free_count(*fit.model);
+  t.gain = 1.0 - t.validation.rmse / gap_cur.rmse;
+  std::vector<double> drop;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (d.role[i] != SampleRole::validation) continue;
+    const double eb = d.measured[i] - f_cur[i], ea = d.measured[i] - fit.simulated[i];
+    drop.push_back(eb * eb - ea * ea);
+  }
+  double mean = 0.0, var = 0.0;
+  for (double v : drop)
+    mean += v;
+  mean /= static_cast<double>(drop.size());
+  for (double v : drop)
+    var += (v - mean) * (v - mean);
+  var /= static_cast<double>(drop.size());
+  const double se = std::sqrt(var * correlation_time(drop) / static_cast<double>(drop.size()));
+  t.z = se > 0.0 ? mean / se : 0.0;
+  const double excess = gap_cur.rmse * gap_cur.rmse - noise * noise;
+  t.excess_share = excess > 0.0 ? mean / excess : 0.0;
+  t.qualifies = t.gain > 0.0 && (t.gain >= o.margin ||
+                                 (t.z >= o.min_z && t.excess_share >= o.min_excess_share));
+  t.values = fit.values;
+  t.evaluations = evaluations;
+  return t;
+}
+
 }  // namespace
 
 ResidualDiagnostics diagnose_residual(const FitData& d, const TsmFrictionModel& model,
@@ -569,63 +634,11 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
             done.fetch_add(1);
             continue;
           }
-          std::optional<FitResult> best;
-          long evaluations = 0;
-          for (std::size_t v = 0; v < p.variants.size(); ++v) {
-            const Variant& var = p.variants[v];
-            FitOptions fo;
-            fo.seed = o.base_fit.seed + 101 * (c + 1) + 7 * v;
-            fo.global_stage = false;
-            fo.threads = 1;
-            // LM: every start (seeded, neutral) is screened on the decimated
-            // data; the better one is polished on the full-rate data.
-            fo.starts = o.base_fit.method == "lm" ? 1 : 1 + static_cast<int>(var.extra_starts.size());
-            fo.method = o.base_fit.method;
-            fo.polish_iterations = o.refit_polish_iterations;
-            fo.extra_starts = var.extra_starts;
-            fo.bounds = var.bounds;
-            fo.coarse_local_evaluations = o.refit_coarse_evaluations;
-            fo.local_evaluations = o.refit_evaluations;
-            FitResult r = identify(TsmFrictionModel(var.seeded), d, fo);
-            evaluations += r.evaluations;
-            if (!best || r.train_rmse < best->train_rmse) best = std::move(r);
-          }
-          const FitResult& fit = *best;
+          round.trials[c] = refit_candidate(d, *current, f_cur, gap_cur, g.noise, p, o,
+                                            o.base_fit.seed + 101 * (c + 1));
           CandidateTrial& t = round.trials[c];
-          t.name = std::string(term_info(todo[c]).name);
-          t.family = std::string(term_family(todo[c]));
-          t.explained = p.explained;
-          t.validation = error_metrics(d, fit.simulated, SampleRole::validation);
-          t.train_mse = fit.train_rmse * fit.train_rmse;
-          t.bic = bic(t.train_mse, n_eff, free_count(*fit.model));
+          t.bic = bic(t.train_mse, n_eff, t.free_parameters);
           t.delta_bic = t.bic - bic_cur;
-          t.gain = 1.0 - t.validation.rmse / gap_cur.rmse;
-          {
-            // Significance: the drop in squared error per validation sample,
-            // against its spread over the effective number of samples.
-            std::vector<double> drop;
-            for (std::size_t i = 0; i < d.size(); ++i) {
-              if (d.role[i] != SampleRole::validation) continue;
-              const double eb = d.measured[i] - f_cur[i], ea = d.measured[i] - fit.simulated[i];
-              drop.push_back(eb * eb - ea * ea);
-            }
-            double mean = 0.0, var = 0.0;
-            for (double v : drop)
-              mean += v;
-            mean /= static_cast<double>(drop.size());
-            for (double v : drop)
-              var += (v - mean) * (v - mean);
-            var /= static_cast<double>(drop.size());
-            const double se =
-                std::sqrt(var * correlation_time(drop) / static_cast<double>(drop.size()));
-            t.z = se > 0.0 ? mean / se : 0.0;
-            const double excess = gap_cur.rmse * gap_cur.rmse - g.noise * g.noise;
-            t.excess_share = excess > 0.0 ? mean / excess : 0.0;
-          }
-          t.qualifies = t.gain > 0.0 && (t.gain >= o.margin || (t.z >= o.min_z &&
-                                                                t.excess_share >= o.min_excess_share));
-          t.values = fit.values;
-          t.evaluations = evaluations;
         } catch (...) {
           errors[c] = std::current_exception();
         }
@@ -664,6 +677,29 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     CandidateTrial& win = round.trials.front();
     win.accepted = true;
     const TermKind kind = *term_kind_from_name(win.name);
+    {
+      // Rivals: other effects that qualified nearly as well. Would the
+      // winner still add after the rival? If not, this data cannot tell
+      // them apart (checked after the last round, see Confound).
+      std::map<std::string, const CandidateTrial*> rivals;
+      for (const auto& t : round.trials) {
+        if (t.family == win.family || !t.qualifies || t.gain < o.confound_ratio * win.gain) continue;
+        if (!rivals.count(t.family) || rivals[t.family]->gain < t.gain) rivals[t.family] = &t;
+      }
+      for (const auto& [family, r] : rivals) {
+        say("checking whether " + win.family + " still adds after " + family);
+        TsmFrictionModel with_rival(with_neutral_term(current->spec(), *term_kind_from_name(r->name),
+                                                      d.motion.front().t, d.motion.back().t));
+        with_rival.set_values(r->values);
+        const auto f_r = simulate_friction(with_rival, d.motion);
+        const auto gap_r = error_metrics(d, f_r, SampleRole::validation);
+        const Prepared pw = prepare_candidate(d, with_rival, f_r, residual_of(d, f_r), kind);
+        const CandidateTrial back =
+            refit_candidate(d, with_rival, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
+        g.evaluations += back.evaluations;
+        round.rivals.push_back({family, r->gain, back.gain, back.qualifies});
+      }
+    }
     auto next_model = std::make_unique<TsmFrictionModel>(
         with_neutral_term(current->spec(), kind, d.motion.front().t, d.motion.back().t));
     next_model->set_values(win.values);
@@ -735,38 +771,45 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     g.rounds.push_back(std::move(round));
   }
 
-  // Confounds: a rival family that qualified in the round an effect was
-  // named, nearly as well, and was never named afterwards explained the same
-  // residual. Never one confident name: both are reported, with the
-  // experiment that would separate them.
+  // Confounds: a rival that qualified in the round an effect was named,
+  // nearly as well, was never named afterwards, and after which the named
+  // effect adds nothing: the two explain the same residual. Never one
+  // confident name: both are reported, with the experiment that would
+  // separate them. When the named effect still adds after the rival, the
+  // rival only correlated with it; its "where" says so.
   {
     std::size_t effect_index = 0;
     for (const auto& round : g.rounds) {
       if (round.accepted < 0) continue;
       const auto& win = round.trials[static_cast<std::size_t>(round.accepted)];
-      std::map<std::string, double> best_gain;
-      for (const auto& t : round.trials) {
-        if (t.family == win.family) continue;
-        best_gain[t.family] = std::max(best_gain.count(t.family) ? best_gain[t.family] : -1e9, t.gain);
-      }
-      for (const auto& [family, gain] : best_gain) {
-        if (gain < o.margin || gain < o.confound_ratio * win.gain) continue;
+      for (const auto& rc : round.rivals) {
         const bool named_later = std::any_of(g.effects.begin(), g.effects.end(),
-                                             [&](const EffectFound& e) { return e.name == family; });
+                                             [&](const EffectFound& e) { return e.name == rc.family; });
         if (named_later) continue;
+        if (rc.winner_still_qualifies) {
+          if (effect_index < g.effects.size())
+            g.effects[effect_index].where +=
+                "; " + rc.family + " alone also shrank the gap (" + pct(rc.gain) + "), but " +
+                win.family + " still shrinks it by " + pct(rc.winner_gain_after) +
+                " on top of it, and not the reverse: " + rc.family +
+                " only correlates with it in this data";
+          continue;
+        }
         Confound c;
         c.named = win.family;
-        c.rival = family;
+        c.rival = rc.family;
         c.named_gain = win.gain;
-        c.rival_gain = gain;
+        c.rival_gain = rc.gain;
         c.experiment = separating_experiment(c.named, c.rival);
         c.warning = c.named + " and " + c.rival +
                     " are confounded in this recording: each alone shrinks the gap (" +
-                    pct(c.named_gain) + " and " + pct(c.rival_gain) + "), and " + c.rival +
-                    " adds nothing once " + c.named + " is in. " + c.named +
+                    pct(c.named_gain) + " and " + pct(c.rival_gain) +
+                    "), and neither adds much once the other is in (" + c.named + " after " +
+                    c.rival + ": " + pct(rc.winner_gain_after) + "). " + c.named +
                     " fitted slightly better, but the data cannot tell them apart; to separate "
                     "them, record " + c.experiment;
-        if (effect_index < g.effects.size()) g.effects[effect_index].confounded_with.push_back(family);
+        if (effect_index < g.effects.size())
+          g.effects[effect_index].confounded_with.push_back(rc.family);
         g.confounds.push_back(std::move(c));
       }
       ++effect_index;
@@ -854,7 +897,13 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
                         {"qualifies", t.qualifies},
                         {"accepted", t.accepted}});
     }
-    rounds.push_back({{"gap_before", gap(r.before)}, {"candidates", trials}});
+    nlohmann::json rivals = nlohmann::json::array();
+    for (const auto& rc : r.rivals)
+      rivals.push_back({{"family", rc.family},
+                        {"gain", rc.gain},
+                        {"accepted_gain_after_rival", rc.winner_gain_after},
+                        {"accepted_still_qualifies", rc.winner_still_qualifies}});
+    rounds.push_back({{"gap_before", gap(r.before)}, {"candidates", trials}, {"rivals", rivals}});
   }
   nlohmann::json warnings = nlohmann::json::array();
   if (!plot_error.empty()) warnings.push_back("plots: " + plot_error);

@@ -259,7 +259,7 @@ int main(int argc, char** argv) {
       for (const auto& r : g.rounds) {
         std::printf("      round:");
         for (const auto& t : r.trials)
-          std::printf(" %s %.1f%%", t.name.c_str(), 100.0 * t.gain);
+          std::printf(" %s %.1f%% (z %.1f, share %.2f)", t.name.c_str(), 100.0 * t.gain, t.z, t.excess_share);
         std::printf("\n");
       }
       std::fflush(stdout);

@@ -23,8 +23,8 @@ struct FitVerdict {
 
 /// good: validation RMSE within `good_ratio` (1.2) x the noise floor
 /// estimated from the data (`noise`), no free parameter at a bound, and no
-/// sign of over-fitting (validation RMSE within 1.5x train). poor: fit < 50 %
-/// or RMSE above 3x the floor. fair otherwise. The reason gives the raw
+/// sign of over-fitting (validation RMSE within 1.5x train). poor: validation
+/// fit < 50 %. fair otherwise. The reason gives the raw
 /// figures beside the ratio, says what is wrong and what data would help.
 /// `uncertainty` (optional) supplies the parameters at a bound, `regimes`
 /// (optional) where the residual concentrates.

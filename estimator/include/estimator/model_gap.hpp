@@ -39,17 +39,17 @@ struct GapOptions {
   /// A candidate must shrink the validation RMSE by at least this fraction.
   double margin = 0.10;
   /// Stop when the validation RMSE is within this factor of the noise floor.
-  double noise_stop = 1.0;
+  double noise_stop = 1.03;
   /// A candidate with a smaller gain still qualifies when its improvement is
   /// significant (z-score of the per-sample drop in squared validation error,
   /// over its correlation time, >= min_z) and it explains at least
   /// min_excess_share of the validation MSE above the noise floor: with the
   /// base at the floor a real effect can be small against the noise.
-  double min_z = 6.0;
-  double min_excess_share = 0.3;
+  double min_z = 2.0;
+  double min_excess_share = 0.5;
   /// Candidates whose regressors explain less than this share of the
   /// residual (first order) are not refitted.
-  double min_explained = 0.01;
+  double min_explained = 0.0;
   int max_effects = 4;
   /// Budget of each candidate's local refit (per start): BOBYQA on the
   /// decimated data, then on the full-rate data.
@@ -102,14 +102,25 @@ struct CandidateTrial {
   double z = 0.0;          ///< significance of the reduction (see GapOptions::min_z)
   double excess_share = 0.0;  ///< share of the MSE above the noise floor it removed
   bool skipped = false;  ///< not refitted: its first-order share was below min_explained
+  std::size_t free_parameters = 0;
   bool qualifies = false;
   bool accepted = false;
   std::vector<double> values;  ///< fitted parameter values (parameters() order)
   long evaluations = 0;
 };
 
+/// A rival of the accepted candidate (another family that shrank the gap
+/// nearly as much): the accepted one refitted on top of the rival.
+struct RivalCheck {
+  std::string family;
+  double gain = 0.0;               ///< the rival's own gain in the round
+  double winner_gain_after = 0.0;  ///< the accepted effect's gain once the rival is in
+  bool winner_still_qualifies = false;
+};
+
 struct GapRound {
   ErrorMetrics before;
+  std::vector<RivalCheck> rivals;
   std::vector<CandidateTrial> trials;  ///< best gain first
   int accepted = -1;                   ///< index into trials, -1: none
   std::string stop_reason;             ///< when the workflow stopped after this round
