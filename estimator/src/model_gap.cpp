@@ -786,7 +786,9 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
         const bool named_later = std::any_of(g.effects.begin(), g.effects.end(),
                                              [&](const EffectFound& e) { return e.name == rc.family; });
         if (named_later) continue;
-        if (rc.winner_still_qualifies) {
+        // The named effect must keep most of its own shrink on top of the
+        // rival to count as told apart from it.
+        if (rc.winner_still_qualifies && rc.winner_gain_after >= o.confound_extra * win.gain) {
           if (effect_index < g.effects.size())
             g.effects[effect_index].where +=
                 "; " + rc.family + " alone also shrank the gap (" + pct(rc.gain) + "), but " +
@@ -805,7 +807,8 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
                     " are confounded in this recording: each alone shrinks the gap (" +
                     pct(c.named_gain) + " and " + pct(c.rival_gain) +
                     "), and neither adds much once the other is in (" + c.named + " after " +
-                    c.rival + ": " + pct(rc.winner_gain_after) + "). " + c.named +
+                    c.rival + ": " + pct(rc.winner_gain_after) + "; " + c.rival + " after " +
+                    c.named + ": below the margin). " + c.named +
                     " fitted slightly better, but the data cannot tell them apart; to separate "
                     "them, record " + c.experiment;
         if (effect_index < g.effects.size())

@@ -261,6 +261,10 @@ int main(int argc, char** argv) {
         for (const auto& t : r.trials)
           std::printf(" %s %.1f%% (z %.1f, share %.2f)", t.name.c_str(), 100.0 * t.gain, t.z, t.excess_share);
         std::printf("\n");
+        for (const auto& rc : r.rivals)
+          std::printf("      rival %s (%.1f%%): accepted effect after it %.1f%% (%s)\n",
+                      rc.family.c_str(), 100.0 * rc.gain, 100.0 * rc.winner_gain_after,
+                      rc.winner_still_qualifies ? "still qualifies" : "no longer qualifies");
       }
       std::fflush(stdout);
     }

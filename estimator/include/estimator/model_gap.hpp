@@ -45,7 +45,7 @@ struct GapOptions {
   /// over its correlation time, >= min_z) and it explains at least
   /// min_excess_share of the validation MSE above the noise floor: with the
   /// base at the floor a real effect can be small against the noise.
-  double min_z = 2.0;
+  double min_z = 1.5;
   double min_excess_share = 0.5;
   /// Candidates whose regressors explain less than this share of the
   /// residual (first order) are not refitted.
@@ -61,6 +61,9 @@ struct GapOptions {
   /// least this fraction of the named effect's shrink, and added nothing
   /// once that was in, is reported as confounded with it.
   double confound_ratio = 0.5;
+  /// ... unless the named effect still qualifies on top of the rival and
+  /// keeps at least this fraction of its own gain there.
+  double confound_extra = 0.25;
   /// After accepting an effect, identify the augmented model again globally
   /// (base_fit's settings, starting from the refit), kept when it fits the
   /// train data better.
