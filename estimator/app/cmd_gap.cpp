@@ -81,10 +81,9 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
                              : e.variable == "load" ? "load |tau_in|/R (N)"
                              : e.variable == "t"    ? "t (s)"
                                                     : "|xd| (rad/s)";
-    const auto r = estimator::plot_xy(dir.staging(),
-                                      "gap_effect" + std::to_string(k + 1) + "_" + e.name, e.shape,
-                                      unit, "added friction (N)",
-                                      e.name + " (" + e.form + "): friction added vs " + unit);
+    const auto r = estimator::plot_xy(
+        dir.staging(), "gap_effect" + std::to_string(k + 1) + "_" + e.name, e.shape, unit,
+        "added friction (N)", e.name + " (" + e.form + "): friction added vs " + unit);
     plot_error = r.error;
     plots.insert(plots.end(), r.files.begin(), r.files.end());
   }

@@ -52,8 +52,7 @@ FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double 
       }
       if (worst != nullptr)
         where = ", most in " + worst->name + " (" + worst->where + ": RMSE " +
-                num(worst->metrics.rmse) + " N, " + num(worst->concentration) +
-                "x its share)";
+                num(worst->metrics.rmse) + " N, " + num(worst->concentration) + "x its share)";
     }
     problems.push_back("the model leaves about " + num(excess) +
                        " N RMS beyond the noise unexplained" + where +
@@ -66,10 +65,11 @@ FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double 
       if (p.fixed || !p.at_bound) continue;
       ++at_bound;
       const bool low = std::fabs(p.value - p.lower) <= std::fabs(p.value - p.upper);
-      problems.push_back(p.name + " = " + num(p.value) + " at its " +
-                         (low ? "lower" : "upper") + " bound (" + num(low ? p.lower : p.upper) +
+      problems.push_back(p.name + " = " + num(p.value) + " at its " + (low ? "lower" : "upper") +
+                         " bound (" + num(low ? p.lower : p.upper) +
                          "): the data do not pin it down or want it beyond its range; data "
-                         "that would help: " + data_that_helps(p.name));
+                         "that would help: " +
+                         data_that_helps(p.name));
     }
   }
   if (overfit)
@@ -98,8 +98,8 @@ FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::st
                const FitWorkflowOptions& o) {
   FitRun run;
   run.initial_name = initial_name;
-  run.data = prepare_fit_data(rec, o.split, o.requirements, o.differentiator, o.derivatives,
-                              o.offline);
+  run.data =
+      prepare_fit_data(rec, o.split, o.requirements, o.differentiator, o.derivatives, o.offline);
   run.noise = noise_floor(run.data.measured);
   auto start = initial.clone();
   if (auto note = adapt_scale_to_data(*start, run.data); !note.empty()) run.notes.push_back(note);
@@ -114,7 +114,8 @@ FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::st
     // The fit's weak prior holds what the data leave undetermined; say which.
     std::string held;
     for (const auto& p : run.uncertainty.parameters) {
-      if (!p.fixed && !p.at_bound && !p.well_identified) held += (held.empty() ? "" : ", ") + p.name;
+      if (!p.fixed && !p.at_bound && !p.well_identified)
+        held += (held.empty() ? "" : ", ") + p.name;
     }
     if (!held.empty() && o.fit.method == "lm")
       run.notes.push_back("regularised: " + held +
@@ -201,9 +202,9 @@ nlohmann::json fit_report_json(const FitRun& run, const FitWorkflowOptions& o, d
 
   nlohmann::json r;
   r["tool"] = "tsm fit";
-  r["data"] = {{"source", d.source},         {"samples", d.size()},
-               {"duration_s", d.duration()}, {"radius_m", d.radius_m},
-               {"reversals", d.reversals},   {"noise_floor", run.noise},
+  r["data"] = {{"source", d.source},          {"samples", d.size()},
+               {"duration_s", d.duration()},  {"radius_m", d.radius_m},
+               {"reversals", d.reversals},    {"noise_floor", run.noise},
                {"derivatives", d.derivatives}};
   r["model"] = model;
   r["split"] = {{"rule", "alternate contiguous blocks, train first, after a warm-up"},
@@ -224,18 +225,12 @@ nlohmann::json fit_report_json(const FitRun& run, const FitWorkflowOptions& o, d
                           {"notes", u["notes"]}};
   r["warnings"] = warnings;
   r["notes"] = run.notes;
-  r["optimiser"] = {{"library", run.fit.library},
-                    {"method", o.fit.method},
-                    {"screened_starts", run.fit.screened},
-                    {"global", run.fit.global_algorithm},
-                    {"local", run.fit.local_algorithm},
-                    {"seed", o.fit.seed},
-                    {"starts", run.fit.starts.size()},
-                    {"best_start", run.fit.best_start},
-                    {"starts_within_2_percent", agreeing},
-                    {"evaluations", run.fit.evaluations},
-                    {"seconds", run.fit.seconds},
-                    {"per_start", starts}};
+  r["optimiser"] = {{"library", run.fit.library},          {"method", o.fit.method},
+                    {"screened_starts", run.fit.screened}, {"global", run.fit.global_algorithm},
+                    {"local", run.fit.local_algorithm},    {"seed", o.fit.seed},
+                    {"starts", run.fit.starts.size()},     {"best_start", run.fit.best_start},
+                    {"starts_within_2_percent", agreeing}, {"evaluations", run.fit.evaluations},
+                    {"seconds", run.fit.seconds},          {"per_start", starts}};
   r["plots"] = plots;
   r["seconds"] = seconds;
   return r;

@@ -1,5 +1,6 @@
 #include "estimator/identification.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -7,7 +8,6 @@
 #include <cstdio>
 #include <exception>
 #include <limits>
-#include <Eigen/Dense>
 #include <nlopt.hpp>
 #include <random>
 #include <stdexcept>
@@ -695,7 +695,8 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
   }
   int best = 0;
   for (std::size_t s = 1; s < r.starts.size(); ++s) {
-    if (r.starts[s].rmse < r.starts[static_cast<std::size_t>(best)].rmse) best = static_cast<int>(s);
+    if (r.starts[s].rmse < r.starts[static_cast<std::size_t>(best)].rmse)
+      best = static_cast<int>(s);
   }
   map.to_values(best_u[static_cast<std::size_t>(best)], r.values);
   r.model = initial.clone();

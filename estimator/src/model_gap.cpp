@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
-#include <numbers>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -432,7 +432,6 @@ std::string where_it_fell(const std::vector<RegimeError>& before,
   return text;
 }
 
-
 // Adds a prepared candidate to `current` and refits it locally (each variant
 // of its shapes; the best train fit counts); scores the validation gap
 // against `gap_cur`: the relative gain, and the significance of the drop in
@@ -490,8 +489,8 @@ CandidateTrial refit_candidate(const FitData& d, const TsmFrictionModel& current
   t.z = se > 0.0 ? mean / se : 0.0;
   const double excess = gap_cur.rmse * gap_cur.rmse - noise * noise;
   t.excess_share = excess > 0.0 ? mean / excess : 0.0;
-  t.qualifies = t.gain > 0.0 && (t.gain >= o.margin ||
-                                 (t.z >= o.min_z && t.excess_share >= o.min_excess_share));
+  t.qualifies = t.gain > 0.0 &&
+                (t.gain >= o.margin || (t.z >= o.min_z && t.excess_share >= o.min_excess_share));
   t.values = fit.values;
   t.evaluations = evaluations;
   return t;
@@ -528,10 +527,9 @@ ResidualDiagnostics diagnose_residual(const FitData& d, const TsmFrictionModel& 
 
 GapResult find_model_gaps(const Recording& rec, const FrictionModel& base,
                           const std::string& base_name, const GapOptions& o) {
-  return find_model_gaps(prepare_fit_data(rec, o.split, o.requirements, o.differentiator,
-                                          o.derivatives, o.offline),
-                         base,
-                         base_name, o);
+  return find_model_gaps(
+      prepare_fit_data(rec, o.split, o.requirements, o.differentiator, o.derivatives, o.offline),
+      base, base_name, o);
 }
 
 GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::string& base_name,
@@ -667,8 +665,8 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
                      [](const auto& a, const auto& b) { return a.gain > b.gain; });
     if (!round.trials.front().qualifies) {
       const auto& best = round.trials.front();
-      g.stop_reason = "no candidate qualifies (shrinks the validation gap by >= " + pct(o.margin) + " or significantly" +
-                      " (best: " + best.name + ", " + pct(best.gain) + ")";
+      g.stop_reason = "no candidate qualifies (shrinks the validation gap by >= " + pct(o.margin) +
+                      " or significantly" + " (best: " + best.name + ", " + pct(best.gain) + ")";
       round.stop_reason = g.stop_reason;
       g.rounds.push_back(std::move(round));
       break;
@@ -683,13 +681,14 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
       // them apart (checked after the last round, see Confound).
       std::map<std::string, const CandidateTrial*> rivals;
       for (const auto& t : round.trials) {
-        if (t.family == win.family || !t.qualifies || t.gain < o.confound_ratio * win.gain) continue;
+        if (t.family == win.family || !t.qualifies || t.gain < o.confound_ratio * win.gain)
+          continue;
         if (!rivals.count(t.family) || rivals[t.family]->gain < t.gain) rivals[t.family] = &t;
       }
       for (const auto& [family, r] : rivals) {
         say("checking whether " + win.family + " still adds after " + family);
-        TsmFrictionModel with_rival(with_neutral_term(current->spec(), *term_kind_from_name(r->name),
-                                                      d.motion.front().t, d.motion.back().t));
+        TsmFrictionModel with_rival(with_neutral_term(
+            current->spec(), *term_kind_from_name(r->name), d.motion.front().t, d.motion.back().t));
         with_rival.set_values(r->values);
         const auto f_r = simulate_friction(with_rival, d.motion);
         const auto gap_r = error_metrics(d, f_r, SampleRole::validation);
@@ -783,18 +782,19 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
       if (round.accepted < 0) continue;
       const auto& win = round.trials[static_cast<std::size_t>(round.accepted)];
       for (const auto& rc : round.rivals) {
-        const bool named_later = std::any_of(g.effects.begin(), g.effects.end(),
-                                             [&](const EffectFound& e) { return e.name == rc.family; });
+        const bool named_later =
+            std::any_of(g.effects.begin(), g.effects.end(),
+                        [&](const EffectFound& e) { return e.name == rc.family; });
         if (named_later) continue;
         // The named effect must keep most of its own shrink on top of the
         // rival to count as told apart from it.
         if (rc.winner_still_qualifies && rc.winner_gain_after >= o.confound_extra * win.gain) {
           if (effect_index < g.effects.size())
-            g.effects[effect_index].where +=
-                "; " + rc.family + " alone also shrank the gap (" + pct(rc.gain) + "), but " +
-                win.family + " still shrinks it by " + pct(rc.winner_gain_after) +
-                " on top of it, and not the reverse: " + rc.family +
-                " only correlates with it in this data";
+            g.effects[effect_index].where += "; " + rc.family + " alone also shrank the gap (" +
+                                             pct(rc.gain) + "), but " + win.family +
+                                             " still shrinks it by " + pct(rc.winner_gain_after) +
+                                             " on top of it, and not the reverse: " + rc.family +
+                                             " only correlates with it in this data";
           continue;
         }
         Confound c;
@@ -810,7 +810,8 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
                     c.rival + ": " + pct(rc.winner_gain_after) + "; " + c.rival + " after " +
                     c.named + ": below the margin). " + c.named +
                     " fitted slightly better, but the data cannot tell them apart; to separate "
-                    "them, record " + c.experiment;
+                    "them, record " +
+                    c.experiment;
         if (effect_index < g.effects.size())
           g.effects[effect_index].confounded_with.push_back(rc.family);
         g.confounds.push_back(std::move(c));
@@ -1021,10 +1022,9 @@ std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
   for (std::size_t k = 0; k < g.effects.size(); ++k) {
     const auto& e = g.effects[k];
     s << "Effect " << k + 1 << ": " << e.name << " (form " << e.form << ") -- " << e.meaning
-      << ".\n  Where: " << e.where
-      << ".\n  Why: adding it shrinks the validation gap by " << pct(e.gain)
-      << " (the acceptance margin is " << pct(o.margin) << "); now " << metrics(e.gap_after)
-      << ".\n  Fitted:";
+      << ".\n  Where: " << e.where << ".\n  Why: adding it shrinks the validation gap by "
+      << pct(e.gain) << " (the acceptance margin is " << pct(o.margin) << "); now "
+      << metrics(e.gap_after) << ".\n  Fitted:";
     for (const auto& [name, value] : e.parameters)
       s << " " << name << " = " << num(value, 4) << ";";
     s << "\n";

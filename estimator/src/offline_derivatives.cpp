@@ -161,7 +161,8 @@ std::vector<Motion> offline_motion(const Recording& rec, const OfflineDerivative
     m.x = rec.x_in[i];
     m.xd = sm.xd[i];
     m.xdd = sm.xdd[i];
-    m.acc_sign = std::fabs(sm.xdd[i]) > cfg.acc_sign_sigmas * sm.xdd_std[i] ? sign_of(sm.xdd[i]) : 0;
+    m.acc_sign =
+        std::fabs(sm.xdd[i]) > cfg.acc_sign_sigmas * sm.xdd_std[i] ? sign_of(sm.xdd[i]) : 0;
     m.load = has_load ? std::fabs(rec.tau_in[i]) / rec.radius_m : 0.0;
   }
   return motion;

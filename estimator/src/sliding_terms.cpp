@@ -27,8 +27,8 @@ constexpr ParamSpec kTime[] = {{"drift", 0.0, -1.0, 1.0, "level/s"},
                                {"t0", 0.0, -1e9, 1e9, "s", false}};
 
 constexpr ParamSpec kRipple[] = {{"a_sin", 0.0, -10.0, 10.0, "level"},
-                                  {"a_cos", 0.0, -10.0, 10.0, "level"},
-                                  {"wavenumber", 6.0, 0.3, 60.0, "1/rad"}};
+                                 {"a_cos", 0.0, -10.0, 10.0, "level"},
+                                 {"wavenumber", 6.0, 0.3, 60.0, "1/rad"}};
 constexpr ParamSpec kBump[] = {{"amp", 0.0, -10.0, 10.0, "level"},
                                {"center", 0.0, -100.0, 100.0, "rad"},
                                {"width", 0.1, 0.005, 10.0, "rad"}};

@@ -77,7 +77,9 @@ std::vector<double> sim(const FrictionModel& m, const std::vector<Motion>& motio
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: accuracy_fit derivs|fit|pipeline SEED... | gap CASE SEED... | csv-gap FILE...\n");
+    std::fprintf(
+        stderr,
+        "usage: accuracy_fit derivs|fit|pipeline SEED... | gap CASE SEED... | csv-gap FILE...\n");
     return 2;
   }
   const std::string mode = argv[1];
@@ -137,7 +139,8 @@ int main(int argc, char** argv) {
                   static_cast<unsigned long long>(seed), fitted, limit, fitted_exact,
                   run.validation.rmse, run.noise, run.validation.rmse / run.noise,
                   run.verdict.grade.c_str(), secs);
-      if (run.verdict.grade != "good") std::printf("      reason: %s\n", run.verdict.reason.c_str());
+      if (run.verdict.grade != "good")
+        std::printf("      reason: %s\n", run.verdict.reason.c_str());
       for (const auto& w : run.uncertainty.warnings)
         std::printf("      warning: %s\n", w.c_str());
       std::fflush(stdout);
@@ -184,8 +187,9 @@ int main(int argc, char** argv) {
         inputs.push_back(argv[i]);
     }
     const std::size_t runs = mode == "gap" ? seeds.size() : inputs.size();
-    std::printf("case seed | hidden | named | gap base -> final (N) | noise floor (N) | final / "
-                "floor | confounds | s\n");
+    std::printf(
+        "case seed | hidden | named | gap base -> final (N) | noise floor (N) | final / "
+        "floor | confounds | s\n");
     for (std::size_t k = 0; k < runs; ++k) {
       Recording rec;
       std::string hidden;
@@ -259,7 +263,8 @@ int main(int argc, char** argv) {
       for (const auto& r : g.rounds) {
         std::printf("      round:");
         for (const auto& t : r.trials)
-          std::printf(" %s %.1f%% (z %.1f, share %.2f)", t.name.c_str(), 100.0 * t.gain, t.z, t.excess_share);
+          std::printf(" %s %.1f%% (z %.1f, share %.2f)", t.name.c_str(), 100.0 * t.gain, t.z,
+                      t.excess_share);
         std::printf("\n");
         for (const auto& rc : r.rivals)
           std::printf("      rival %s (%.1f%%): accepted effect after it %.1f%% (%s)\n",

@@ -94,17 +94,17 @@ struct ResidualDiagnostics {
 };
 
 struct CandidateTrial {
-  std::string name;    ///< the term (form) tried
-  std::string family;  ///< the effect it is a form of (term_family)
+  std::string name;         ///< the term (form) tried
+  std::string family;       ///< the effect it is a form of (term_family)
   double explained = 0.0;   ///< first-order: fraction of the residual its regressors explain
   ErrorMetrics validation;  ///< after the refit
   double train_mse = 0.0;
-  double bic = 0.0;        ///< effective-sample BIC on train data (lower is better)
-  double delta_bic = 0.0;  ///< vs the current model
-  double gain = 0.0;       ///< relative validation RMSE reduction (0.3 = 30 % smaller)
-  double z = 0.0;          ///< significance of the reduction (see GapOptions::min_z)
+  double bic = 0.0;           ///< effective-sample BIC on train data (lower is better)
+  double delta_bic = 0.0;     ///< vs the current model
+  double gain = 0.0;          ///< relative validation RMSE reduction (0.3 = 30 % smaller)
+  double z = 0.0;             ///< significance of the reduction (see GapOptions::min_z)
   double excess_share = 0.0;  ///< share of the MSE above the noise floor it removed
-  bool skipped = false;  ///< not refitted: its first-order share was below min_explained
+  bool skipped = false;       ///< not refitted: its first-order share was below min_explained
   std::size_t free_parameters = 0;
   bool qualifies = false;
   bool accepted = false;
@@ -130,8 +130,8 @@ struct GapRound {
 };
 
 struct EffectFound {
-  std::string name;     ///< the effect (term family): viscous, load_dependent, ...
-  std::string form;     ///< the term that expressed it (e.g. position_ripple)
+  std::string name;      ///< the effect (term family): viscous, load_dependent, ...
+  std::string form;      ///< the term that expressed it (e.g. position_ripple)
   std::string variable;  ///< what the added term depends on: x, load, t or speed
   /// The added friction (N, gamma x the term's level) against `variable`,
   /// sorted by the variable, thinned to a few hundred points.

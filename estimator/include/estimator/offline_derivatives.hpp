@@ -47,6 +47,7 @@ SmoothedDerivatives smooth_derivatives(std::span<const double> t, std::span<cons
 
 /// Motion samples for every row of `rec` from the smoothed angle derivatives
 /// (x is the recorded angle; load = |tau_in|/R when both are known).
-std::vector<Motion> offline_motion(const Recording& rec, const OfflineDerivativeConfig& config = {});
+std::vector<Motion> offline_motion(const Recording& rec,
+                                   const OfflineDerivativeConfig& config = {});
 
 }  // namespace tsmh::estimator

@@ -32,7 +32,8 @@ enum class TermKind : std::uint8_t {
   // Further forms of the same physical effects (issue 14: real effects do not
   // come in one form). Each belongs to a family (TermInfo::family), the name
   // under which tsm gap reports it.
-  position_ripple,  ///< a sin(k x) + b cos(k x): periodic friction along the stroke (family position)
+  position_ripple,  ///< a sin(k x) + b cos(k x): periodic friction along the stroke (family
+                    ///< position)
   position_bump,    ///< amp exp(-((x - center)/width)^2 / 2): a local kink in the sheath
   load_saturating,  ///< c_sat l_sat tanh(load / l_sat): capstan growth that levels off
 };
