@@ -99,9 +99,14 @@ TEST(GapPaperWorld, NothingHiddenNothingFound) {
   record(g, g.gap_base.rmse);
   EXPECT_TRUE(g.effects.empty()) << ::testing::PrintToString(names(g));
   EXPECT_EQ(g.gap_final.rmse, g.gap_base.rmse);
-  EXPECT_FALSE(g.rounds.empty());
-  for (const auto& t : g.rounds.front().trials)
-    EXPECT_LT(t.gain, 0.05) << t.name;  // far below the 10 % margin
+  // Either the base is already at the noise floor (issue 14: nothing left
+  // to explain, no round needed) or no candidate comes near the margin.
+  if (g.rounds.empty()) {
+    EXPECT_LE(g.gap_base.rmse, 1.03 * g.noise) << g.stop_reason;
+  } else {
+    for (const auto& t : g.rounds.front().trials)
+      EXPECT_LT(t.gain, 0.05) << t.name;  // far below the 10 % margin
+  }
 }
 
 TEST(GapPaperWorld, HiddenViscousDrag) {
@@ -270,7 +275,16 @@ TEST(GapVirtualSlave, LoadDependenceOfTheCapstanEffect) {
   const auto g = gap(with);
   const double floor = floor_of(without);
   record(g, floor);
-  EXPECT_EQ(names(g), std::vector<std::string>{"load_dependent"});
+  // One contact position: with flexible position forms (a bump where the
+  // tissue is) position can imitate the load here. Issue 14: never one
+  // confident wrong name. Either load_dependent is named, or the effect
+  // named is reported as confounded with load_dependent.
+  ASSERT_EQ(g.effects.size(), 1U) << ::testing::PrintToString(names(g));
+  if (g.effects.front().name != "load_dependent") {
+    ASSERT_FALSE(g.confounds.empty()) << g.effects.front().name << " named confidently";
+    EXPECT_EQ(g.confounds.front().rival, "load_dependent");
+    EXPECT_FALSE(g.effects.front().confounded_with.empty());
+  }
   // Named, and the gap shrinks by more than the margin; it does not reach
   // the floor (docs/model-gap.md: the plant's capstan friction follows the
   // sheath tensions, which |tau_in| / R only approximates).

@@ -2,6 +2,8 @@
 // equations) in every branch, including the boundaries xd = 0 and xdd = 0.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "estimator/tsm_model.hpp"
 
 namespace tsmh::estimator {
@@ -70,13 +72,33 @@ TEST(SlidingTerms, CatalogNamesAreStableAndUnique) {
                             "stribeck",        "acceleration_dependence",
                             "reversal_offset", "viscous",
                             "load_dependent",  "position_dependent",
-                            "time_varying"};
+                            "time_varying",    "position_ripple",
+                            "position_bump",   "load_saturating"};
   ASSERT_EQ(term_catalog().size(), std::size(expected));
   for (std::size_t i = 0; i < std::size(expected); ++i) {
     EXPECT_EQ(term_catalog()[i].name, expected[i]);
     EXPECT_EQ(term_kind_from_name(expected[i]), term_catalog()[i].kind);
   }
   EXPECT_FALSE(term_kind_from_name("nonsense").has_value());
+  // The further forms are reported under their effect's name.
+  EXPECT_EQ(term_family(TermKind::position_ripple), "position_dependent");
+  EXPECT_EQ(term_family(TermKind::position_bump), "position_dependent");
+  EXPECT_EQ(term_family(TermKind::load_saturating), "load_dependent");
+  EXPECT_EQ(term_family(TermKind::viscous), "viscous");
+}
+
+TEST(SlidingTerms, FlexibleFormsHaveTheirShapes) {
+  Motion m;
+  m.x = 0.5;
+  m.load = 10.0;
+  const Term ripple{TermKind::position_ripple, {0.2, 0.1, 3.0}};
+  EXPECT_NEAR(term_level(ripple, m, false), 0.2 * std::sin(1.5) + 0.1 * std::cos(1.5), 1e-12);
+  const Term bump{TermKind::position_bump, {0.3, 0.4, 0.1}};
+  EXPECT_NEAR(term_level(bump, m, false), 0.3 * std::exp(-0.5), 1e-12);  // one width away
+  const Term sat{TermKind::load_saturating, {0.02, 5.0}};
+  EXPECT_NEAR(term_level(sat, m, false), 0.02 * 5.0 * std::tanh(2.0), 1e-12);
+  m.load = 1e-3;  // linear for small loads: c_sat x load
+  EXPECT_NEAR(term_level(sat, m, false), 0.02 * 1e-3, 1e-9);
 }
 
 TEST(SlidingTerms, AddedEffectsContribute) {
