@@ -1,7 +1,9 @@
 #include "estimator/offline_derivatives.hpp"
 
 #include <array>
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 namespace tsmh::estimator {
@@ -161,8 +163,13 @@ std::vector<Motion> offline_motion(const Recording& rec, const OfflineDerivative
     m.x = rec.x_in[i];
     m.xd = sm.xd[i];
     m.xdd = sm.xdd[i];
-    m.acc_sign =
-        std::fabs(sm.xdd[i]) > cfg.acc_sign_sigmas * sm.xdd_std[i] ? sign_of(sm.xdd[i]) : 0;
+    if (cfg.expected_sign) {
+      const double sd = std::max(sm.xdd_std[i], 1e-12);
+      m.acc_sign = std::erf(sm.xdd[i] / (std::numbers::sqrt2 * sd));
+    } else {
+      m.acc_sign =
+          std::fabs(sm.xdd[i]) > cfg.acc_sign_sigmas * sm.xdd_std[i] ? sign_of(sm.xdd[i]) : 0;
+    }
     m.load = has_load ? std::fabs(rec.tau_in[i]) / rec.radius_m : 0.0;
   }
   return motion;

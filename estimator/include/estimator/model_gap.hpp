@@ -63,7 +63,7 @@ struct GapOptions {
   double confound_ratio = 0.5;
   /// ... unless the named effect still qualifies on top of the rival and
   /// keeps at least this fraction of its own gain there.
-  double confound_extra = 0.25;
+  double confound_extra = 0.5;
   /// After accepting an effect, identify the augmented model again globally
   /// (base_fit's settings, starting from the refit), kept when it fits the
   /// train data better.

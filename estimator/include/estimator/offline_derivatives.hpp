@@ -32,6 +32,10 @@ struct OfflineDerivativeConfig {
   /// sgn(xdd) is 0 while |xdd| is below this many standard deviations of the
   /// smoothed acceleration (0: the plain sign).
   double acc_sign_sigmas = 0.5;
+  /// Pass the expected sign E[sgn(xdd)] = erf(xdd / (sqrt 2 sd)) in
+  /// [-1, 1] (eqs. 4-10 are linear in sgn(xdd); Motion::acc_sign) rather
+  /// than a hard sign beyond acc_sign_sigmas (measured: docs/identification.md).
+  bool expected_sign = true;
 };
 
 struct SmoothedDerivatives {
