@@ -1,7 +1,7 @@
 #include "estimator/offline_derivatives.hpp"
 
-#include <array>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
