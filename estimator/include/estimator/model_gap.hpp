@@ -64,14 +64,10 @@ struct GapOptions {
   /// ... unless the named effect still qualifies on top of the rival and
   /// keeps at least this fraction of its own gain there.
   double confound_extra = 0.5;
-  /// After accepting an effect, fit the augmented model again (warm, from
-  /// the refit), kept when it fits the train data better. Off by default
-  /// since issue 14: the candidate's refit already moves every parameter
-  /// jointly (Levenberg-Marquardt), and a further fit on the train blocks can
-  /// move a step time inside a validation block, where no train sample sees
-  /// it (virtual-slave re-routing at 20 s: t_step drifted to 18.5 s and the
-  /// validation gap grew from 0.38 to 0.85 N).
-  bool reidentify = false;
+  /// After accepting an effect, fit the augmented model to convergence
+  /// (warm, from the candidate's refit, time parameters held within 10 ms of
+  /// the refit's value), kept when it fits the train data better.
+  bool reidentify = true;
   /// Worker threads for the candidates (each refit runs on one); 0: all cores.
   int threads = 0;
   SplitConfig split;
