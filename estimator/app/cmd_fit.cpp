@@ -114,7 +114,10 @@ void add_fit_command(CLI::App& app, Context& ctx) {
                   "Model to fit and its starting values: a preset (paper, dahl, ...) or a params "
                   "file (default paper)");
   cmd->add_option("--seed", opts->seed, "Seed of the optimiser's random streams (default 1)");
-  cmd->add_option("--starts", opts->starts, "Independent optimiser starts (default 4)")
+  cmd->add_option(
+         "--starts", opts->starts,
+         "Starts: lm, the screened candidates polished on full-rate data; nlopt, independent "
+         "starts (default 4)")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 64));
