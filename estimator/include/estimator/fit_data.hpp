@@ -1,7 +1,8 @@
 #pragma once
-// A recording made ready for identification: the motion the deployed
-// estimator would see (the project's differentiator on the measured angle),
-// the measured friction F = (tau_in - tau_out)/R, and a split of the samples
+// A recording made ready for identification: the motion (the file's exact
+// derivatives, or by default the offline zero-phase smoother of the measured
+// angle, or the deployed differentiator on request: FitDerivatives), the
+// measured friction F = (tau_in - tau_out)/R, and a split of the samples
 // into contiguous train and validation blocks.
 //
 // The model is always simulated over the whole record (its state needs the

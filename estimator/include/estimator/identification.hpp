@@ -1,19 +1,23 @@
 #pragma once
 // Identification of a friction model's parameters from recorded data
 // (`tsm fit`, issue 3): least squares between the measured friction and the
-// model simulated on the deployed motion, on the train samples only.
+// model simulated on the data's motion (fit_data.hpp: exact or offline
+// zero-phase derivatives by default), on the train samples only.
 //
-// Optimisation uses NLopt, in normalised coordinates (parameter_map.hpp)
-// within the parameters' bounds. Per start: a global stage (MLSL: random
-// points, each followed by a short BOBYQA search, clustered so that one basin
-// is not searched twice) on the data decimated to 5 ms, where an evaluation
-// costs a fifth; a BOBYQA polish on the same data; a final BOBYQA polish on
-// the full-rate data. (MLSL found the best optimum most often among CRS2,
-// ESCH, ISRES and MLSL on synthetic data: docs/identification.md.) Several
-// starts run on worker threads, each with its own model clone, its own
-// seeded NLopt random stream (NLopt's generator is thread-local) and its own
-// evaluation budget, so the result depends on the seed only, never on the
-// thread count or timing.
+// Default method "lm" (issue 14): informed starts from the data (sliding
+// plateaus give the levels, reversal slopes gamma theta, a small grid over
+// theta's share, lambda and the Stribeck decay), each screened by a few
+// Levenberg-Marquardt iterations on data decimated to 5 ms; the best
+// `starts` candidates are polished by Levenberg-Marquardt on the full-rate
+// data (forward-difference Jacobian, columns spread over the threads, a weak
+// prior towards the start that only decides directions the data leaves
+// undetermined). The model is smooth in its parameters for a fixed motion,
+// so this converges where derivative-free searches stopped in local optima.
+// Method "nlopt" keeps the previous optimiser: per start an MLSL global stage
+// on decimated data, BOBYQA polishes, seeded starts on worker threads.
+// Both work in normalised coordinates (parameter_map.hpp) within the
+// parameters' bounds, and the result depends on the data and options only,
+// never on the thread count or timing (docs/identification.md).
 
 #include <cstdint>
 #include <functional>

@@ -1,5 +1,5 @@
 #pragma once
-// The model-gap workflow (`tsm gap`, issue 8): find where the simulated and
+// The model-gap workflow (`tsm gap`, issues 8 and 14): find where the simulated and
 // the measured friction disagree, name the missing effect, add it to the
 // model and show the gap shrink.
 //
@@ -7,14 +7,20 @@
 //     validation data; localise it (per-regime errors) and diagnose the
 //     residual (whiteness; how much of it each candidate term's regressor
 //     explains, to first order).
-//  2. For every candidate term of the catalog (sliding_terms.hpp) not yet in
-//     the model: add it, refit (a local refit from the current optimum, the
-//     new term seeded by the first-order estimate), measure the validation
-//     gap and BIC.
-//  3. Accept the candidate that shrinks the validation RMSE most, only when it
-//     shrinks it by at least `margin` (10 %; BIC is reported with each trial);
-//     re-identify the augmented model globally; repeat until nothing
-//     qualifies or the gap reaches the measurement-noise floor.
+//  2. For every candidate form of the catalog (sliding_terms.hpp) whose
+//     effect (family) is not yet in the model: scan its shape parameters
+//     (step time, ripple wavenumber, bump place and width, saturation load)
+//     by first-order projection, add it at the best shape, refit locally
+//     (Levenberg-Marquardt from the current optimum, the new term seeded by
+//     the first-order estimate), measure the validation gap, its
+//     significance and BIC.
+//  3. Accept the candidate that shrinks the validation RMSE most when it
+//     shrinks it by at least `margin` (10 %), or significantly and by at
+//     least half of the MSE above the noise floor; polish the augmented
+//     model; repeat until nothing qualifies or the gap reaches the
+//     measurement-noise floor. Effects are named by family.
+//  4. Confounds: a rival effect that explained most of the same residual is
+//     reported with the named one and the experiment that separates them.
 // docs/model-gap.md explains the margin, the floor and the evidence.
 
 #include <functional>
