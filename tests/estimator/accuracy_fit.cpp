@@ -15,6 +15,7 @@
 //   accuracy_fit csv-gap FILE...       tsm gap on recordings (virtual slave)
 //
 // Figures are RMSE over t >= 0.5 s in % of the true friction's peak.
+// TSMH_MOTION=surgeon|reversals|creep runs fit/pipeline on another motion kind.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -59,6 +60,10 @@ double pct(const Recording& r, const std::vector<double>& a, const std::vector<d
 SyntheticData world(std::uint64_t seed) {
   SyntheticConfig c;
   c.seed = seed;
+  // TSMH_MOTION=surgeon|reversals|creep: another motion kind (synthetic.hpp).
+  if (const char* kind = std::getenv("TSMH_MOTION")) {
+    if (const auto k = motion_kind_from_name(kind)) c.motion = *k;
+  }
   c.exact_derivatives = true;  // for the limits only; the fit is given the file without them
   return make_synthetic(TsmFrictionModel(paper_spec()), c);
 }
