@@ -432,15 +432,14 @@ std::string where_it_fell(const std::vector<RegimeError>& before,
   return text;
 }
 
-// Adds a prepared candidate to `current` and refits it locally (each variant
-// of its shapes; the best train fit counts); scores the validation gap
-// against `gap_cur`: the relative gain, and the significance of the drop in
-// squared error (z over the correlation time; the share of the MSE above the
-// noise floor it removes). BIC is left to the caller.
-CandidateTrial refit_candidate(const FitData& d, const TsmFrictionModel& current,
-                               std::span<const double> f_cur, const ErrorMetrics& gap_cur,
-                               double noise, const Prepared& p, const GapOptions& o,
-                               std::uint64_t seed) {
+// Refits a prepared candidate locally: each variant (the current model with
+// the term added at one scanned shape); the best train fit counts. Scores the
+// validation gap against `gap_cur`: the relative gain, and the significance
+// of the drop in squared error (z over the correlation time; the share of the
+// MSE above the noise floor it removes). BIC is left to the caller.
+CandidateTrial refit_candidate(const FitData& d, std::span<const double> f_cur,
+                               const ErrorMetrics& gap_cur, double noise, const Prepared& p,
+                               const GapOptions& o, std::uint64_t seed) {
   std::optional<FitResult> best;
   long evaluations = 0;
   for (std::size_t v = 0; v < p.variants.size(); ++v) {
@@ -462,7 +461,6 @@ CandidateTrial refit_candidate(const FitData& d, const TsmFrictionModel& current
     evaluations += r.evaluations;
     if (!best || r.train_rmse < best->train_rmse) best = std::move(r);
   }
-  (void)current;
   const FitResult& fit = *best;
   CandidateTrial t;
   t.name = std::string(term_info(p.kind).name);
@@ -632,8 +630,8 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
             done.fetch_add(1);
             continue;
           }
-          round.trials[c] = refit_candidate(d, *current, f_cur, gap_cur, g.noise, p, o,
-                                            o.base_fit.seed + 101 * (c + 1));
+          round.trials[c] =
+              refit_candidate(d, f_cur, gap_cur, g.noise, p, o, o.base_fit.seed + 101 * (c + 1));
           CandidateTrial& t = round.trials[c];
           t.bic = bic(t.train_mse, n_eff, t.free_parameters);
           t.delta_bic = t.bic - bic_cur;
@@ -694,7 +692,7 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
         const auto gap_r = error_metrics(d, f_r, SampleRole::validation);
         const Prepared pw = prepare_candidate(d, with_rival, f_r, residual_of(d, f_r), kind);
         const CandidateTrial back =
-            refit_candidate(d, with_rival, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
+            refit_candidate(d, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
         g.evaluations += back.evaluations;
         round.rivals.push_back({family, r->gain, back.gain, back.qualifies});
       }
