@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "estimator/distal_estimator.hpp"
+#include "estimator/offline_derivatives.hpp"
+#include "estimator/simulate.hpp"
 #include "estimator/synthetic.hpp"
 #include "estimator/tsm_model.hpp"
 
@@ -56,31 +58,13 @@ struct Row {
   bool within_target;
 };
 
-// What the encoder can tell at all: the same two filters run forwards and on
-// the time-reversed samples, averaged (zero phase, no lag), the sign from the
-// averaged acceleration, and the exact 0 at rest. Not causal: a limit for
-// the causal figure, never used online.
-std::vector<double> offline_friction(const FrictionModel& truth, const Recording& rec,
-                                     DifferentiatorConfig diff) {
-  const std::size_t n = rec.size();
-  Differentiator forward(diff), backward(diff);
-  std::vector<Derivatives> fw(n), bw(n);
-  for (std::size_t i = 0; i < n; ++i)
-    fw[i] = forward.update(rec.t[i], rec.x_in[i]);
-  for (std::size_t k = n; k-- > 0;)
-    bw[k] = backward.update(rec.t.back() - rec.t[k], rec.x_in[k]);
+// What the encoder can tell at all: the offline zero-phase derivatives that
+// `tsm fit` uses (a Rauch-Tung-Striebel smoother over the whole record, future
+// included; offline_derivatives.hpp) drive the same model. Not causal: a
+// limit for the causal figure, never used online.
+std::vector<double> offline_friction(const FrictionModel& truth, const Recording& rec) {
   auto model = truth.clone();
-  std::vector<double> f(n, 0.0);
-  for (std::size_t i = 1; i < n; ++i) {
-    const double xd = 0.5 * (fw[i].xd - bw[i].xd);
-    const double xdd = 0.5 * (fw[i].xdd + bw[i].xdd);
-    const double sd = fw[i].acc_sd / std::numbers::sqrt2;
-    double s = std::clamp(xdd / (diff.smooth_sigmas * sd), -1.0, 1.0);
-    if (fw[i].acc_sign == 0.0 && bw[i].acc_sign == 0.0) s = 0.0;  // still
-    const Motion m{rec.t[i], rec.x_in[i], xd, xdd, s, std::fabs(rec.tau_in[i]) / rec.radius_m};
-    f[i] = model->step(m, rec.t[i] - rec.t[i - 1]);
-  }
-  return f;
+  return simulate_friction(*model, offline_motion(rec));
 }
 
 Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
@@ -112,7 +96,7 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
         exact.update_exact(rec.t[i], rec.x_in[i], rec.xd_in[i], rec.xdd_in[i], rec.tau_in[i])
             .friction;
   }
-  const std::vector<double> f_offline = offline_friction(truth, rec, diff);
+  const std::vector<double> f_offline = offline_friction(truth, rec);
   // The recording starts at rest 1 s before t = 0 (from_rest), as the
   // estimators do, so truth and estimate share their initial state; that
   // warm-up second (a fade-in from rest for the multisine) is not scored.
