@@ -18,6 +18,7 @@ ChannelStats InboxBase::stats() const noexcept {
   s.seq_missing = seq_missing_.load(std::memory_order_relaxed);
   s.restarts = restarts_.load(std::memory_order_relaxed);
   s.resyncs = resyncs_.load(std::memory_order_relaxed);
+  s.discarded_before_start = discarded_.load(std::memory_order_relaxed);
   s.latency = latency_.summary();
   s.last_receive_ns = last_receive_ns_.load(std::memory_order_relaxed);
   return s;

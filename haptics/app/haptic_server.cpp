@@ -10,13 +10,17 @@
 
 #include <pthread.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdarg>
 #include <cstdio>
 #include <ctime>
 #include <iostream>
 #include <optional>
+#include <stdexcept>
 
+#include "bridge/clock.hpp"
 #include "bridge/lcm_url.hpp"
 #include "bridge/stop_signals.hpp"
 #include "estimator/model_io.hpp"
@@ -44,53 +48,175 @@ struct Options {
   bool quiet = false;
 };
 
+// Exit status (docs/haptic-server.md, "Exit status"): 0 only for a clean
+// session; a script or a supervisor tells the others apart by the code.
+constexpr int kExitClean = 0;
+constexpr int kExitError = 1;    // an unexpected error while running
+constexpr int kExitConfig = 2;   // bad command line or configuration: nothing was started
+constexpr int kExitDevice = 3;   // the master device could not be opened
+constexpr int kExitFault = 4;    // the session went into FAULT (at any time)
+constexpr int kExitNoSlave = 5;  // no SLAVE_STATE was ever used: nothing was rendered
+
+/// The master device could not be created or opened.
+struct DeviceError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::string seconds_text(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, s < 10 ? "%.1f s" : "%.0f s", s);
+  return b;
+}
+
+std::string us_text(double us) {
+  char b[32];
+  if (us < 1000.0)
+    std::snprintf(b, sizeof b, "%.0f us", us);
+  else
+    std::snprintf(b, sizeof b, "%.1f ms", us * 1e-3);
+  return b;
+}
+
 /// Logs what the loop thread reports through LoopEvents (it never prints
 /// itself): estimator re-initialisations, loss and return of the estimate,
-/// state changes with the fault reason, and stalls.
+/// state changes with the fault reason, stalls, a slave that sends nothing;
+/// and, on a terminal, a live status line once a second. Main thread only.
 class EventLog {
  public:
-  explicit EventLog(haptics::LoopEvents& events) : events_(events) {}
+  struct Context {
+    std::string slave_channel;  ///< e.g. ARM1_SLAVE_STATE
+    std::string url;
+    double slave_timeout_s = 1.0;
+    std::string feedback;
+    int joints = 0;
+    bool live = false;  ///< stderr is a terminal and not --quiet
+  };
+  EventLog(haptics::LoopEvents& events, Context ctx, std::int64_t start_ns)
+      : events_(events), ctx_(std::move(ctx)), start_ns_(start_ns), slave_seen_ns_(start_ns) {}
+
   void poll() {
+    const std::int64_t now = bridge::monotonic_now_ns();
+    watch_slave(now);  // before the FAULT it causes
     const auto resets = events_.estimator_resets.load(std::memory_order_relaxed);
     if (resets != resets_) {
-      std::fprintf(stderr,
-                   "haptic-server: slave clock jumped by %.6f s: estimators re-initialised (%llu "
-                   "so far)\n",
-                   static_cast<double>(events_.last_reset_jump_us.load()) * 1e-6,
-                   static_cast<unsigned long long>(resets));
+      say("slave clock jumped by %.6f s: estimators re-initialised (%llu so far)",
+          static_cast<double>(events_.last_reset_jump_us.load()) * 1e-6,
+          static_cast<unsigned long long>(resets));
       resets_ = resets;
     }
     const auto lost = events_.estimate_lost_joints.load(std::memory_order_relaxed);
     if (lost != lost_) {
       if (lost != 0)
-        std::fprintf(stderr,
-                     "haptic-server: torque estimate lost (joint mask 0x%x): holding and fading "
-                     "the last valid one, FAULT if it lasts\n",
-                     lost);
+        say("torque estimate lost (joint mask 0x%x): holding and fading the last valid one, "
+            "FAULT if it lasts",
+            lost);
       else
-        std::fprintf(stderr, "haptic-server: torque estimate valid again on every joint\n");
+        say("torque estimate valid again on every joint");
       lost_ = lost;
     }
     const auto state = static_cast<haptics::LoopState>(events_.state.load());
     if (state != state_) {
       if (state == haptics::LoopState::kFault)
-        std::fprintf(stderr, "haptic-server: FAULT: %s\n",
-                     std::string(to_string(static_cast<haptics::FaultReason>(events_.fault.load())))
-                         .c_str());
+        say("FAULT: %s",
+            std::string(to_string(static_cast<haptics::FaultReason>(events_.fault.load())))
+                .c_str());
       state_ = state;
     }
     const std::int64_t worst = events_.worst_lateness_ns.exchange(0);
     if (worst > 10'000'000)
-      std::fprintf(stderr, "haptic-server: warning: a tick started %.1f ms late (overruns %llu)\n",
-                   static_cast<double>(worst) * 1e-6,
-                   static_cast<unsigned long long>(events_.overruns.load()));
+      say("warning: a tick started %.1f ms late (overruns %llu)", static_cast<double>(worst) * 1e-6,
+          static_cast<unsigned long long>(events_.overruns.load()));
+    if (ctx_.live && now >= next_live_ns_) {
+      live_line(now);
+      next_live_ns_ = now + 1'000'000'000;
+    }
+  }
+
+  /// Removes the live line (before the exit summary).
+  void clear() {
+    if (live_shown_) std::fputs("\r\033[K", stderr);
+    live_shown_ = false;
   }
 
  private:
+  __attribute__((format(printf, 2, 3))) void say(const char* fmt, ...) {
+    clear();
+    std::fputs("haptic-server: ", stderr);
+    va_list args;
+    va_start(args, fmt);
+    std::vfprintf(stderr, fmt, args);
+    va_end(args);
+    std::fputc('\n', stderr);
+  }
+
+  // No fresh SLAVE_STATE for a second: say so at once (the operator otherwise
+  // sees nothing at all), then every 5 s while it lasts, and when it returns.
+  void watch_slave(std::int64_t now) {
+    const std::uint64_t samples = events_.slave_samples.load(std::memory_order_relaxed);
+    if (samples != slave_samples_) {
+      if (slave_warned_)
+        say("SLAVE_STATE arriving again on '%s' after %s without", ctx_.slave_channel.c_str(),
+            seconds_text(static_cast<double>(now - slave_seen_ns_) * 1e-9).c_str());
+      slave_samples_ = samples;
+      slave_seen_ns_ = now;
+      slave_warned_ = false;
+      return;
+    }
+    const double silent_s = static_cast<double>(now - slave_seen_ns_) * 1e-9;
+    if (silent_s < 1.0 || now < next_slave_warning_ns_) return;
+    if (samples == 0)
+      say("no SLAVE_STATE on '%s' (%s) for %s since start: is the slave running, on this URL and "
+          "prefix? No torque is rendered; FAULT after %s without it",
+          ctx_.slave_channel.c_str(), ctx_.url.c_str(), seconds_text(silent_s).c_str(),
+          seconds_text(ctx_.slave_timeout_s).c_str());
+    else
+      say("no fresh SLAVE_STATE on '%s' for %s: torque faded to zero%s", ctx_.slave_channel.c_str(),
+          seconds_text(silent_s).c_str(),
+          silent_s > ctx_.slave_timeout_s ? ", FAULT (slave state lost)" : "");
+    slave_warned_ = true;
+    next_slave_warning_ns_ = now + 5'000'000'000;
+  }
+
+  // One compact line, rewritten in place: time, rate, lateness, state,
+  // feedback and the torque on the master, the slave sample's age.
+  void live_line(std::int64_t now) {
+    char line[256];
+    int n = std::snprintf(
+        line, sizeof line, "%s  %.1f Hz  late p99 %s max %s  %s  %s",
+        seconds_text(static_cast<double>(now - start_ns_) * 1e-9).c_str(), events_.rate_hz.load(),
+        us_text(events_.lateness_p99_us.load()).c_str(),
+        us_text(events_.lateness_max_us.load()).c_str(),
+        std::string(to_string(static_cast<haptics::LoopState>(events_.state.load()))).c_str(),
+        ctx_.feedback.c_str());
+    n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), "  torque");
+    for (int j = 0; j < ctx_.joints && n < 200; ++j)
+      n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " %+.3f",
+                         events_.torque_nm[static_cast<std::size_t>(j)].load());
+    const double age = events_.slave_age_ms.load();
+    if (n < 220) {
+      if (age < 0)
+        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), " N m  no slave yet");
+      else
+        std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n),
+                      " N m  slave age %.1f ms", age);
+    }
+    std::fprintf(stderr, "\r\033[Khaptic-server: %s", line);
+    std::fflush(stderr);
+    live_shown_ = true;
+  }
+
   haptics::LoopEvents& events_;
+  Context ctx_;
+  std::int64_t start_ns_;
   std::uint64_t resets_ = 0;
   std::uint32_t lost_ = 0;
   haptics::LoopState state_ = haptics::LoopState::kDisabled;
+  std::uint64_t slave_samples_ = 0;
+  std::int64_t slave_seen_ns_;
+  std::int64_t next_slave_warning_ns_ = 0;
+  bool slave_warned_ = false;
+  std::int64_t next_live_ns_ = 0;
+  bool live_shown_ = false;
 };
 
 /// Waits for a stop signal or the runner finishing, logging loop events every
@@ -118,35 +244,75 @@ int list_devices() {
   return 0;
 }
 
+/// The exit summary, printed once. Every figure says what it counts and what
+/// is normal, so an operator can read it without the source.
 void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink& link,
-                   double seconds) {
+                   const std::string& slave_channel, double seconds, int exit_code,
+                   const char* verdict) {
   const auto lat = loop.lateness().summary();
   const auto cmp = loop.compute().summary();
   const auto& c = loop.counters();
   const auto st = link.state_stats();
-  std::fprintf(
-      stderr,
-      "haptic-server: ran %.1f s, %llu ticks at %.3f Hz (nominal %.0f), overruns %llu\n"
-      "  lateness us: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f;  compute p99 %.1f us\n"
-      "  slave: %llu samples used, %llu accepted, %llu rejected, %llu seq gaps, latency p99 "
-      "%.0f us\n"
-      "  safety: stale %llu ticks, saturated %llu, rate-limited %llu, non-finite %llu, estimate "
-      "lost %llu ticks, estimator resets %llu;  state %s\n",
-      seconds, static_cast<unsigned long long>(c.ticks), loop.measured_rate_hz(), loop.rate_hz(),
-      static_cast<unsigned long long>(c.overruns), lat.p50_us, lat.p99_us, lat.p999_us, lat.max_us,
-      cmp.p99_us, static_cast<unsigned long long>(c.slave_samples),
-      static_cast<unsigned long long>(st.accepted), static_cast<unsigned long long>(st.rejected()),
-      static_cast<unsigned long long>(st.seq_gaps), st.latency.p99_us,
-      static_cast<unsigned long long>(c.stale_ticks),
-      static_cast<unsigned long long>(c.saturated_ticks),
-      static_cast<unsigned long long>(c.rate_limited_ticks),
-      static_cast<unsigned long long>(c.nonfinite_requests),
-      static_cast<unsigned long long>(c.estimate_lost_ticks),
-      static_cast<unsigned long long>(c.estimator_resets),
-      std::string(to_string(loop.state())).c_str());
+  using ull = unsigned long long;
+  std::fprintf(stderr, "haptic-server: summary of %.1f s\n", seconds);
+  std::fprintf(stderr,
+               "  loop:   %llu ticks at %.3f Hz (nominal %.0f); %llu deadlines skipped (overruns); "
+               "lateness against the schedule p50 %s, p99 %s, p99.9 %s, max %s; compute p99 %s\n",
+               static_cast<ull>(c.ticks), loop.measured_rate_hz(), loop.rate_hz(),
+               static_cast<ull>(c.overruns), us_text(lat.p50_us).c_str(),
+               us_text(lat.p99_us).c_str(), us_text(lat.p999_us).c_str(),
+               us_text(lat.max_us).c_str(), us_text(cmp.p99_us).c_str());
+  const double rate = seconds > 0 ? static_cast<double>(st.accepted) / seconds : 0.0;
+  std::fprintf(stderr,
+               "  slave:  '%s': %llu accepted (%.1f per s), %llu used by the loop (the newest at "
+               "each tick); %llu rejected, %llu duplicates, %llu late/reordered (dropped)\n",
+               slave_channel.c_str(), static_cast<ull>(st.accepted), rate,
+               static_cast<ull>(c.slave_samples), static_cast<ull>(st.rejected()),
+               static_cast<ull>(st.duplicates), static_cast<ull>(st.reordered));
+  std::fprintf(stderr,
+               "          seq gaps %llu (%llu messages missing: the slave's seq jumped, i.e. "
+               "messages lost on the way or rejected; 0 is normal on one host)\n",
+               static_cast<ull>(st.seq_gaps), static_cast<ull>(st.seq_missing));
+  if (st.latency.count > 0)
+    std::fprintf(stderr,
+                 "          one-way latency (arrival - the slave's utime, one host clock) p50 %s, "
+                 "p99 %s (to 12.5 %%), max %s; normal on one host: under 1 ms\n",
+                 us_text(st.latency.p50_us).c_str(), us_text(st.latency.p99_us).c_str(),
+                 us_text(st.latency.max_us).c_str());
+  if (st.discarded_before_start > 0)
+    std::fprintf(stderr,
+                 "          %llu messages queued before the loop started were discarded unread "
+                 "(not counted above)\n",
+                 static_cast<ull>(st.discarded_before_start));
+  std::fprintf(stderr,
+               "  safety: ticks stale-faded %llu, saturated %llu, rate-limited %llu; non-finite "
+               "requests %llu; estimate lost %llu ticks; estimator resets %llu; faults %llu\n",
+               static_cast<ull>(c.stale_ticks), static_cast<ull>(c.saturated_ticks),
+               static_cast<ull>(c.rate_limited_ticks), static_cast<ull>(c.nonfinite_requests),
+               static_cast<ull>(c.estimate_lost_ticks), static_cast<ull>(c.estimator_resets),
+               static_cast<ull>(c.faults));
+  std::fprintf(stderr, "  end:    state %s; exit %d (%s)\n",
+               std::string(to_string(loop.state())).c_str(), exit_code, verdict);
+}
+
+/// The exit code of a session that ran (see kExit*).
+int session_exit_code(const haptics::HapticLoop& loop, const char** verdict) {
+  const auto& c = loop.counters();
+  if (c.slave_samples == 0) {
+    *verdict = "no SLAVE_STATE was ever received: nothing was rendered";
+    return kExitNoSlave;
+  }
+  if (loop.state() == haptics::LoopState::kFault || c.faults > 0) {
+    *verdict = loop.state() == haptics::LoopState::kFault ? "ended in FAULT"
+                                                          : "went into FAULT during the session";
+    return kExitFault;
+  }
+  *verdict = "clean session";
+  return kExitClean;
 }
 
 int run(const Options& o, const sigset_t& stop_signals) {
+  int exit_code = kExitClean;
   haptics::ServerConfig cfg = haptics::load_server_config(o.config);
   if (o.duration) cfg.duration_s = *o.duration;
   if (o.feedback) cfg.loop.source = haptics::feedback_source_from_string(*o.feedback);
@@ -182,7 +348,15 @@ int run(const Options& o, const sigset_t& stop_signals) {
   const auto registry = make_registry();
   master_devices::DriverContext ctx{cfg.source, "device.settings",
                                     std::filesystem::path(cfg.source).parent_path()};
-  auto device = registry.create(cfg.device_driver, cfg.device_settings, ctx);
+  std::unique_ptr<master_devices::Device> device;
+  try {
+    device = registry.create(cfg.device_driver, cfg.device_settings, ctx);
+  } catch (const master_devices::ConfigError&) {
+    throw;  // a bad setting: exit 2 with the file, field and line
+  } catch (const std::exception& e) {
+    throw DeviceError(std::string("cannot create the master device (") + cfg.device_driver +
+                      "): " + e.what());
+  }
   haptics::check_against_device(cfg, device->spec());
   // The configured torque limit never exceeds what the device can take.
   for (int j = 0; j < cfg.loop.joints; ++j) {
@@ -203,7 +377,12 @@ int run(const Options& o, const sigset_t& stop_signals) {
         cfg.loop.joints,
         static_cast<std::size_t>(cfg.evaluation.max_trace_s * cfg.loop.rate_hz) + 16);
 
-  device->open();
+  try {
+    device->open();
+  } catch (const std::exception& e) {
+    throw DeviceError(std::string("cannot open the master device (") + cfg.device_driver + ", " +
+                      device->spec().model + "): " + e.what());
+  }
   haptics::HapticLoop loop(cfg.loop, *device, link, std::move(estimators), trace.get());
   try {
     if (cfg.realtime.lock_memory) {
@@ -229,8 +408,18 @@ int run(const Options& o, const sigset_t& stop_signals) {
           cfg.loop.joints, cfg.loop.rate_hz, std::string(to_string(cfg.loop.source)).c_str(),
           cfg.device_driver.c_str(), device->spec().model.c_str(), link_cfg.bridge.url.c_str(),
           cfg.lcm_prefix.empty() ? "" : " prefix ", cfg.lcm_prefix.c_str());
-    EventLog events(loop.events());
+    const std::string slave_channel = cfg.lcm_prefix + "SLAVE_STATE";
+    EventLog events(loop.events(),
+                    {.slave_channel = slave_channel,
+                     .url = link_cfg.bridge.url,
+                     .slave_timeout_s = cfg.loop.slave_timeout_s,
+                     .feedback = std::string(to_string(cfg.loop.source)),
+                     .joints = cfg.loop.joints,
+                     .live = !o.quiet && isatty(STDERR_FILENO) != 0},
+                    static_cast<std::int64_t>(t0.tv_sec) * 1'000'000'000 + t0.tv_nsec);
     const int sig = wait_for_stop(stop_signals, runner, events);
+    events.poll();  // anything the loop reported in its last ticks
+    events.clear();
     runner.stop();
     runner.join();  // the loop thread wrote zero torque on its way out
     timespec t1{};
@@ -242,7 +431,12 @@ int run(const Options& o, const sigset_t& stop_signals) {
     if (sig)
       std::fprintf(stderr, "haptic-server: %s: torque zeroed, stopping\n",
                    bridge::signal_name(sig));
-    print_summary(loop, link, seconds);
+    const char* verdict = "";
+    exit_code = session_exit_code(loop, &verdict);
+    std::string verdict_text = verdict;
+    if (loop.state() == haptics::LoopState::kFault)
+      verdict_text += std::string(": ") + std::string(to_string(loop.fault()));
+    print_summary(loop, link, slave_channel, seconds, exit_code, verdict_text.c_str());
     if (trace && !cfg.evaluation.trace.empty()) trace->write_csv(cfg.evaluation.trace);
     if (trace && !cfg.evaluation.report.empty()) {
       const auto report = haptics::evaluate(loop, *trace, cfg);
@@ -254,7 +448,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     device->close();
     throw;
   }
-  return 0;
+  return exit_code;
 }
 
 }  // namespace
@@ -282,20 +476,27 @@ int main(int argc, char** argv) {
   app.add_flag("--list-devices", o.list_devices,
                "List connected master devices matching known profiles");
   app.add_flag("--quiet", o.quiet, "Only warnings and the exit summary");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? kExitClean : kExitConfig;  // --help: 0; a bad option: 2
+  }
   try {
     if (o.list_devices) return list_devices();
     if (o.config.empty()) {
       std::cerr
           << "haptic-server: error: --config FILE is required (see examples/demo/server.yaml)\n";
-      return 2;
+      return kExitConfig;
     }
     return run(o, stop_signals);
   } catch (const haptics::ConfigError& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
-    return 2;
+    return kExitConfig;
+  } catch (const DeviceError& e) {
+    std::cerr << "haptic-server: error: " << e.what() << "\n";
+    return kExitDevice;
   } catch (const std::exception& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
-    return 1;
+    return kExitError;
   }
 }

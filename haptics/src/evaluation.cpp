@@ -229,13 +229,8 @@ void write_report(const EvaluationReport& report, const std::string& path) {
 
 std::string format_report(const EvaluationReport& r) {
   std::string s;
-  char line[256];
-  std::snprintf(line, sizeof line,
-                "loop: %.2f Hz (nominal %.0f), lateness p50 %.1f / p99 %.1f / p99.9 %.1f / max "
-                "%.1f us, %llu overruns, %.1f s\n",
-                r.rate_hz, r.nominal_rate_hz, r.jitter.p50_us, r.jitter.p99_us, r.jitter.p999_us,
-                r.jitter.max_us, static_cast<unsigned long long>(r.overruns), r.duration_s);
-  s += line;
+  char line[512];
+  // The loop's timing is in haptic-server's own exit summary (printed once).
   for (const auto& j : r.joints) {
     std::snprintf(line, sizeof line,
                   "joint %-8s distal torque rmse: estimated %.4f N m, naive %.4f N m, ratio %.2f "
@@ -253,12 +248,25 @@ std::string format_report(const EvaluationReport& r) {
   }
   const auto& d = r.discrimination;
   if (d.joint >= 0) {
-    std::snprintf(
-        line, sizeof line,
-        "stiffness felt (joint %d, N m/rad): soft %.3f (true %.3f, perfect estimate %.3f), "
-        "nodule %.3f (true %.3f, perfect estimate %.3f)\n",
-        d.joint, d.soft.perceived, d.soft.truth, d.soft.ideal, d.hard.perceived, d.hard.truth,
-        d.hard.ideal);
+    // How far each felt stiffness is from the truth, in %: what a surgeon
+    // would misjudge (the same for the perfect estimate, for scale).
+    const auto off = [](double felt, double truth) {
+      char b[48];
+      if (std::isfinite(felt) && std::isfinite(truth) && truth > 0)
+        std::snprintf(b, sizeof b, "%+.0f %%", 100.0 * (felt - truth) / truth);
+      else
+        std::snprintf(b, sizeof b, "n/a");
+      return std::string(b);
+    };
+    std::snprintf(line, sizeof line,
+                  "stiffness felt (joint %d, N m/rad, slave joint space; vs the truth):\n"
+                  "  soft   %.3f  true %.3f: %s   (a perfect estimate: %.3f, %s)\n"
+                  "  nodule %.3f  true %.3f: %s   (a perfect estimate: %.3f, %s)\n",
+                  d.joint, d.soft.perceived, d.soft.truth,
+                  off(d.soft.perceived, d.soft.truth).c_str(), d.soft.ideal,
+                  off(d.soft.ideal, d.soft.truth).c_str(), d.hard.perceived, d.hard.truth,
+                  off(d.hard.perceived, d.hard.truth).c_str(), d.hard.ideal,
+                  off(d.hard.ideal, d.hard.truth).c_str());
     s += line;
   } else {
     s += "stiffness felt: no tissue contact in this run\n";

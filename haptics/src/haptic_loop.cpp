@@ -71,6 +71,7 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   if (version != 0 && version != state_version_) {
     state_version_ = version;
     ++counters_.slave_samples;
+    events_.slave_samples.store(counters_.slave_samples, std::memory_order_relaxed);
     estimate();
   }
   const double age_s = have_state_ ? static_cast<double>(now_ns - state_.receive_ns) * 1e-9
@@ -137,6 +138,10 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
                                      counters_.ticks * nominal_dt > config_.slave_timeout_s,
                        .estimate_lost = lost_s > config_.estimate_fault_s,
                        .internal_error = false});
+  if (now_state == LoopState::kFault && before != LoopState::kFault) {
+    ++counters_.faults;
+    events_.faults.store(counters_.faults, std::memory_order_relaxed);
+  }
   events_.state.store(static_cast<std::int32_t>(now_state), std::memory_order_relaxed);
   events_.fault.store(static_cast<std::int32_t>(machine_.fault()), std::memory_order_relaxed);
   const bool enabled = now_state == LoopState::kEnabled;
@@ -312,6 +317,14 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
     status_.master_q[j] = reading_.q[j];
   }
   link_.publish_status(status_);
+  // The same figures for the server's live status line (main thread).
+  events_.ticks.store(counters_.ticks, std::memory_order_relaxed);
+  events_.rate_hz.store(status_.rate_hz, std::memory_order_relaxed);
+  events_.lateness_p99_us.store(lat.p99_us, std::memory_order_relaxed);
+  events_.lateness_max_us.store(lat.max_us, std::memory_order_relaxed);
+  events_.slave_age_ms.store(status_.slave_age_ms, std::memory_order_relaxed);
+  for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j)
+    events_.torque_nm[j].store(out.torque[j], std::memory_order_relaxed);
 }
 
 void HapticLoop::shutdown() noexcept {

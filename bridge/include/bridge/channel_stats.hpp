@@ -23,8 +23,12 @@ struct ChannelStats {
   /// Sequence numbers those gaps skipped, saturating at UINT64_MAX (a hostile
   /// seq can claim 2^63 missing messages in one go).
   std::uint64_t seq_missing = 0;
-  std::uint64_t restarts = 0;        ///< sender restarts detected (seq down, utime up)
-  std::uint64_t resyncs = 0;         ///< tracker re-based after a run of out-of-order messages
+  std::uint64_t restarts = 0;  ///< sender restarts detected (seq down, utime up)
+  std::uint64_t resyncs = 0;   ///< tracker re-based after a run of out-of-order messages
+  /// Queued between subscribe() and Receiver::start() and dropped unread (not
+  /// in `received`): they were old before anyone looked, and would otherwise
+  /// read as a burst of huge latencies and a gap at start.
+  std::uint64_t discarded_before_start = 0;
   LatencySummary latency;            ///< receive time - utime, accepted messages, shared clock only
   std::int64_t last_receive_ns = 0;  ///< CLOCK_MONOTONIC of the newest accepted message, 0 if none
 

@@ -56,6 +56,14 @@ class InboxBase {
   /// The most recent rejection, if any (any thread).
   std::optional<Rejection> last_rejection() const noexcept;
 
+  /// Receiver only, before its receive thread starts: messages that queued up
+  /// between subscribe() and start() are old by the time anyone reads them;
+  /// they are counted (ChannelStats::discarded_before_start) and dropped
+  /// instead of being handed to the loop as if they had just arrived.
+  void set_discarding(bool on) noexcept { discarding_ = on; }
+  bool discarding() const noexcept { return discarding_; }
+  void count_discarded() noexcept { discarded_.fetch_add(1, std::memory_order_relaxed); }
+
  protected:
   void count_received() noexcept { received_.fetch_add(1, std::memory_order_relaxed); }
   void count_rejected(const Rejection& r) noexcept;
@@ -76,6 +84,8 @@ class InboxBase {
   std::atomic<std::uint64_t> seq_missing_{0};
   std::atomic<std::uint64_t> restarts_{0};
   std::atomic<std::uint64_t> resyncs_{0};
+  std::atomic<std::uint64_t> discarded_{0};
+  bool discarding_ = false;
   std::atomic<std::int64_t> last_receive_ns_{0};
   LatencyHistogram latency_;
   LatestValue<Rejection> last_rejection_;

@@ -65,6 +65,7 @@ struct LoopCounters {
   std::uint64_t device_stale_ticks = 0;  ///< master readings too old: torque zeroed, no fault
   std::uint64_t estimator_resets = 0;    ///< slave clock discontinuities: estimators re-initialised
   std::uint64_t estimate_lost_ticks = 0;  ///< ticks with some joint's estimate invalid
+  std::uint64_t faults = 0;               ///< entries into FAULT
 };
 
 /// HAPTIC_STATUS flags (lcmtypes/haptic_status_t.lcm).
@@ -90,6 +91,15 @@ struct LoopEvents {
   std::atomic<std::int32_t> fault{0};                  ///< FaultReason
   std::atomic<std::uint64_t> overruns{0};
   std::atomic<std::int64_t> worst_lateness_ns{0};  ///< since the reader last exchanged it with 0
+  std::atomic<std::uint64_t> slave_samples{0};     ///< new SLAVE_STATE samples used so far
+  std::atomic<std::uint64_t> faults{0};            ///< entries into FAULT so far
+  // The live status line (updated with every HAPTIC_STATUS, 100 Hz):
+  std::atomic<std::uint64_t> ticks{0};
+  std::atomic<double> rate_hz{0.0};                         ///< over the last status period
+  std::atomic<double> lateness_p99_us{0.0};                 ///< this second's window
+  std::atomic<double> lateness_max_us{0.0};                 ///< this second's window
+  std::atomic<double> slave_age_ms{-1.0};                   ///< -1: no slave state yet
+  std::array<std::atomic<double>, kMaxJoints> torque_nm{};  ///< written to the master
 };
 
 class HapticLoop {
