@@ -1,0 +1,225 @@
+// What the operator is told must be true (issue 16), checked on the real
+// haptic-server over udpm on this host (ttl=0, port 7731): exit codes for a
+// session without a slave, one that faulted, one whose device cannot be
+// opened, and a clean one; the line when no SLAVE_STATE arrives; the live
+// status line only on a terminal and never with --quiet; the summary once.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <pty.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bridge/clock.hpp"
+#include "bridge/codec.hpp"
+
+namespace tsmh::haptics {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+std::string url() {
+  return "udpm://239.255.76.67:7731?ttl=0";
+}
+
+std::string unique_prefix() {
+  static int n = 0;
+  std::string p = "O";  // += only: GCC 12's -Wrestrict misfires on "literal" + std::string
+  p += std::to_string(getpid());
+  p += "_";
+  p += std::to_string(++n);
+  p += "_";
+  return p;
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1))
+    ++n;
+  return n;
+}
+
+struct Result {
+  int code = -1;  ///< exit code, -1 if killed or timed out
+  std::string output;
+};
+
+/// Runs argv to completion (killed after `timeout`), stdout+stderr captured;
+/// on a pseudo-terminal when `tty`.
+Result run(const std::vector<std::string>& argv, bool tty, std::chrono::seconds timeout = 30s) {
+  int master = -1, pipe_fds[2] = {-1, -1};
+  pid_t pid = -1;
+  if (tty) {
+    pid = forkpty(&master, nullptr, nullptr, nullptr);
+  } else {
+    if (pipe(pipe_fds) != 0) return {};
+    pid = fork();
+  }
+  if (pid == 0) {
+    if (!tty) {
+      dup2(pipe_fds[1], 1);
+      dup2(pipe_fds[1], 2);
+      close(pipe_fds[0]);
+    }
+    std::vector<char*> args;
+    for (const auto& a : argv)
+      args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+  const int fd = tty ? master : pipe_fds[0];
+  if (!tty) close(pipe_fds[1]);
+  Result r;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  char buf[4096];
+  for (;;) {
+    const ssize_t n = read(fd, buf, sizeof buf);  // EOF (or EIO on a pty) at exit
+    if (n <= 0) break;
+    r.output.append(buf, static_cast<std::size_t>(n));
+    if (std::chrono::steady_clock::now() > deadline) kill(pid, SIGKILL);
+  }
+  close(fd);
+  int st = 0;
+  waitpid(pid, &st, 0);
+  if (WIFEXITED(st)) r.code = WEXITSTATUS(st);
+  return r;
+}
+
+/// Publishes a plausible SLAVE_STATE at ~1 kHz from its own thread for
+/// `seconds` (or until destroyed).
+class FakeSlave {
+ public:
+  FakeSlave(std::string prefix, double seconds) {
+    thread_ = std::thread([this, prefix, seconds] {
+      lcm::LCM lcm(url());
+      bridge::SlaveStateSample s;
+      s.num_joints = 2;
+      s.status = 1;
+      for (std::size_t j = 0; j < 2; ++j) {
+        s.T1[j] = 30.0;
+        s.T3[j] = 29.0;
+        s.radius_m[j] = 0.01;
+      }
+      const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+      for (std::int64_t seq = 0; running_ && std::chrono::steady_clock::now() < end; ++seq) {
+        s.utime = bridge::monotonic_utime();
+        s.seq = seq;
+        bridge::publish_sample(lcm, prefix + "SLAVE_STATE", s);
+        std::this_thread::sleep_for(1ms);
+      }
+    });
+  }
+  ~FakeSlave() {
+    running_ = false;
+    thread_.join();
+  }
+
+ private:
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+};
+
+class ServerOperator : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("tsmh-server-operator-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  /// The simulated console (the dead-man held by a simulated operator).
+  fs::path config(const std::string& prefix, const std::string& device = "driver: sim") {
+    const fs::path p = dir_ / "server.yaml";
+    std::ofstream(p) << "rate_hz: 1000\nfeedback: naive\n"
+                     << "device: {" << device << "}\n"
+                     << "lcm: {prefix: " << prefix << "}\n"
+                     << "realtime: {sched_fifo: false, lock_memory: false, "
+                        "cpu_dma_latency: false}\n"
+                     << "joints:\n"
+                     << "  - {params: paper, max_torque_nm: 0.3}\n"
+                     << "  - {params: paper, max_torque_nm: 0.3}\n";
+    return p;
+  }
+  std::vector<std::string> server(const fs::path& cfg, double seconds,
+                                  std::vector<std::string> more = {}) {
+    std::vector<std::string> argv{
+        TSMH_HAPTIC_SERVER,     "--config", cfg.string(), "--lcm-url", url(), "--duration",
+        std::to_string(seconds)};
+    argv.insert(argv.end(), more.begin(), more.end());
+    return argv;
+  }
+  fs::path dir_;
+};
+
+// Before issue 16: silent for the whole run, `state FAULT`, exit 0.
+TEST_F(ServerOperator, NoSlaveStateIsSaidAtOnceAndRepeatedAndExitsFive) {
+  const auto r = run(server(config(unique_prefix()), 6.5), false);
+  EXPECT_EQ(r.code, 5) << r.output;
+  EXPECT_EQ(count(r.output, "no SLAVE_STATE on '"), 2U) << "after 1 s, then again 5 s later:\n"
+                                                        << r.output;
+  EXPECT_NE(r.output.find("exit 5 (no SLAVE_STATE was ever received"), std::string::npos)
+      << r.output;
+}
+
+TEST_F(ServerOperator, CleanSessionExitsZeroAndPrintsTheSummaryOnce) {
+  const std::string prefix = unique_prefix();
+  FakeSlave slave(prefix, 30.0);
+  std::this_thread::sleep_for(200ms);
+  const auto r = run(server(config(prefix), 2.0, {"--report", (dir_ / "r.json").string()}), false);
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(count(r.output, "p99.9"), 1U) << "the loop's figures once, not twice:\n" << r.output;
+  EXPECT_EQ(count(r.output, "summary of"), 1U) << r.output;
+  EXPECT_EQ(count(r.output, "\r\033[K"), 0U) << "no live line off a terminal";
+  EXPECT_NE(r.output.find("seq gaps 0 ("), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("exit 0 (clean session)"), std::string::npos) << r.output;
+}
+
+TEST_F(ServerOperator, SlaveLostMidSessionEndsInFaultAndExitsFour) {
+  const std::string prefix = unique_prefix();
+  FakeSlave slave(prefix, 1.5);
+  const auto r = run(server(config(prefix), 4.0), false);
+  EXPECT_EQ(r.code, 4) << r.output;
+  EXPECT_NE(r.output.find("no fresh SLAVE_STATE on '"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ended in FAULT"), std::string::npos) << r.output;
+}
+
+TEST_F(ServerOperator, DeviceThatCannotBeOpenedExitsThree) {
+  const auto r = run(
+      server(config(unique_prefix(), "driver: hid, settings: {path: /nonexistent/hidraw9}"), 1.0),
+      false);
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find("cannot open the master device"), std::string::npos) << r.output;
+}
+
+TEST_F(ServerOperator, LiveStatusLineOnATerminalOnlyAndNeverWithQuiet) {
+  const std::string prefix = unique_prefix();
+  FakeSlave slave(prefix, 30.0);
+  std::this_thread::sleep_for(200ms);
+  const auto live = run(server(config(prefix), 2.6), true);
+  EXPECT_EQ(live.code, 0) << live.output;
+  // Once a second, rewritten in place: rate, lateness, state, feedback, torque.
+  EXPECT_GE(count(live.output, "\r\033[Khaptic-server: "), 2U) << live.output;
+  EXPECT_NE(live.output.find(" Hz  late p99 "), std::string::npos) << live.output;
+  EXPECT_NE(live.output.find("naive  torque"), std::string::npos) << live.output;
+  const auto quiet = run(server(config(prefix), 1.5, {"--quiet"}), true);
+  EXPECT_EQ(quiet.code, 0) << quiet.output;
+  EXPECT_EQ(count(quiet.output, "\r\033[K"), 0U) << quiet.output;
+}
+
+}  // namespace
+}  // namespace tsmh::haptics
