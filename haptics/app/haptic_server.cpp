@@ -10,6 +10,7 @@
 
 #include <pthread.h>
 #include <signal.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -371,11 +372,26 @@ int run(const Options& o, const sigset_t& stop_signals) {
     }
   }
 
-  std::unique_ptr<haptics::Trace> trace;
-  if (!cfg.evaluation.trace.empty() || !cfg.evaluation.report.empty())
-    trace = std::make_unique<haptics::Trace>(
-        cfg.loop.joints,
-        static_cast<std::size_t>(cfg.evaluation.max_trace_s * cfg.loop.rate_hz) + 16);
+  // Trace and report: rows stream to an unlinked spool file beside the
+  // output through a fixed ring (memory does not grow with the run). The
+  // output folders must exist: checked before anything is opened.
+  std::unique_ptr<haptics::TraceSpool> trace;
+  if (!cfg.evaluation.trace.empty() || !cfg.evaluation.report.empty()) {
+    for (const std::string* out : {&cfg.evaluation.trace, &cfg.evaluation.report}) {
+      if (out->empty()) continue;
+      const auto folder = std::filesystem::path(*out).parent_path();
+      std::error_code ec;
+      if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
+        throw haptics::ConfigError(*out + ": the folder '" + folder.string() +
+                                   "' does not exist (outputs are written into existing "
+                                   "folders only)");
+    }
+    const std::string& first =
+        cfg.evaluation.trace.empty() ? cfg.evaluation.report : cfg.evaluation.trace;
+    trace = std::make_unique<haptics::TraceSpool>(
+        cfg.loop.joints, std::filesystem::path(first).parent_path(),
+        static_cast<std::uint64_t>(cfg.evaluation.max_trace_s * cfg.loop.rate_hz) + 16);
+  }
 
   try {
     device->open();
@@ -437,11 +453,27 @@ int run(const Options& o, const sigset_t& stop_signals) {
     if (loop.state() == haptics::LoopState::kFault)
       verdict_text += std::string(": ") + std::string(to_string(loop.fault()));
     print_summary(loop, link, slave_channel, seconds, exit_code, verdict_text.c_str());
-    if (trace && !cfg.evaluation.trace.empty()) trace->write_csv(cfg.evaluation.trace);
-    if (trace && !cfg.evaluation.report.empty()) {
-      const auto report = haptics::evaluate(loop, *trace, cfg);
-      haptics::write_report(report, cfg.evaluation.report);
-      if (!o.quiet) std::cerr << haptics::format_report(report);
+    if (trace) {
+      // The loop is over: nothing needs locked memory any more, and the
+      // trace is mapped back from disk (page cache, not locked).
+      if (cfg.realtime.lock_memory) munlockall();
+      const std::uint64_t spooled = trace->bytes_written();
+      const haptics::Trace recorded = trace->finish();
+      if (recorded.dropped() > 0)
+        std::fprintf(stderr,
+                     "haptic-server: warning: trace: %llu rows not recorded (past "
+                     "evaluation.max_trace_s, or the writer fell %zu rows behind)\n",
+                     static_cast<unsigned long long>(recorded.dropped()),
+                     haptics::TraceSpool::kRingRows);
+      if (!o.quiet)
+        std::fprintf(stderr, "haptic-server: trace: %zu rows, %.1f MB spooled to disk\n",
+                     recorded.size(), static_cast<double>(spooled) * 1e-6);
+      if (!cfg.evaluation.trace.empty()) recorded.write_csv(cfg.evaluation.trace);
+      if (!cfg.evaluation.report.empty()) {
+        const auto report = haptics::evaluate(loop, recorded, cfg);
+        haptics::write_report(report, cfg.evaluation.report);
+        if (!o.quiet) std::cerr << haptics::format_report(report);
+      }
     }
   } catch (...) {
     loop.shutdown();  // zero torque before anything else happens

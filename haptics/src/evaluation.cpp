@@ -48,7 +48,8 @@ bool enabled_with_truth(const TraceRow& r, std::size_t j) {
 double find_boundary(const Trace& trace, std::size_t j) {
   std::vector<std::pair<double, double>> pts;
   for (std::size_t i = 0; i < trace.size(); ++i) {
-    const auto& q = trace[i].joints[j];
+    const TraceRow row = trace[i];  // by value: a stored trace is decoded row by row
+    const auto& q = row.joints[j];
     if (std::isfinite(q.indentation) && q.indentation > 0.0 && std::isfinite(q.contact_force))
       pts.emplace_back(q.indentation, q.contact_force);
   }
@@ -160,8 +161,9 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
   for (std::size_t j = 0; j < joints; ++j) {
     r.joints.push_back(evaluate_joint(trace, config, j));
     for (std::size_t i = 0; i < trace.size(); ++i) {
-      const auto& q = trace[i].joints[j];
-      if (enabled_with_truth(trace[i], j) && std::isfinite(q.indentation) &&
+      const TraceRow row = trace[i];
+      const auto& q = row.joints[j];
+      if (enabled_with_truth(row, j) && std::isfinite(q.indentation) &&
           q.indentation > deepest) {
         deepest = q.indentation;
         r.discrimination.joint = static_cast<int>(j);

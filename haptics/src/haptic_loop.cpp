@@ -21,7 +21,7 @@ std::string_view to_string(FeedbackSource s) noexcept {
 
 HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device, SlaveLink& link,
                        std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators,
-                       Trace* trace)
+                       TraceSink* trace)
     : config_(config),
       device_(device),
       link_(link),

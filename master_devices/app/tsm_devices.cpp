@@ -35,12 +35,15 @@ int main(int argc, char** argv) {
   app.add_option("--monitor", monitor, "open a device with this driver and print readings");
   app.add_option("--config", config, "YAML file with the driver's settings map (for --monitor)");
   app.add_option("--seconds", seconds, "how long to monitor")->check(CLI::PositiveNumber);
-  app.add_option("--profiles", profile_dir, "directory of device profiles (*.yaml)");
+  CLI::Option* profiles_opt =
+      app.add_option("--profiles", profile_dir, "directory of device profiles (*.yaml)");
   CLI11_PARSE(app, argc, argv);
 
   try {
     md::BuiltinDriverOptions options;
-    if (std::filesystem::is_directory(profile_dir))
+    // A folder named on the command line must exist (an error, never a silent
+    // fall-back to the built-in profile); the installed default may be absent.
+    if (profiles_opt->count() > 0 || std::filesystem::is_directory(profile_dir))
       options.profiles = md::load_profiles(profile_dir);
     md::DriverRegistry registry;
     md::register_builtin_drivers(registry, options);

@@ -3,6 +3,8 @@
 
 #include "haptics/evaluation.hpp"
 #include "haptics/server_config.hpp"
+#include "master_devices/builtin_drivers.hpp"
+#include "master_devices/registry.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -226,6 +228,36 @@ TEST(ServerConfig, MoreJointsThanTheDeviceHasIsAnError) {
   }
   spec.dof = 3;
   EXPECT_NO_THROW(check_against_device(c, spec));
+}
+
+// Issue 16: the driver's settings keep their place in the file; the error
+// said "(line 1)" for a key on line 10 (the settings were a clone without marks).
+TEST(ServerConfig, DeviceSettingsErrorsCarryTheirOwnLine) {
+  const auto c = parse_server_config(
+      "rate_hz: 1000\n"
+      "feedback: naive\n"
+      "# a comment\n"
+      "device:\n"
+      "  driver: sim\n"
+      "  settings:\n"
+      "    stale_timeout_ms: 100\n"
+      "    command_timeout_ms: 100\n"
+      "    # the typo is on line 10\n"
+      "    scenaro: palpate\n" +
+          std::string("joints:\n  - {max_torque_nm: 0.3}\n"),
+      "server.yaml", "/cfg");
+  master_devices::DriverRegistry registry;
+  master_devices::register_builtin_drivers(registry);
+  try {
+    registry.create(c.device_driver, c.device_settings,
+                    master_devices::DriverContext{"server.yaml", "device.settings", "/cfg"});
+    FAIL() << "an unknown settings key was accepted";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("server.yaml: device.settings.scenaro: unknown key"), std::string::npos)
+        << what;
+    EXPECT_NE(what.find("(line 10)"), std::string::npos) << what;
+  }
 }
 
 }  // namespace

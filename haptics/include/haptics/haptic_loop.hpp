@@ -108,7 +108,7 @@ class HapticLoop {
   /// std::invalid_argument on an inconsistent configuration.
   HapticLoop(const LoopConfig& config, master_devices::Device& device, SlaveLink& link,
              std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators,
-             Trace* trace = nullptr);
+             TraceSink* trace = nullptr);
 
   /// One tick at time now_ns (CLOCK_MONOTONIC, or simulated). `lateness_ns`:
   /// how late this tick started against the absolute schedule, i.e. the
@@ -146,7 +146,7 @@ class HapticLoop {
   master_devices::Device& device_;
   SlaveLink& link_;
   std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators_;
-  Trace* trace_;
+  TraceSink* trace_;
 
   SafetyStateMachine machine_;
   SafetyFilter safety_;
