@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <pty.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -53,6 +54,7 @@ std::size_t count(const std::string& text, const std::string& what) {
 struct Result {
   int code = -1;  ///< exit code, -1 if killed or timed out
   std::string output;
+  long max_rss_kb = 0;  ///< the child's peak resident memory
 };
 
 /// Runs argv to completion (killed after `timeout`), stdout+stderr captured;
@@ -92,7 +94,9 @@ Result run(const std::vector<std::string>& argv, bool tty, std::chrono::seconds 
   }
   close(fd);
   int st = 0;
-  waitpid(pid, &st, 0);
+  rusage usage{};
+  wait4(pid, &st, 0, &usage);
+  r.max_rss_kb = usage.ru_maxrss;
   if (WIFEXITED(st)) r.code = WEXITSTATUS(st);
   return r;
 }
@@ -219,6 +223,30 @@ TEST_F(ServerOperator, LiveStatusLineOnATerminalOnlyAndNeverWithQuiet) {
   const auto quiet = run(server(config(prefix), 1.5, {"--quiet"}), true);
   EXPECT_EQ(quiet.code, 0) << quiet.output;
   EXPECT_EQ(count(quiet.output, "\r\033[K"), 0U) << quiet.output;
+}
+
+// Before issue 16 --trace/--report allocated (and zeroed) storage for
+// evaluation.max_trace_s (600 s) up front: ~480 MB resident for any run.
+// Now rows stream to disk through a fixed ring (3 MB).
+TEST_F(ServerOperator, TraceAndReportMemoryDoesNotFollowTheConfiguredMaximum) {
+  const std::string prefix = unique_prefix();
+  FakeSlave slave(prefix, 30.0);
+  std::this_thread::sleep_for(200ms);
+  const auto trace = dir_ / "trace.csv";
+  const auto r = run(server(config(prefix), 2.0,
+                            {"--trace", trace.string(), "--report", (dir_ / "r.json").string()}),
+                     false);
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_LT(r.max_rss_kb, 100 * 1024) << "peak RSS " << r.max_rss_kb << " kB";
+  std::ifstream in(trace);
+  std::size_t lines = 0;
+  for (std::string line; std::getline(in, line);)
+    ++lines;
+  EXPECT_GE(lines, 1900U) << "one row per tick for 2 s";
+  EXPECT_LE(lines, 2101U);
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".haptic-server-trace"), std::string::npos)
+        << "the spool file is unlinked";
 }
 
 }  // namespace

@@ -1,8 +1,14 @@
 // Server configuration: defaults, and every bad field named in the error.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
 
 #include "haptics/evaluation.hpp"
 #include "haptics/server_config.hpp"
+#include "haptics/trace.hpp"
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/registry.hpp"
 
@@ -258,6 +264,50 @@ TEST(ServerConfig, DeviceSettingsErrorsCarryTheirOwnLine) {
         << what;
     EXPECT_NE(what.find("(line 10)"), std::string::npos) << what;
   }
+}
+
+TEST(TraceSpool, StreamsRowsToDiskAndMapsThemBackExactly) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("tsmh-trace-spool-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    TraceSpool spool(2, dir, 5000);
+    for (int i = 0; i < 6000; ++i) {  // more than the ring holds, and past max_rows
+      TraceRow row;
+      row.t = i * 1e-3;
+      row.state_seq = i;
+      row.state = 1;
+      row.flags = i % 7;
+      row.joints[0].torque_cmd = 0.001 * i;
+      row.joints[1].true_tau_out = -0.5 * i;
+      spool.append(row);
+      if (i % 1000 == 999) std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    }
+    const Trace t = spool.finish();
+    ASSERT_EQ(t.size(), 5000U);
+    EXPECT_EQ(t.dropped(), 1000U) << "past max_rows: counted, not stored";
+    for (std::size_t i = 0; i < t.size(); i += 997) {
+      const TraceRow r = t[i];
+      EXPECT_EQ(r.state_seq, static_cast<std::int64_t>(i));
+      EXPECT_EQ(r.flags, static_cast<std::int32_t>(i % 7));
+      EXPECT_DOUBLE_EQ(r.joints[0].torque_cmd, 0.001 * static_cast<double>(i));
+      EXPECT_DOUBLE_EQ(r.joints[1].true_tau_out, -0.5 * static_cast<double>(i));
+    }
+    t.write_csv((dir / "t.csv").string());
+  }
+  std::ifstream in(dir / "t.csv");
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header.rfind("t,state_seq,state,flags,lateness_us,q_0,", 0), 0U) << header;
+  std::size_t rows = 0;
+  for (std::string line; std::getline(in, line);)
+    ++rows;
+  EXPECT_EQ(rows, 5000U);
+  std::size_t left = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir))
+    ++left;
+  EXPECT_EQ(left, 1U) << "only the CSV: the spool file was unlinked";
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
