@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "lcm_log_source.hpp"
+#include "output_checks.hpp"
 
 namespace tsmh::tsm_cli {
 namespace {
@@ -18,6 +19,7 @@ struct ConvertOptions {
 };
 
 void run_convert(const ConvertOptions& o) {
+  check_outputs({{"--output", o.output, OutputKind::kFile}});
   std::string summary;
   const auto rec = recording_from_lcm_log(o.log, o.sel, std::nullopt, {}, &summary);
   estimator::write_recording_csv(rec, o.output);

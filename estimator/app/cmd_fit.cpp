@@ -15,6 +15,7 @@
 #include "estimator/model_io.hpp"
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
+#include "output_checks.hpp"
 #include "progress_line.hpp"
 
 namespace tsmh::tsm_cli {
@@ -46,6 +47,8 @@ std::string progress_text(const estimator::FitProgress& p) {
 
 void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
+  check_outputs(
+      {{"--output", o.output, OutputKind::kFile}, {"--report", o.report, OutputKind::kFolder}});
   const auto rec =
       ctx.sources.load(o.data, o.radius, {.tau_in = true, .tau_out = true, .radius = true});
   const auto initial = estimator::load_model(o.model);

@@ -14,6 +14,7 @@
 #include "estimator/model_io.hpp"
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
+#include "output_checks.hpp"
 #include "progress_line.hpp"
 
 namespace tsmh::tsm_cli {
@@ -34,6 +35,7 @@ struct GapCliOptions {
 
 void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
+  check_outputs({{"--output", o.output, OutputKind::kFolder}});
   const auto rec =
       ctx.sources.load(o.data, o.radius, {.tau_in = true, .tau_out = true, .radius = true});
   const auto base = estimator::load_model(o.base);

@@ -9,6 +9,7 @@
 #include "estimator/distal_estimator.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/simulate.hpp"
+#include "output_checks.hpp"
 
 namespace tsmh::tsm_cli {
 namespace {
@@ -39,6 +40,7 @@ std::vector<double> causal_friction(const estimator::FrictionModel& model,
 }
 
 void run_simulate(const SimulateOptions& o, const Context& ctx) {
+  check_outputs({{"--output", o.output, OutputKind::kFile}});
   auto model = estimator::load_model(o.params);
   const auto rec = ctx.sources.load(o.input, o.radius, {});
   const bool exact =

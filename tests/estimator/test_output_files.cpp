@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -274,6 +275,49 @@ TEST_F(OutputFiles, HugeLinesAndBinaryFilesAreQuotedAsShortEscapedExcerpts) {
   EXPECT_NE(e.find("\\x"), std::string::npos) << e;
   for (const char c : e)
     EXPECT_TRUE(c >= 0x20 && c < 0x7f) << "unescaped byte " << static_cast<int>(c);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
+
+// --- one rule for outputs, checked before any work (issue 16) ---------------
+namespace tsmh::estimator {
+namespace {
+
+// `tsm fit --output /nonexistent/dir/x.yaml` used to fail only after the whole
+// fit; `tsm gap --output /nonexistent/a/gap` created the whole path.
+TEST_F(OutputFiles, OutputPathsAreCheckedBeforeAnyWorkWithOneRule) {
+  const fs::path data = synthetic_csv(dir_, 20.0);
+  const fs::path missing = dir_ / "nonexistent" / "dir";
+  const auto t0 = std::chrono::steady_clock::now();
+  Ran r = run_tsm({"fit", data.string(), "--output", (missing / "x.yaml").string()}, dir_ / "log1");
+  const double fit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--output " + (missing / "x.yaml").string() + ": the folder '" +
+                          missing.string() + "' does not exist"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("model runs"), std::string::npos) << "no fit ran:\n" << r.output;
+  EXPECT_LT(fit_s, 5.0);
+  r = run_tsm({"fit", data.string(), "--output", (dir_ / "p.yaml").string(), "--report",
+               (missing / "rep").string()},
+              dir_ / "log2");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--report"), std::string::npos) << r.output;
+
+  r = run_tsm({"gap", data.string(), "--output", (missing / "gap").string()}, dir_ / "log3");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("never a whole path"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "nonexistent")) << "gap created the path";
+
+  r = run_tsm(
+      {"simulate", "--params", "paper", "--input", data.string(), "--output", dir_.string()},
+      dir_ / "log4");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("is a folder"), std::string::npos) << r.output;
+  r = run_tsm({"convert", data.string(), "--output", (missing / "x.csv").string()}, dir_ / "log5");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
 }
 
 }  // namespace
