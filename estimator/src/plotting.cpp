@@ -70,9 +70,10 @@ std::string extension(const std::string& terminal) {
 std::string terminal_line(const std::string& terminal, int w, int h) {
   if (terminal == "svg")
     return "set terminal svg size " + std::to_string(w) + "," + std::to_string(h) +
-           " dynamic background rgb 'white'\n";
+           " dynamic noenhanced background rgb 'white'\n";
+  // noenhanced: names such as low_speed print as written, not as subscripts.
   return "set terminal pngcairo size " + std::to_string(w) + "," + std::to_string(h) +
-         " font ',10'\n";
+         " noenhanced font ',10'\n";
 }
 
 // The blocks of validation samples as [t_begin, t_end] intervals, for shading.
@@ -217,16 +218,26 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
   for (std::size_t c = 0; c < curves.size(); ++c)
     s << ", '' using 2:" << 4 + c << " with lines lw 1 title " << quoted(curves[c].title);
   s << "\n";
-  // 3. residuals
+  // 3. residuals, on the scale of the scored samples: the warm-up (the model
+  // starts at rest, the joint may not) is clipped instead of stretching the axis.
+  double scored_max = 0.0;
+  for (std::size_t i = 0; i < data.size(); ++i)
+    if (data.role[i] != SampleRole::ignored)
+      for (const auto& c : curves)
+        if (std::isfinite(c.friction[i]))
+          scored_max = std::max(scored_max, std::fabs(data.measured[i] - c.friction[i]));
   s << terminal_line(term, 1400, 500) << "set output " << quoted(image("residual"))
-    << "\nset title " << quoted(title + ": residual, measured - model (validation shaded)")
-    << "\nset xlabel 't (s)'\nset ylabel 'error (N)'\n"
-    << shade.str() << "plot ";
+    << "\nset title "
+    << quoted(title + ": residual, measured - model (validation shaded; warm-up clipped)")
+    << "\nset xlabel 't (s)'\nset ylabel 'error (N)'\n";
+  if (scored_max > 0.0)
+    s << "set yrange [" << -1.1 * scored_max << ":" << 1.1 * scored_max << "]\n";
+  s << shade.str() << "plot ";
   for (std::size_t c = 0; c < curves.size(); ++c) {
     s << (c ? ", " : "") << quoted(dat.filename().string()) << " using 1:($3-$" << 4 + c
       << ") with lines lw 1 title " << quoted(curves[c].title);
   }
-  s << "\nunset object\n";
+  s << "\nunset object\nset autoscale y\n";
   const fs::path script = dir / (prefix + "_plots.gp");
   write_or_throw(script, [&](std::ostream& f) { f << s.str(); });
   const std::vector<std::string> images = {image("friction"), image("hysteresis"),

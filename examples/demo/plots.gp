@@ -5,8 +5,10 @@
 # per slave N m, slave rad per master rad), so the stiffness plot shows what
 # the surgeon feels in the same units as the truth.
 set datafile separator ","
-set terminal pngcairo size 1200,700 font ",11"
-set key top left
+# noenhanced: labels print as written (tau_in, not a subscript); the legend
+# sits below the plot, never on the data.
+set terminal pngcairo size 1200,760 noenhanced font ",11"
+set key below horizontal
 set grid
 # Column of field k (1-based within a joint block of 11) for joint j.
 col(j, k) = 5 + j * 11 + k
@@ -17,7 +19,7 @@ do for [j = 0:1] {
   set xlabel "time (s)"
   set ylabel "distal torque (N m)"
   plot trace using 1:(column(col(j, 8))) every 5 with lines lw 2 lc rgb "black" title "true distal torque", \
-       trace using 1:(column(col(j, 3))) every 5 with lines lc rgb "#d62728" title "naive (proximal tau_{in})", \
+       trace using 1:(column(col(j, 3))) every 5 with lines lc rgb "#d62728" title "naive (proximal tau_in)", \
        trace using 1:(column(col(j, 4))) every 5 with lines lc rgb "#1f77b4" title "estimated (friction model)"
 }
 

@@ -320,5 +320,31 @@ TEST_F(OutputFiles, OutputPathsAreCheckedBeforeAnyWorkWithOneRule) {
   EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
 }
 
+// Plots readable at a glance (issue 16): gnuplot's enhanced text turned
+// "low_speed" into a subscript; the warm-up's large residual (the model
+// starts at rest) stretched the residual axis so the scored residual was a
+// flat line.
+TEST_F(OutputFiles, FitPlotsPrintNamesAsWrittenAndScaleResidualsToScoredSamples) {
+  const fs::path data = synthetic_csv(dir_, 20.0);
+  const Ran r = run_tsm({"fit", data.string(), "--output", (dir_ / "p.yaml").string(), "--report",
+                         (dir_ / "rep").string(), "--starts", "1"},
+                        dir_ / "log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string gp = slurp(dir_ / "rep" / "fit_plots.gp");
+  std::size_t terminals = 0, plain = 0;
+  for (auto p = gp.find("set terminal"); p != std::string::npos;
+       p = gp.find("set terminal", p + 1)) {
+    ++terminals;
+    if (gp.substr(p, gp.find('\n', p) - p).find("noenhanced") != std::string::npos) ++plain;
+  }
+  EXPECT_GT(terminals, 0U);
+  EXPECT_EQ(plain, terminals) << gp;
+  const auto residual = gp.find("_residual");
+  ASSERT_NE(residual, std::string::npos) << gp;
+  EXPECT_NE(gp.find("set yrange [", residual), std::string::npos)
+      << "residual axis from the scored samples:\n"
+      << gp;
+}
+
 }  // namespace
 }  // namespace tsmh::estimator
