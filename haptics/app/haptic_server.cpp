@@ -286,7 +286,8 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
                  "(not counted above)\n",
                  static_cast<ull>(st.discarded_before_start));
   std::fprintf(stderr,
-               "  safety: ticks stale-faded %llu, saturated %llu, rate-limited %llu; non-finite "
+               "  safety: ticks faded (slave stale, or ramping in over recover_ms, at start too) "
+               "%llu, saturated %llu, rate-limited %llu; non-finite "
                "requests %llu; estimate lost %llu ticks; estimator resets %llu; faults %llu\n",
                static_cast<ull>(c.stale_ticks), static_cast<ull>(c.saturated_ticks),
                static_cast<ull>(c.rate_limited_ticks), static_cast<ull>(c.nonfinite_requests),

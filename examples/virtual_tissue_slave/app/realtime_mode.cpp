@@ -220,6 +220,10 @@ int run_realtime_mode(const CliOptions& o) {
                static_cast<unsigned long long>(os.dropped_full),
                static_cast<unsigned long long>(commands.stats().accepted),
                static_cast<unsigned long long>(commands.stats().rejected()));
+  // A rejected command is never silent: say which and why (the last one).
+  if (const auto r = commands.last_rejection())
+    std::fprintf(stderr, "virtual-slave: last rejected MASTER_COMMAND: %s\n",
+                 bridge::describe(*r, commands.channel()).c_str());
   return 0;
 }
 
