@@ -451,15 +451,15 @@ int run(const Options& o, const sigset_t& stop_signals) {
     const char* verdict = "";
     exit_code = session_exit_code(loop, &verdict);
     std::string verdict_text = verdict;
-    if (loop.state() == haptics::LoopState::kFault)
+    if (exit_code == kExitFault && loop.state() == haptics::LoopState::kFault)
       verdict_text += std::string(": ") + std::string(to_string(loop.fault()));
     print_summary(loop, link, slave_channel, seconds, exit_code, verdict_text.c_str());
     if (trace) {
       // The loop is over: nothing needs locked memory any more, and the
       // trace is mapped back from disk (page cache, not locked).
       if (cfg.realtime.lock_memory) munlockall();
-      const std::uint64_t spooled = trace->bytes_written();
       const haptics::Trace recorded = trace->finish();
+      const std::uint64_t spooled = trace->bytes_written();
       if (recorded.dropped() > 0)
         std::fprintf(stderr,
                      "haptic-server: warning: trace: %llu rows not recorded (past "
