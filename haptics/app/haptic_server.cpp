@@ -274,6 +274,14 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
                "          seq gaps %llu (%llu messages missing: the slave's seq jumped, i.e. "
                "messages lost on the way or rejected; 0 is normal on one host)\n",
                static_cast<ull>(st.seq_gaps), static_cast<ull>(st.seq_missing));
+  if (st.restarts > 0 || st.resyncs > 0)
+    std::fprintf(
+        stderr,
+        "          restarts %llu (seq went back while utime went on: the slave restarted%s), "
+        "re-bases %llu\n",
+        static_cast<ull>(st.restarts),
+        st.restarts > 10 ? "; this many: two slaves publishing on one channel?" : "",
+        static_cast<ull>(st.resyncs));
   if (st.latency.count > 0)
     std::fprintf(stderr,
                  "          one-way latency (arrival - the slave's utime, one host clock) p50 %s, "
