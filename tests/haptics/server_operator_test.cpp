@@ -105,8 +105,10 @@ Result run(const std::vector<std::string>& argv, bool tty, std::chrono::seconds 
 /// `seconds` (or until destroyed).
 class FakeSlave {
  public:
-  FakeSlave(std::string prefix, double seconds) {
-    thread_ = std::thread([this, prefix, seconds] {
+  /// `age_us`: how old each sample is stamped (a known one-way latency);
+  /// `skip_every`: every that many messages 2 sequence numbers are skipped.
+  FakeSlave(std::string prefix, double seconds, std::int64_t age_us = 0, int skip_every = 0) {
+    thread_ = std::thread([this, prefix, seconds, age_us, skip_every] {
       lcm::LCM lcm(url());
       bridge::SlaveStateSample s;
       s.num_joints = 2;
@@ -117,20 +119,28 @@ class FakeSlave {
         s.radius_m[j] = 0.01;
       }
       const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+      std::int64_t sent = 0;
       for (std::int64_t seq = 0; running_ && std::chrono::steady_clock::now() < end; ++seq) {
-        s.utime = bridge::monotonic_utime();
+        if (skip_every > 0 && ++sent % skip_every == 0) {
+          seq += 2;
+          gaps_made_.fetch_add(1);
+        }
+        s.utime = bridge::monotonic_utime() - age_us;
         s.seq = seq;
         bridge::publish_sample(lcm, prefix + "SLAVE_STATE", s);
         std::this_thread::sleep_for(1ms);
       }
     });
   }
-  ~FakeSlave() {
+  ~FakeSlave() { stop(); }
+  void stop() {
     running_ = false;
-    thread_.join();
+    if (thread_.joinable()) thread_.join();
   }
+  int gaps_made() const { return gaps_made_.load(); }
 
  private:
+  std::atomic<int> gaps_made_{0};
   std::atomic<bool> running_{true};
   std::thread thread_;
 };
@@ -247,6 +257,39 @@ TEST_F(ServerOperator, TraceAndReportMemoryDoesNotFollowTheConfiguredMaximum) {
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().find(".haptic-server-trace"), std::string::npos)
         << "the spool file is unlinked";
+}
+
+// The summary's slave-link figures are the injected ones, end to end over
+// udpm: samples stamped 3 ms old, 2 sequence numbers skipped every 500
+// messages while the server runs.
+TEST_F(ServerOperator, SummaryReportsTheInjectedLatencyAndGaps) {
+  const std::string prefix = unique_prefix();
+  FakeSlave slave(prefix, 60.0, 3000, 500);
+  std::this_thread::sleep_for(300ms);
+  const int before = slave.gaps_made();
+  const auto r = run(server(config(prefix), 3.0), false);
+  const int during = slave.gaps_made() - before;
+  slave.stop();
+  EXPECT_EQ(r.code, 0) << r.output;
+  // The gaps the fake slave made while the server listened: 5 or 6 in 3 s
+  // (one may fall in the start-up backlog, which is discarded).
+  const auto at = r.output.find("seq gaps ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const int gaps = std::stoi(r.output.substr(at + 9));
+  EXPECT_GE(gaps, during - 2) << r.output;
+  EXPECT_LE(gaps, during) << r.output;
+  EXPECT_NE(r.output.find("seq gaps " + std::to_string(gaps) + " (" + std::to_string(2 * gaps) +
+                          " messages missing"),
+            std::string::npos)
+      << r.output;
+  // p50 of a 3 ms latency: the histogram's bucket edge, 3.0-3.4 ms (+ scheduling).
+  const auto lat = r.output.find("one-way latency");
+  ASSERT_NE(lat, std::string::npos) << r.output;
+  const auto p50 = r.output.find("p50 ", lat);
+  const double p50_ms = std::stod(r.output.substr(p50 + 4));
+  EXPECT_GE(p50_ms, 3.0) << r.output;
+  EXPECT_LE(p50_ms, 4.0) << r.output;
+  EXPECT_NE(r.output.find(" ms, p99 ", lat), std::string::npos) << "p50 in ms:\n" << r.output;
 }
 
 }  // namespace
