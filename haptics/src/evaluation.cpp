@@ -163,8 +163,7 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
     for (std::size_t i = 0; i < trace.size(); ++i) {
       const TraceRow row = trace[i];
       const auto& q = row.joints[j];
-      if (enabled_with_truth(row, j) && std::isfinite(q.indentation) &&
-          q.indentation > deepest) {
+      if (enabled_with_truth(row, j) && std::isfinite(q.indentation) && q.indentation > deepest) {
         deepest = q.indentation;
         r.discrimination.joint = static_cast<int>(j);
       }
