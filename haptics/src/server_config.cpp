@@ -88,8 +88,7 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
                 "simulated console)");
   c.device_driver = device.get_string("driver", "sim");
   const YAML::Node settings = device.node("settings");
-  c.device_settings =
-      settings.IsDefined() ? settings : YAML::Node(YAML::NodeType::Map);
+  c.device_settings = settings.IsDefined() ? settings : YAML::Node(YAML::NodeType::Map);
   device.reject_unknown();
 
   FieldReader lcm(r.node("lcm"), origin, "lcm");
