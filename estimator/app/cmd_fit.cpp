@@ -85,7 +85,8 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
     throw;
   }
 
-  for (const auto& w : run.uncertainty.warnings)
+  // One line per problem; report.json keeps every warning.
+  for (const auto& w : estimator::grouped_warnings(run.uncertainty))
     std::cerr << "tsm fit: warning: " << w << "\n";
   for (const auto& n : run.notes)
     std::cerr << "tsm fit: note: " << n << "\n";

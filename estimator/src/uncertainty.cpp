@@ -178,4 +178,101 @@ UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitDat
   return rep;
 }
 
+std::vector<std::string> grouped_warnings(const UncertaintyReport& rep,
+                                          const UncertaintyOptions& o) {
+  const std::size_t p = rep.free_names.size();
+  const auto estimate = [&](std::size_t j) -> const ParameterEstimate* {
+    for (const auto& e : rep.parameters)
+      if (e.name == rep.free_names[j]) return &e;
+    return nullptr;
+  };
+  const auto term_of = [](const std::string& name) { return name.substr(0, name.find('.')); };
+  std::vector<bool> doubtful(p, false);
+  for (std::size_t j = 0; j < p; ++j) {
+    const auto* e = estimate(j);
+    doubtful[j] = e && !e->well_identified;
+  }
+  // Union-find over the free parameters: strongly correlated pairs, and the
+  // doubtful parameters of one term.
+  std::vector<std::size_t> parent(p);
+  for (std::size_t j = 0; j < p; ++j)
+    parent[j] = j;
+  const auto find = [&](std::size_t j) {
+    while (parent[j] != j)
+      j = parent[j] = parent[parent[j]];
+    return j;
+  };
+  const auto correlated = [&](std::size_t a, std::size_t b) {
+    return a < rep.correlation.size() && b < rep.correlation[a].size() &&
+           std::fabs(rep.correlation[a][b]) > o.max_correlation;
+  };
+  for (std::size_t a = 0; a < p; ++a)
+    for (std::size_t b = a + 1; b < p; ++b)
+      if (correlated(a, b) ||
+          (doubtful[a] && doubtful[b] && term_of(rep.free_names[a]) == term_of(rep.free_names[b])))
+        parent[find(a)] = find(b);
+
+  std::vector<std::string> out;
+  for (const auto& w : rep.warnings) {
+    const bool about_a_parameter =
+        std::any_of(rep.free_names.begin(), rep.free_names.end(),
+                    [&](const std::string& n) { return w.find(n) == 0; });
+    if (!about_a_parameter) out.push_back(w);
+  }
+  for (std::size_t root = 0; root < p; ++root) {
+    std::vector<std::size_t> members;
+    bool any_problem = false;
+    for (std::size_t j = 0; j < p; ++j) {
+      if (find(j) != root) continue;
+      members.push_back(j);
+      any_problem = any_problem || doubtful[j];
+    }
+    bool any_pair = false;
+    for (std::size_t a : members)
+      for (std::size_t b : members)
+        any_pair = any_pair || (a < b && correlated(a, b));
+    if (members.empty() || (!any_problem && !any_pair)) continue;
+    std::string names, status, pairs;
+    std::string last_term;
+    for (std::size_t j : members) {
+      const std::string& n = rep.free_names[j];
+      const std::string term = term_of(n);
+      names += (names.empty() ? "" : ", ") + (term == last_term ? n.substr(term.size() + 1) : n);
+      last_term = term;
+      const auto* e = estimate(j);
+      if (!e || e->well_identified) continue;
+      std::string s;
+      if (e->at_bound) {
+        s = (e->value - e->lower <= e->upper - e->value ? "at its lower bound "
+                                                        : "at its upper bound ") +
+            num(e->value, 4);
+      } else if (!std::isfinite(e->std_error)) {
+        s = "not identifiable";
+      } else {
+        s = "standard error " +
+            num(100.0 * e->std_error / std::max(std::fabs(e->value), 1e-300), 2) +
+            " % of the value";
+      }
+      const std::string who = members.size() > 1 ? n.substr(n.find('.') + 1) + " " : "";
+      status += (status.empty() ? "" : "; ") + who + s;
+    }
+    for (std::size_t a : members)
+      for (std::size_t b : members)
+        if (a < b && correlated(a, b))
+          pairs += (pairs.empty() ? "" : ", ") +
+                   rep.free_names[a].substr(rep.free_names[a].find('.') + 1) + "~" +
+                   rep.free_names[b].substr(rep.free_names[b].find('.') + 1) +
+                   " r = " + num(rep.correlation[a][b], 3);
+    std::string line = names + ":";
+    if (!status.empty()) line += " " + status;
+    if (!pairs.empty())
+      line += std::string(status.empty() ? "" : ";") + " correlated " + pairs +
+              ": the data determine mainly a combination";
+    else
+      line += ": the data do not pin it down";
+    out.push_back(line);
+  }
+  return out;
+}
+
 }  // namespace tsmh::estimator

@@ -48,6 +48,15 @@ struct UncertaintyOptions {
   double bound_margin = 1e-3;     ///< within this fraction of the range: at a bound
 };
 
+/// The warnings as one line per problem, for a reader: parameters the data do
+/// not pin down are grouped with the parameters they are strongly correlated
+/// with and with the other doubtful parameters of the same term, e.g.
+/// "acceleration_dependence.mu2, kappa2: poorly identified (standard error
+/// 570 %, 620 % of the value), correlated r = -0.97: the data determine mainly
+/// a combination". Warnings about no parameter pass through unchanged.
+std::vector<std::string> grouped_warnings(const UncertaintyReport& report,
+                                          const UncertaintyOptions& options = {});
+
 /// Evaluates the uncertainty of `fitted` on the train samples of `data`.
 UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitData& data,
                                        const UncertaintyOptions& options = {});
