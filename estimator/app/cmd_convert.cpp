@@ -1,6 +1,6 @@
 // tsm convert LOG.lcmlog --output OUT.csv [--joint J] [--prefix P]
 // An LCM log of SLAVE_STATE (and SLAVE_TRUTH, for tau_out) to the CSV data
-// contract (design.md §4), with the '# radius_m:' comment.
+// contract (docs/data-formats.md), with the '# radius_m:' comment.
 
 #include <iostream>
 #include <memory>

@@ -1,5 +1,5 @@
 #pragma once
-// LCM logs as DATA for `tsm` (design.md §4): one joint of the SLAVE_STATE
+// LCM logs as DATA for `tsm` (docs/data-formats.md): one joint of the SLAVE_STATE
 // stream (with SLAVE_TRUTH's tau_out matched by seq), read by the bridge
 // module and turned into the same Recording a CSV gives.
 

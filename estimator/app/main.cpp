@@ -1,4 +1,4 @@
-// tsm: the estimator's command line (design.md §4): simulate, fit, gap, convert.
+// tsm: the estimator's command line (docs/data-formats.md, docs/identification.md): simulate, fit, gap, convert.
 
 #include <iostream>
 

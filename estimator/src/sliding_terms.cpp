@@ -6,7 +6,7 @@ namespace tsmh::estimator {
 namespace {
 
 // Bounds are what identification searches in; they are wide around the
-// paper's values (design.md §3) and keep every term physically signed.
+// paper's values (Do & Phee, docs/friction-model.md) and keep every term physically signed.
 constexpr ParamSpec kCoulomb[] = {{"rho1", 1.038, 0.01, 20.0, "level"}};
 constexpr ParamSpec kAsymmetry[] = {{"rho2", 0.8904, 0.01, 20.0, "level"}};
 constexpr ParamSpec kStribeck[] = {{"mu1", 1.0978, 0.0, 20.0, "level"},

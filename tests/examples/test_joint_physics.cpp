@@ -93,7 +93,7 @@ TEST(JointPhysics, DeadZoneAtReversalGrowsWithFrictionAndCompliance) {
 }
 
 TEST(JointPhysics, HysteresisLoopHasThePaperScaleAndAsymmetry) {
-  // design.md §3: a 0.8 rad 0.5 Hz sine at the input gives a total friction
+  // The paper's Fig. 2(b): a 0.8 rad 0.5 Hz sine at the input gives a total friction
   // loop of about +10 N / -8.5 N. Joint1's sheaths differ (wrap 3.4 vs 1.2 rad).
   vts::JointPlant plant(joint1());
   double f_max = -1e9, f_min = 1e9;

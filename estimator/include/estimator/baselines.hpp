@@ -1,6 +1,6 @@
 #pragma once
 // Baseline friction models behind the same interface, for comparison with the
-// paper's model (design.md §3, issue 2): Dahl, LuGre, and Kaneko's
+// paper's model (docs/friction-model.md): Dahl, LuGre, and Kaneko's
 // Coulomb/capstan model of a tendon-sheath pair.
 
 #include "estimator/friction_model.hpp"

@@ -50,7 +50,7 @@ struct SplitConfig {
   double warmup_s = 0.5;  ///< initial time scored by neither set
 };
 
-/// Minimum data identification accepts (design.md §4: "too short", "no motion").
+/// Minimum data identification accepts (docs/identification.md: "too short", "no motion").
 struct DataRequirements {
   double min_duration_s = 4.0;
   std::size_t min_samples = 400;

@@ -1,7 +1,7 @@
 #pragma once
 // `tsm fit` as a library call: prepare the data, identify, score on
 // validation (overall and per regime), estimate the parameters' uncertainty,
-// judge the fit, and build report.json (design.md §4). The CLI adds only
+// judge the fit, and build report.json (docs/data-formats.md). The CLI adds only
 // file handling, so tests exercise exactly what users run.
 
 #include <memory>

@@ -202,7 +202,7 @@ ResidualDiagnostics diagnose_residual(const FitData& data, const TsmFrictionMode
                                       std::span<const double> simulated,
                                       const std::vector<TermKind>& candidates);
 
-/// report.json of design.md §4 (base, gap_base, effects[{name, where,
+/// report.json of docs/data-formats.md (base, gap_base, effects[{name, where,
 /// gap_after}], gap_final) with the evidence around it.
 nlohmann::json gap_report_json(const GapResult& result, const GapOptions& options,
                                const std::vector<std::string>& plots, const std::string& plot_error,

@@ -1,5 +1,5 @@
 #pragma once
-// Recorded data per the CSV contract of design.md §4 / docs/data-formats.md:
+// Recorded data per the CSV contract of docs/data-formats.md:
 // one joint's proximal measurements, optionally the measured distal torque.
 
 #include <cmath>

@@ -34,7 +34,7 @@ struct TsmModelSpec {
 };
 
 /// The built-in `paper` preset: the parameters identified in the paper
-/// (design.md §3), rho1 1.038 ... sigma 1.
+/// (docs/friction-model.md), rho1 1.038 ... sigma 1.
 TsmModelSpec paper_spec();
 /// A Dahl-like base (`dahl` preset): n = 1, one Coulomb level, no offset.
 /// With these, eq. (4) reduces exactly to Dahl's model with sigma0 = gamma

@@ -17,7 +17,7 @@ void add_options(CLI::App& app, CliOptions& o) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--scenario", o.scenario,
                  "offline scenario: sine, multisine, palpate, chirp, excite");
-  app.add_option("--output", o.output, "offline: CSV file to write (data contract, design.md §4)");
+  app.add_option("--output", o.output, "offline: CSV file to write (data contract: docs/data-formats.md)");
   app.add_option(
          "--joint", o.joint,
          "joint index written to --output, and whose sheaths --wrap/--pretension/--reroute-wrap "

@@ -2,7 +2,7 @@
 // What a run of the server achieved, from its trace: loop timing, how close
 // the fed-back distal torque was to the truth (estimated vs naive), and the
 // stiffness a surgeon would perceive for soft tissue and for the nodule
-// beside the true values. Written as the demo report (design.md §4).
+// beside the true values. Written as the demo report (docs/data-formats.md).
 
 #include <string>
 #include <vector>

@@ -21,7 +21,7 @@ struct SlaveParams {
   int substeps = 10;                ///< physics steps per control period
 };
 
-/// The paper-scale slave (design.md §3): R = 0.01 m, 1.5 m sheaths, a total
+/// The paper-scale slave (docs/virtual-slave.md): R = 0.01 m, 1.5 m sheaths, a total
 /// friction loop of about +10 N / -9 N on Joint1 for a 0.8 rad 0.5 Hz sine,
 /// backlash of about 0.2 rad, sheaths of unequal wrap and pretension.
 SlaveParams paper_slave();
