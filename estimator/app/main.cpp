@@ -5,10 +5,12 @@
 #include "commands.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/table.hpp"
+#include "tsmh/version.hpp"
 
 int main(int argc, char** argv) {
   using namespace tsmh::tsm_cli;
   CLI::App app{"tsm: tendon-sheath friction models: simulate, identify, find model gaps"};
+  app.set_version_flag("--version", tsmh::version_line("tsm"));
   app.require_subcommand(1);
   Context ctx;
   ctx.sources.add(lcm_log_source(ctx.lcm_log));

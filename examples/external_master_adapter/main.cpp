@@ -28,6 +28,7 @@
 #include <string>
 #include <tsmh/master_force_t.hpp>
 #include <tsmh/master_state_t.hpp>
+#include <tsmh/version.hpp>
 
 namespace {
 
@@ -119,6 +120,7 @@ sigset_t block_stop_signals() {
 
 int main(int argc, char** argv) {
   CLI::App app{"external-master-adapter: a vendor master driver talking to haptic-server over LCM"};
+  app.set_version_flag("--version", tsmh::version_line("external-master-adapter"));
   std::string url;
   std::string prefix;
   double rate_hz = 1000.0;

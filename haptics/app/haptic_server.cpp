@@ -32,6 +32,7 @@
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
+#include "tsmh/version.hpp"
 
 namespace {
 
@@ -502,6 +503,7 @@ int main(int argc, char** argv) {
   // they happen).
   const sigset_t stop_signals = tsmh::bridge::block_terminating_signals();
   CLI::App app{"haptic-server: 1 kHz haptic feedback for tendon-sheath driven robots"};
+  app.set_version_flag("--version", tsmh::version_line("haptic-server"));
   Options o;
   app.add_option("--config", o.config, "Server configuration (YAML)");
   app.add_option("--lcm-url", o.lcm_url,

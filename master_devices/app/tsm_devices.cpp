@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <thread>
@@ -18,17 +19,20 @@
 #include "master_devices/clock.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/profile.hpp"
+#include "master_devices/profile_dirs.hpp"
 #include "master_devices/registry.hpp"
+#include "tsmh/version.hpp"
 
 namespace md = tsmh::master_devices;
 
 int main(int argc, char** argv) {
   CLI::App app{"tsm-devices: list and probe tsm-haptics master devices"};
+  app.set_version_flag("--version", tsmh::version_line("tsm-devices"));
   bool list = false;
   bool drivers = false;
   std::string monitor;
   std::string config;
-  std::string profile_dir = TSMH_PROFILE_DIR;
+  std::string profile_dir = md::default_profiles_dir().string();
   double seconds = 3.0;
   app.add_flag("--list", list, "list connected devices that match known profiles");
   app.add_flag("--drivers", drivers, "list registered drivers");
@@ -36,14 +40,20 @@ int main(int argc, char** argv) {
   app.add_option("--config", config, "YAML file with the driver's settings map (for --monitor)");
   app.add_option("--seconds", seconds, "how long to monitor")->check(CLI::PositiveNumber);
   CLI::Option* profiles_opt =
-      app.add_option("--profiles", profile_dir, "directory of device profiles (*.yaml)");
+      app.add_option("--profiles", profile_dir,
+                     "directory of device profiles (*.yaml); default: $TSMH_PROFILES_DIR, else "
+                     "share/tsm-haptics/profiles next to this program's bin/")
+          ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   try {
     md::BuiltinDriverOptions options;
-    // A folder named on the command line must exist (an error, never a silent
-    // fall-back to the built-in profile); the installed default may be absent.
-    if (profiles_opt->count() > 0 || std::filesystem::is_directory(profile_dir))
+    // A folder named on the command line or in $TSMH_PROFILES_DIR must exist
+    // (an error, never a silent fall-back to the built-in profile); the
+    // installed default may be absent.
+    const char* env_dir = std::getenv(md::kProfilesDirEnv);
+    const bool named = profiles_opt->count() > 0 || (env_dir != nullptr && *env_dir != '\0');
+    if (named || std::filesystem::is_directory(profile_dir))
       options.profiles = md::load_profiles(profile_dir);
     md::DriverRegistry registry;
     md::register_builtin_drivers(registry, options);

@@ -8,6 +8,7 @@
 #include "cli_options.hpp"
 #include "offline_mode.hpp"
 #include "realtime_mode.hpp"
+#include "tsmh/version.hpp"
 #include "virtual_tissue_slave/scenario.hpp"
 
 int main(int argc, char** argv) {
@@ -17,6 +18,7 @@ int main(int argc, char** argv) {
       "virtual-slave: a two-joint tendon-sheath slave with tissue at the tool (physics, "
       "sensors, controller). Real time at 1 kHz over LCM (MASTER_COMMAND in; SLAVE_STATE, "
       "SLAVE_TRUTH out), or --offline to write a recording. See docs/virtual-slave.md."};
+  cli.set_version_flag("--version", tsmh::version_line("virtual-slave"));
   app::CliOptions options;
   app::add_options(cli, options);
   CLI11_PARSE(cli, argc, argv);
