@@ -18,3 +18,35 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${TSMH_INSTALL_DOCDIR}
   COMPONENT runtime)
 install(FILES ${PROJECT_SOURCE_DIR}/examples/demo/server.yaml
   DESTINATION ${TSMH_INSTALL_DOCDIR}/examples/demo COMPONENT runtime)
+
+# Debian packages (scripts/package; docs/install.md): `tsm-haptics` (programs,
+# profiles, udev rules, docs) and `tsm-haptics-dev` (static libraries,
+# headers, the CMake package), from the install components runtime and dev.
+set(CPACK_PACKAGE_NAME tsm-haptics)
+set(CPACK_PACKAGE_VENDOR "tsm-haptics")
+set(CPACK_PACKAGE_CONTACT "tsm-haptics maintainers <tsm-haptics@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "${PROJECT_DESCRIPTION}")
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_GENERATOR DEB)
+set(CPACK_STRIP_FILES ON)
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_COMPONENTS_ALL runtime dev)
+set(CPACK_DEB_COMPONENT_INSTALL ON)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_RELEASE 1)
+set(CPACK_DEBIAN_PACKAGE_SECTION science)
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_NAME tsm-haptics)
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_SECTION science)
+# The programs' shared libraries (liblcm, libyaml-cpp, hidapi, libusb, nlopt,
+# libstdc++ ...) are found by dpkg-shlibdeps; gnuplot draws `tsm` plots and
+# lcm tools read the logs.
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_RECOMMENDS "gnuplot-nox")
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_SUGGESTS "liblcm-bin")
+set(CPACK_DEBIAN_DEV_PACKAGE_NAME tsm-haptics-dev)
+set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
+# The runtime package (tsmhConfig.cmake points at its profiles) and what
+# tsmhConfig.cmake's find_dependency/pkg-config calls need.
+set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
+  "tsm-haptics (= ${PROJECT_VERSION}-${CPACK_DEBIAN_PACKAGE_RELEASE}), cmake, pkg-config, liblcm-dev, libyaml-cpp-dev, nlohmann-json3-dev, libnlopt-cxx-dev, libhidapi-dev, libusb-1.0-0-dev")
+include(CPack)

@@ -3,7 +3,7 @@
 # shellcheck shell=bash
 
 TSMH_PACKAGES=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config dpkg-dev
   libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libnlopt-cxx-dev
   liblcm-dev liblcm-bin libglib2.0-dev iproute2
   libhidapi-dev libusb-1.0-0-dev

@@ -1,0 +1,76 @@
+# ctest install.package: the Debian packages CPack makes from this build
+# (scripts/package does the same from a /usr-configured build), extracted with
+# dpkg-deb -x into a scratch folder; the extracted programs' --version, and
+# their profile lookup relative to the extracted tree; the downstream project
+# (tests/install/downstream) built against the extracted -dev package.
+#   cmake -DCPACK=... -DBUILD_DIR=... -DWORK_DIR=... -DVERSION=... -DARCH=...
+#         -DDOWNSTREAM_DIR=... -DC_COMPILER=... -DCXX_COMPILER=... [-DLAUNCHER=...] -P run_package.cmake
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
+  endif()
+  set(out "${out}" PARENT_SCOPE)
+endfunction()
+
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+run(${CPACK} --config ${BUILD_DIR}/CPackConfig.cmake -G DEB -B ${WORK_DIR})
+set(runtime ${WORK_DIR}/tsm-haptics_${VERSION}-1_${ARCH}.deb)
+set(dev ${WORK_DIR}/tsm-haptics-dev_${VERSION}-1_${ARCH}.deb)
+foreach(deb ${runtime} ${dev})
+  if(NOT EXISTS ${deb})
+    file(GLOB made ${WORK_DIR}/*.deb)
+    message(FATAL_ERROR "not made: ${deb} (made: ${made})")
+  endif()
+endforeach()
+
+# Declared dependencies: found by dpkg-shlibdeps for the programs, listed for -dev.
+run(dpkg-deb -f ${runtime} Depends)
+foreach(dep liblcm1 libyaml-cpp libhidapi-hidraw0 libusb-1.0-0 libnlopt)
+  if(NOT out MATCHES "${dep}")
+    message(FATAL_ERROR "tsm-haptics does not depend on ${dep}: ${out}")
+  endif()
+endforeach()
+run(dpkg-deb -f ${dev} Depends)
+foreach(dep "tsm-haptics \\(= ${VERSION}-1\\)" liblcm-dev libyaml-cpp-dev nlohmann-json3-dev)
+  if(NOT out MATCHES "${dep}")
+    message(FATAL_ERROR "tsm-haptics-dev does not depend on ${dep}: ${out}")
+  endif()
+endforeach()
+
+set(root ${WORK_DIR}/root)
+run(dpkg-deb -x ${runtime} ${root})
+run(dpkg-deb -x ${dev} ${root})
+foreach(f usr/lib/udev/rules.d/70-tsm-haptics.rules usr/share/tsm-haptics/profiles/tsm-console-2dof.yaml
+          usr/share/doc/tsm-haptics/README.md usr/include/tsmh/estimator/tsm_model.hpp)
+  if(NOT EXISTS ${root}/${f})
+    message(FATAL_ERROR "not in the packages: ${f}")
+  endif()
+endforeach()
+file(GLOB_RECURSE config ${root}/usr/lib/*/tsmhConfig.cmake)
+if(NOT config)
+  message(FATAL_ERROR "tsmhConfig.cmake not in tsm-haptics-dev")
+endif()
+foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter)
+  run(${root}/usr/bin/${program} --version)
+  if(NOT out MATCHES "^${program} \\(tsm-haptics\\) ${VERSION}\n$")
+    message(FATAL_ERROR "extracted ${program} --version: ${out}")
+  endif()
+endforeach()
+run(${CMAKE_COMMAND} -E env --unset=TSMH_PROFILES_DIR ${root}/usr/bin/tsm-devices --help)
+string(FIND "${out}" "${root}/usr/share/tsm-haptics/profiles" at)
+if(at EQUAL -1)
+  message(FATAL_ERROR "extracted tsm-devices does not default to the extracted profiles:\n${out}")
+endif()
+# The -dev package is usable from where it was extracted (the config is
+# relocatable): the downstream project builds and runs against it.
+set(args -S ${DOWNSTREAM_DIR} -B ${WORK_DIR}/downstream -DCMAKE_PREFIX_PATH=${root}/usr
+    -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_CXX_COMPILER=${CXX_COMPILER} -DCMAKE_BUILD_TYPE=Release)
+if(LAUNCHER)
+  list(APPEND args -DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER} -DCMAKE_C_COMPILER_LAUNCHER=${LAUNCHER})
+endif()
+run(${CMAKE_COMMAND} ${args})
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/downstream -j2)
+run(${WORK_DIR}/downstream/downstream)
+message(STATUS "packages ok: ${runtime} ${dev}; downstream: ${out}")
