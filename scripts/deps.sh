@@ -8,7 +8,7 @@ TSMH_PACKAGES=(
   liblcm-dev liblcm-bin libglib2.0-dev iproute2
   libhidapi-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  gnuplot-nox python3
+  gnuplot-nox python3 help2man
 )
 
 tsmh_missing_packages() {

@@ -2,7 +2,7 @@
 # check the installed layout, then configure, build and run
 # tests/install/downstream against it with the same compilers.
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DDOWNSTREAM_DIR=... -DC_COMPILER=...
-#         -DCXX_COMPILER=... [-DLAUNCHER=...] -DVERSION=... -P run_downstream.cmake
+#         -DCXX_COMPILER=... [-DLAUNCHER=...] -DVERSION=... [-DMAN_PAGES=1] -P run_downstream.cmake
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
@@ -24,6 +24,13 @@ foreach(f bin/tsm bin/haptic-server bin/tsm-devices bin/virtual-slave bin/extern
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
+if(MAN_PAGES)
+  foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter)
+    if(NOT EXISTS ${prefix}/share/man/man1/${program}.1)
+      message(FATAL_ERROR "man page not installed: ${program}.1")
+    endif()
+  endforeach()
+endif()
 file(GLOB_RECURSE config ${prefix}/*/tsmhConfig.cmake)
 file(GLOB_RECURSE config_version ${prefix}/*/tsmhConfigVersion.cmake)
 if(NOT config OR NOT config_version)

@@ -4,7 +4,8 @@
 # their profile lookup relative to the extracted tree; the downstream project
 # (tests/install/downstream) built against the extracted -dev package.
 #   cmake -DCPACK=... -DBUILD_DIR=... -DWORK_DIR=... -DVERSION=... -DARCH=...
-#         -DDOWNSTREAM_DIR=... -DC_COMPILER=... -DCXX_COMPILER=... [-DLAUNCHER=...] -P run_package.cmake
+#         -DDOWNSTREAM_DIR=... -DC_COMPILER=... -DCXX_COMPILER=... [-DLAUNCHER=...]
+#         [-DMAN_PAGES=1] -P run_package.cmake
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
@@ -48,6 +49,13 @@ foreach(f usr/lib/udev/rules.d/70-tsm-haptics.rules usr/share/tsm-haptics/profil
     message(FATAL_ERROR "not in the packages: ${f}")
   endif()
 endforeach()
+if(MAN_PAGES)
+  foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter)
+    if(NOT EXISTS ${root}/usr/share/man/man1/${program}.1)
+      message(FATAL_ERROR "man page not installed: ${program}.1")
+    endif()
+  endforeach()
+endif()
 file(GLOB_RECURSE config ${root}/usr/lib/*/tsmhConfig.cmake)
 if(NOT config)
   message(FATAL_ERROR "tsmhConfig.cmake not in tsm-haptics-dev")
