@@ -39,9 +39,9 @@ set(CPACK_DEBIAN_RUNTIME_PACKAGE_NAME tsm-haptics)
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_SECTION science)
 # The programs' shared libraries (liblcm, libyaml-cpp, hidapi, libusb, nlopt,
 # libstdc++ ...) are found by dpkg-shlibdeps; gnuplot draws `tsm` plots and
-# lcm tools read the logs.
+# lcm tools read the logs; tsm-lcm-spy needs a JRE, lcm.jar and jchart2d.
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_RUNTIME_PACKAGE_RECOMMENDS "gnuplot-nox")
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_RECOMMENDS "gnuplot-nox, default-jre, liblcm-java, libjchart2d-java")
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_SUGGESTS "liblcm-bin")
 set(CPACK_DEBIAN_DEV_PACKAGE_NAME tsm-haptics-dev)
 set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)

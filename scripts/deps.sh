@@ -9,6 +9,7 @@ TSMH_PACKAGES=(
   libhidapi-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox python3 help2man
+  default-jdk-headless liblcm-java libjchart2d-java
 )
 
 tsmh_missing_packages() {

@@ -5,7 +5,7 @@
 # (tests/install/downstream) built against the extracted -dev package.
 #   cmake -DCPACK=... -DBUILD_DIR=... -DWORK_DIR=... -DVERSION=... -DARCH=...
 #         -DDOWNSTREAM_DIR=... -DC_COMPILER=... -DCXX_COMPILER=... [-DLAUNCHER=...]
-#         [-DMAN_PAGES=1] -P run_package.cmake
+#         [-DMAN_PAGES=1] [-DLCM_JAVA=1] -P run_package.cmake
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
@@ -53,6 +53,13 @@ if(MAN_PAGES)
   foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter)
     if(NOT EXISTS ${root}/usr/share/man/man1/${program}.1)
       message(FATAL_ERROR "man page not installed: ${program}.1")
+    endif()
+  endforeach()
+endif()
+if(LCM_JAVA)
+  foreach(f usr/share/java/tsmh-lcmtypes.jar usr/bin/tsm-lcm-spy)
+    if(NOT EXISTS ${root}/${f})
+      message(FATAL_ERROR "not in the packages: ${f}")
     endif()
   endforeach()
 endif()
