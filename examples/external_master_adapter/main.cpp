@@ -10,7 +10,7 @@
 // FakeVendorMaster stands in for the vendor SDK; replace its four calls
 // (read angles, velocities, buttons; write torques) with the real ones.
 //
-//   external-master-adapter [--lcm-url URL] [--channel-prefix LEFT_] [--rate-hz 1000]
+//   external-master-adapter [--lcm-url URL] [--prefix LEFT_] [--rate-hz 1000]
 //                           [--watchdog-ms 50] [--duration S]
 // Server side: device: {driver: lcm, settings: {channel_prefix: LEFT_}}
 
@@ -127,7 +127,9 @@ int main(int argc, char** argv) {
   double watchdog_ms = 50.0;
   double duration_s = 0.0;
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
-  app.add_option("--channel-prefix", prefix, "per-arm prefix, e.g. LEFT_ -> LEFT_MASTER_STATE");
+  app.add_option("--prefix,--channel-prefix", prefix,
+                 "per-arm channel prefix, e.g. LEFT_ -> LEFT_MASTER_STATE (--channel-prefix: old "
+                 "name)");
   app.add_option("--rate-hz", rate_hz, "device read / MASTER_STATE rate")
       ->check(CLI::Range(1.0, 20000.0));
   app.add_option("--watchdog-ms", watchdog_ms, "zero torque when MASTER_FORCE is older")

@@ -2,6 +2,7 @@
 //   tsm-devices --list                 connected devices matching known profiles, with paths
 //   tsm-devices --drivers              registered drivers
 //   tsm-devices --monitor DRIVER [--config FILE] [--seconds S]
+//               [--lcm-url URL] [--prefix P]   (driver lcm)
 //                                      open a device, print its readings (no torque)
 // haptic-server --list-devices prints the same listing (same library call).
 
@@ -13,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <stdexcept>
 #include <thread>
 
 #include "master_devices/builtin_drivers.hpp"
@@ -39,6 +41,13 @@ int main(int argc, char** argv) {
   app.add_option("--monitor", monitor, "open a device with this driver and print readings");
   app.add_option("--config", config, "YAML file with the driver's settings map (for --monitor)");
   app.add_option("--seconds", seconds, "how long to monitor")->check(CLI::PositiveNumber);
+  std::string lcm_url;
+  std::string prefix;
+  app.add_option("--lcm-url", lcm_url,
+                 "--monitor lcm: LCM URL (default: the config's url, else $LCM_DEFAULT_URL)");
+  app.add_option(
+      "--prefix", prefix,
+      "--monitor lcm: channel prefix, e.g. LEFT_ (default: the config's channel_prefix)");
   CLI::Option* profiles_opt =
       app.add_option("--profiles", profile_dir,
                      "directory of device profiles (*.yaml); default: $TSMH_PROFILES_DIR, else "
@@ -73,6 +82,12 @@ int main(int argc, char** argv) {
         ctx.source = config;
         ctx.path = "";
         ctx.base_dir = std::filesystem::path(config).parent_path();
+      }
+      if (monitor == "lcm") {
+        if (!lcm_url.empty()) settings["url"] = lcm_url;
+        if (!prefix.empty()) settings["channel_prefix"] = prefix;
+      } else if (!lcm_url.empty() || !prefix.empty()) {
+        throw std::runtime_error("--lcm-url and --prefix apply to --monitor lcm only");
       }
       auto device = registry.create(monitor, settings, ctx);
       device->open();
