@@ -31,6 +31,8 @@ if(TSMH_HELP2MAN)
   tsmh_man_page(virtual_slave_app virtual-slave "virtual tendon-sheath slave with tissue, over LCM or offline")
   tsmh_man_page(external-master-adapter external-master-adapter
     "vendor master driver talking to haptic-server over LCM")
+  tsmh_man_page(slave-node-skeleton slave-node-skeleton
+    "minimal slave node of a real robot for haptic-server (robot I/O stubbed)")
 else()
   message(STATUS "help2man not found: no man pages (scripts/deps.sh installs it)")
 endif()

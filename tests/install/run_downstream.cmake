@@ -25,7 +25,8 @@ foreach(f bin/tsm bin/haptic-server bin/tsm-devices bin/virtual-slave bin/extern
   endif()
 endforeach()
 if(MAN_PAGES)
-  foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter)
+  foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter
+          slave-node-skeleton)
     if(NOT EXISTS ${prefix}/share/man/man1/${program}.1)
       message(FATAL_ERROR "man page not installed: ${program}.1")
     endif()

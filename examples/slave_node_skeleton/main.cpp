@@ -1,0 +1,235 @@
+// slave-node-skeleton: the minimal slave node of a real tendon-sheath robot
+// for haptic-server (docs/real-robot.md). It is what a robot integrator
+// writes; it depends on nothing of ours but the generated LCM types.
+//
+//   every period (1 kHz):  drain MASTER_COMMAND (newest wins)
+//                          fresh and enabled -> position reference to the robot
+//                          otherwise         -> hold (motors safe)
+//                          read the sensors  -> publish SLAVE_STATE
+//
+// All robot I/O goes through RobotIo. StubRobot stands in for it so the
+// skeleton runs without hardware: replace it with your driver where marked
+// "REAL DRIVER". Nothing else needs to change for a two-joint arm.
+//
+//   slave-node-skeleton [--lcm-url URL] [--prefix ARM1_] [--rate-hz 1000]
+//                       [--command-timeout-ms 100] [--duration S]
+
+#include <pthread.h>
+#include <signal.h>
+#include <time.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <tsmh/master_command_t.hpp>
+#include <tsmh/slave_state_t.hpp>
+#include <tsmh/version.hpp>
+#include <vector>
+
+namespace {
+
+/// What the slave node needs from the robot, per joint. Units and signs are
+/// the contract of SLAVE_STATE (docs/real-robot.md, docs/lcm-messages.md).
+struct JointSample {
+  double x_in = 0.0;   ///< motor-side input pulley angle, rad (motor encoder / gear ratio)
+  double x_out = NAN;  ///< joint angle, rad; NaN when the joint has no encoder
+  double T1 = 0.0;     ///< proximal tension of tendon 1, N: pulling it turns the joint +
+  double T3 = 0.0;     ///< proximal tension of tendon 3, N: pulling it turns the joint -
+};
+
+class RobotIo {
+ public:
+  virtual ~RobotIo() = default;
+  virtual int joints() const = 0;
+  /// Input pulley radius R of joint j, m (tau_in = R (T1 - T3)).
+  virtual double radius_m(int j) const = 0;
+  /// Reads every joint's sensors now. false: a sensor fault (status bit 2).
+  virtual bool read(std::vector<JointSample>& out) = 0;
+  /// Position reference for joint j, rad, from the master (already scaled).
+  virtual void command_position(int j, double rad) = 0;
+  /// No fresh, enabled command: keep the current position, motors safe.
+  virtual void hold() = 0;
+};
+
+/// REAL DRIVER: replace this class with one that talks to your motor
+/// controllers and load-cell amplifiers (EtherCAT, CAN, serial ...). This
+/// stand-in moves each motor towards its reference with a first-order lag
+/// and makes tensions from a stiff spring, so the server sees plausible data.
+class StubRobot final : public RobotIo {
+ public:
+  explicit StubRobot(double dt) : dt_(dt) {}
+  int joints() const override { return 2; }
+  double radius_m(int) const override { return 0.01; }
+  bool read(std::vector<JointSample>& out) override {
+    out.resize(2);
+    for (int j = 0; j < 2; ++j) {
+      // REAL DRIVER: motor encoder counts -> rad at the input pulley.
+      x_in_[j] += (ref_[j] - x_in_[j]) * dt_ / 0.02;
+      // REAL DRIVER: joint encoder (or NaN), load cells (N, tared).
+      x_out_[j] += (x_in_[j] - x_out_[j]) * dt_ / 0.01;
+      const double stretch = x_in_[j] - x_out_[j];
+      auto& s = out[static_cast<std::size_t>(j)];
+      s.x_in = x_in_[j];
+      s.x_out = x_out_[j];
+      s.T1 = 20.0 + 500.0 * stretch;  // 20 N pretension per tendon
+      s.T3 = 20.0 - 500.0 * stretch;
+    }
+    return true;
+  }
+  void command_position(int j, double rad) override { ref_[j] = rad; }
+  void hold() override {
+    for (int j = 0; j < 2; ++j)
+      ref_[j] = x_in_[j];
+  }
+
+ private:
+  double dt_;
+  double x_in_[2] = {0.0, 0.0};
+  double x_out_[2] = {0.0, 0.0};
+  double ref_[2] = {0.0, 0.0};
+};
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+/// The newest MASTER_COMMAND and when it arrived (this node's clock: the
+/// server's utime is on another host's clock when the nodes are apart).
+struct CommandInbox {
+  int joints = 0;
+  tsmh::master_command_t newest;
+  std::int64_t received_ns = 0;
+  std::int64_t last_seq = -1;
+  std::int64_t rejected = 0;
+  void on_command(const lcm::ReceiveBuffer*, const std::string&,
+                  const tsmh::master_command_t* msg) {
+    bool ok = msg->num_joints == joints && msg->seq > last_seq;
+    for (int j = 0; ok && j < msg->num_joints; ++j)
+      ok = std::isfinite(msg->position_ref[static_cast<std::size_t>(j)]);
+    if (!ok) {
+      ++rejected;  // wrong joint count, NaN/Inf, duplicate or old: never moves the robot
+      return;
+    }
+    newest = *msg;
+    last_seq = msg->seq;
+    received_ns = monotonic_ns();
+  }
+};
+
+sigset_t block_stop_signals() {
+  signal(SIGPIPE, SIG_IGN);
+  sigset_t set;
+  sigemptyset(&set);
+  for (int s : {SIGHUP, SIGINT, SIGQUIT, SIGTERM})
+    sigaddset(&set, s);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  return set;
+}
+
+bool stop_requested(const sigset_t& set) {
+  sigset_t pending;
+  sigpending(&pending);
+  for (int s : {SIGHUP, SIGINT, SIGQUIT, SIGTERM})
+    if (sigismember(&set, s) == 1 && sigismember(&pending, s) == 1) return true;
+  return false;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "slave-node-skeleton: the minimal slave node of a real robot for haptic-server "
+      "(robot I/O stubbed; docs/real-robot.md)"};
+  app.set_version_flag("--version", tsmh::version_line("slave-node-skeleton"));
+  std::string url;
+  std::string prefix;
+  double rate_hz = 1000.0;
+  double command_timeout_ms = 100.0;
+  double duration_s = 0.0;
+  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  app.add_option("--prefix", prefix, "per-arm channel prefix, e.g. ARM1_ -> ARM1_SLAVE_STATE");
+  app.add_option("--rate-hz", rate_hz, "control and SLAVE_STATE rate")
+      ->check(CLI::Range(100.0, 4000.0));
+  app.add_option("--command-timeout-ms", command_timeout_ms,
+                 "hold when the newest MASTER_COMMAND is older")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
+  CLI11_PARSE(app, argc, argv);
+  const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
+
+  lcm::LCM lcm(url);
+  if (!lcm.good()) {
+    std::fprintf(stderr,
+                 "slave-node-skeleton: cannot start LCM (no multicast route? ip link set lo "
+                 "multicast on; ip route add 224.0.0.0/4 dev lo)\n");
+    return 1;
+  }
+  const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
+  StubRobot robot(static_cast<double>(period_ns) * 1e-9);  // REAL DRIVER: your RobotIo
+  const int n = robot.joints();
+  CommandInbox inbox;
+  inbox.joints = n;
+  lcm.subscribe(prefix + "MASTER_COMMAND", &CommandInbox::on_command, &inbox);
+
+  tsmh::slave_state_t state;
+  state.num_joints = n;
+  const auto un = static_cast<std::size_t>(n);
+  state.x_in.resize(un);
+  state.x_out.resize(un);
+  state.T1.resize(un);
+  state.T3.resize(un);
+  state.radius_m.resize(un);
+  for (int j = 0; j < n; ++j)
+    state.radius_m[static_cast<std::size_t>(j)] = robot.radius_m(j);
+  std::vector<JointSample> samples;
+
+  const std::int64_t start = monotonic_ns();
+  std::int64_t next = start;
+  std::int64_t seq = 0;
+  std::int64_t holds = 0;
+  bool was_driving = false;
+  while (!stop_requested(stop_signals) &&
+         (duration_s <= 0.0 || monotonic_ns() - start < duration_s * 1e9)) {
+    next += period_ns;  // absolute deadlines: no drift
+    timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+
+    while (lcm.handleTimeout(0) > 0) {
+    }  // drain MASTER_COMMAND without blocking
+    const std::int64_t now = monotonic_ns();
+    const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= command_timeout_ms * 1e6;
+    const bool driving = fresh && inbox.newest.enable;
+    if (driving) {
+      // While the operator clutches, the server freezes the reference: just follow it.
+      for (int j = 0; j < n; ++j)
+        robot.command_position(j, inbox.newest.position_ref[static_cast<std::size_t>(j)]);
+    } else {
+      if (was_driving) ++holds;
+      robot.hold();
+    }
+    was_driving = driving;
+
+    const bool sensors_ok = robot.read(samples);
+    // utime: this node's CLOCK_MONOTONIC at the moment the sensors were read.
+    state.utime = monotonic_ns() / 1000;
+    state.seq = seq++;
+    for (std::size_t j = 0; j < un; ++j) {
+      state.x_in[j] = samples[j].x_in;
+      state.x_out[j] = samples[j].x_out;
+      state.T1[j] = samples[j].T1;
+      state.T3[j] = samples[j].T3;
+    }
+    state.status = (driving ? 1 : 0) | (driving ? 0 : 2) | (sensors_ok ? 0 : 4);
+    lcm.publish(prefix + "SLAVE_STATE", &state);
+  }
+  robot.hold();
+  std::printf("slave-node-skeleton: sent %lld SLAVE_STATE, holds %lld, rejected commands %lld\n",
+              static_cast<long long>(seq), static_cast<long long>(holds),
+              static_cast<long long>(inbox.rejected));
+  return 0;
+}
