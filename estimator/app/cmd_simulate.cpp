@@ -1,4 +1,4 @@
-// tsm simulate --params (paper|FILE.yaml) --input IN.csv --output OUT.csv [--radius R]
+// tsm simulate --params (paper|FILE.yaml) IN.csv (or --input IN.csv) --output OUT.csv [--radius R]
 // Runs a friction model over recorded (or synthetic) motion: OUT has t,F, and
 // tau_out_est when the input has tau_in (or T1, T3) and a radius is known.
 
@@ -77,7 +77,7 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
   cmd->add_option("--params", opts->params,
                   "Model: a preset (paper, dahl, ...) or a params YAML file")
       ->required();
-  cmd->add_option("--input", opts->input,
+  cmd->add_option("input,--input", opts->input,
                   "Input CSV (t, x_in; optional tau_in or T1,T3; xd_in,xdd_in)")
       ->required();
   cmd->add_option("--output", opts->output, "Output CSV (t, F[, tau_out_est])")->required();

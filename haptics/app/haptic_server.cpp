@@ -41,6 +41,7 @@ using namespace tsmh;
 struct Options {
   std::string config;
   std::string lcm_url;
+  std::optional<std::string> prefix;
   std::optional<double> duration;
   std::optional<std::string> feedback;
   std::optional<double> rate;
@@ -333,6 +334,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     cfg.loop.rate_hz = *o.rate;
     cfg.loop.status_every = std::max(1, static_cast<int>(std::lround(*o.rate / 100.0)));
   }
+  if (o.prefix) cfg.lcm_prefix = *o.prefix;
   if (!o.trace.empty()) cfg.evaluation.trace = o.trace;
   if (!o.report.empty()) cfg.evaluation.report = o.report;
 
@@ -508,6 +510,8 @@ int main(int argc, char** argv) {
   app.add_option("--config", o.config, "Server configuration (YAML)");
   app.add_option("--lcm-url", o.lcm_url,
                  "LCM URL (default: $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0)");
+  app.add_option("--prefix", o.prefix,
+                 "LCM channel prefix of the arm, e.g. ARM1_ (overrides lcm.prefix in the config)");
   app.add_option("--duration", o.duration,
                  "Stop after this many seconds (default: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);

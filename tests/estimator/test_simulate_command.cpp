@@ -50,6 +50,14 @@ TEST(SimulateCommand, WithoutDerivativesRunsTheServersEstimatorSampleBySample) {
     ASSERT_EQ(f[i], e.friction) << "row " << i;
     ASSERT_EQ(est[i], e.tau_out_est) << "row " << i;
   }
+  // The input file may also be given as a positional argument, as fit, gap
+  // and convert take it; --input stays as an alias.
+  const std::string positional =
+      std::string(TSMH_TSM_BIN) + " simulate --params paper " + (dir / "in.csv").string() +
+      " --output " + (dir / "out2.csv").string() + " >" + (dir / "log2").string() + " 2>&1";
+  const int rc2 = std::system(positional.c_str());
+  ASSERT_TRUE(WIFEXITED(rc2) && WEXITSTATUS(rc2) == 0);
+  EXPECT_EQ(read_csv_table(dir / "out2.csv").column("F"), f);
   fs::remove_all(dir);
 }
 

@@ -203,6 +203,17 @@ TEST_F(ServerOperator, CleanSessionExitsZeroAndPrintsTheSummaryOnce) {
   EXPECT_NE(r.output.find("exit 0 (clean session)"), std::string::npos) << r.output;
 }
 
+// --prefix on the command line wins over lcm.prefix in the config (one
+// convention for every program: --lcm-url, --prefix).
+TEST_F(ServerOperator, PrefixOnTheCommandLineOverridesTheConfig) {
+  const std::string prefix = unique_prefix();
+  FakeSlave slave(prefix, 30.0);
+  std::this_thread::sleep_for(200ms);
+  const auto r = run(server(config(unique_prefix()), 2.0, {"--prefix", prefix}), false);
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("exit 0 (clean session)"), std::string::npos) << r.output;
+}
+
 TEST_F(ServerOperator, SlaveLostMidSessionEndsInFaultAndExitsFour) {
   const std::string prefix = unique_prefix();
   FakeSlave slave(prefix, 1.5);
