@@ -185,6 +185,10 @@ std::string report_to_json(const EvaluationReport& r) {
                       {"rmse_naive", num(j.rmse_naive)},
                       {"ratio", num(j.ratio)},
                       {"true_peak", num(j.true_peak)},
+                      // The contract's names for the free-motion figures;
+                      // free_motion has them with their threshold and counts.
+                      {"phantom_rms", num(j.phantom_rendered)},
+                      {"phantom_ratio", num(j.phantom_ratio)},
                       {"free_motion",
                        {{"threshold_nm", kPhantomThreshold},
                         {"samples", j.free_samples},

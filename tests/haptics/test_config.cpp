@@ -168,6 +168,12 @@ TEST(Evaluation, PhantomTorqueInFreeMotion) {
   EXPECT_NEAR(e.phantom_naive, 0.03, 1e-12);
   EXPECT_NEAR(e.phantom_ratio, 1.0 / 3.0, 1e-9);
   EXPECT_NEAR(e.rmse_naive, 0.05, 1e-12);
+  // The report carries them under the contract's names.
+  EvaluationReport rep;
+  rep.joints.push_back(e);
+  const std::string json = report_to_json(rep);
+  EXPECT_NE(json.find("\"phantom_rms\": 0.01"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"phantom_ratio\": 0.333"), std::string::npos) << json;
 }
 
 // Issue 15: configurations that used to run silently.
