@@ -530,23 +530,35 @@ std::vector<std::vector<double>> informed_starts(const TsmFrictionModel& initial
   return out;
 }
 
-FitResult identify_lm(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
-  const auto t_start = Clock::now();
+// The free parameters both optimisers search. Time parameters (unit "s",
+// e.g. a step time) are searched within the recording, not over their
+// catalog bounds, unless the caller narrows them.
+ParameterMap search_map(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
   std::vector<BoundsOverride> bounds;
   for (const auto& p : initial.parameters()) {
     if (p.unit == "s" && !p.fixed && !data.motion.empty())
       bounds.push_back({p.name, data.motion.front().t, data.motion.back().t});
   }
   bounds.insert(bounds.end(), o.bounds.begin(), o.bounds.end());
-  const ParameterMap map(initial.parameters(), bounds);
+  ParameterMap map(initial.parameters(), bounds);
   if (map.size() == 0) throw std::invalid_argument("identify: the model has no free parameters");
+  return map;
+}
+
+int worker_threads(const FitOptions& o) {
+  const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
+  return std::max(1, o.threads > 0 ? o.threads : hw);
+}
+
+FitResult identify_lm(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+  const auto t_start = Clock::now();
+  const ParameterMap map = search_map(initial, data, o);
   const std::size_t n = map.size();
   const Scored full = full_rate(data);
   const Scored coarse = decimated(data, o.global_sample_period_s);
   const double noise = noise_floor(data.measured);
   const double alpha = o.prior_weight * (std::isfinite(noise) && noise > 0.0 ? noise * noise : 1.0);
-  const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
-  const int threads = std::max(1, o.threads > 0 ? o.threads : hw);
+  const int threads = worker_threads(o);
 
   FitResult r;
   // Starting points (full value vectors): the given values, the extra ones,
@@ -729,16 +741,7 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
 
 FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
   const auto t_start = Clock::now();
-  // Time parameters (unit "s", e.g. a step time) are searched within the
-  // recording, not over their catalog bounds, unless the caller narrows them.
-  std::vector<BoundsOverride> bounds;
-  for (const auto& p : initial.parameters()) {
-    if (p.unit == "s" && !p.fixed && !data.motion.empty())
-      bounds.push_back({p.name, data.motion.front().t, data.motion.back().t});
-  }
-  bounds.insert(bounds.end(), o.bounds.begin(), o.bounds.end());
-  const ParameterMap map(initial.parameters(), bounds);
-  if (map.size() == 0) throw std::invalid_argument("identify: the model has no free parameters");
+  const ParameterMap map = search_map(initial, data, o);
   const std::size_t n = map.size();
 
   const Scored full = full_rate(data);
@@ -826,8 +829,7 @@ FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, cons
     best_u[static_cast<std::size_t>(s)] = u;
   };
 
-  const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
-  const int workers = std::min(starts, o.threads > 0 ? o.threads : hw);
+  const int workers = std::min(starts, worker_threads(o));
   std::vector<std::thread> pool;
   for (int w = 0; w < workers; ++w) {
     pool.emplace_back([&] {
