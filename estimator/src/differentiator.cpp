@@ -37,11 +37,11 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
 
 double Differentiator::grid_dt(std::size_t k) const noexcept {
   if (k < kFine) return kFineStep * static_cast<double>(k + 1);
-  const double step = std::max(0.0, cfg_.max_gap - kFineEnd) / kCoarse;
-  return kFineEnd + step * static_cast<double>(k - kFine + 1);
+  return kFineEnd + static_cast<double>(k - kFine + 1) / coarse_inverse_step_;
 }
 
 void Differentiator::build_gain_table() {
+  // Intervals past kFineEnd (only when max_gap exceeds it) share kCoarse steps.
   coarse_inverse_step_ = kCoarse / std::max(1e-9, cfg_.max_gap - kFineEnd);
   const std::size_t n = kFine + (cfg_.max_gap > kFineEnd ? kCoarse : 0);
   gains_.resize(n);

@@ -122,6 +122,8 @@ JointEvaluation evaluate_joint(const Trace& trace, const ServerConfig& config, s
     const auto& row = trace[i];
     if (!enabled_with_truth(row, j)) continue;
     const auto& q = row.joints[j];
+    if (std::isfinite(q.indentation))
+      je.deepest_indentation = std::max(je.deepest_indentation, q.indentation);
     if (!std::isfinite(q.tau_out_est) || !std::isfinite(q.tau_in)) continue;
     se_est += (q.tau_out_est - q.true_tau_out) * (q.tau_out_est - q.true_tau_out);
     se_naive += (q.tau_in - q.true_tau_out) * (q.tau_in - q.true_tau_out);
@@ -157,16 +159,13 @@ EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const Serv
   r.feedback = std::string(to_string(config.loop.source));
   const auto joints = static_cast<std::size_t>(config.loop.joints);
 
+  // The joint that pressed the tissue deepest is the one whose stiffness is felt.
   double deepest = 0.0;
   for (std::size_t j = 0; j < joints; ++j) {
     r.joints.push_back(evaluate_joint(trace, config, j));
-    for (std::size_t i = 0; i < trace.size(); ++i) {
-      const TraceRow row = trace[i];
-      const auto& q = row.joints[j];
-      if (enabled_with_truth(row, j) && std::isfinite(q.indentation) && q.indentation > deepest) {
-        deepest = q.indentation;
-        r.discrimination.joint = static_cast<int>(j);
-      }
+    if (r.joints.back().deepest_indentation > deepest) {
+      deepest = r.joints.back().deepest_indentation;
+      r.discrimination.joint = static_cast<int>(j);
     }
   }
 

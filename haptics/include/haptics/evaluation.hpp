@@ -23,9 +23,10 @@ struct JointEvaluation {
   /// Free motion: ticks where |true tau_out| < kPhantomThreshold. What the
   /// surgeon feels there is phantom torque (the truth is about zero).
   std::size_t free_samples = 0;
-  double phantom_rendered = 0.0;  ///< N m on the master, rms of the torque written
-  double phantom_naive = 0.0;     ///< N m on the master, rms of force_scale * tau_in
-  double phantom_ratio = 0.0;     ///< phantom_rendered / phantom_naive
+  double deepest_indentation = 0.0;  ///< m, deepest tissue indentation seen (SLAVE_TRUTH)
+  double phantom_rendered = 0.0;     ///< N m on the master, rms of the torque written
+  double phantom_naive = 0.0;        ///< N m on the master, rms of force_scale * tau_in
+  double phantom_ratio = 0.0;        ///< phantom_rendered / phantom_naive
 };
 
 /// |true distal torque| below which a tick counts as free motion, N m.
