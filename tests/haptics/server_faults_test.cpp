@@ -28,6 +28,7 @@
 #include "bridge/codec.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/stop_signals.hpp"
+#include "scratch_dir_test.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -252,16 +253,9 @@ class Peer {
   std::thread thread_;
 };
 
-class ServerFaults : public ::testing::Test {
+class ServerFaults : public test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("tsmh-server-faults-" + std::to_string(getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  ServerFaults() : ScratchDirTest("tsmh-server-faults") {}
 
   /// A server configuration: the lcm device (this test is the console),
   /// naive feedback (torque = 0.1 N m from the peer's tensions).
@@ -289,8 +283,6 @@ class ServerFaults : public ::testing::Test {
     argv.insert(argv.end(), more.begin(), more.end());
     return std::make_unique<Child>(argv, dir_ / "server.log", process_cpu);
   }
-
-  fs::path dir_;
 };
 
 // Torque on the console: enabled, and (through the rate limit) at the 0.1 N m

@@ -23,6 +23,7 @@
 
 #include "bridge/clock.hpp"
 #include "bridge/codec.hpp"
+#include "scratch_dir_test.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -145,16 +146,9 @@ class FakeSlave {
   std::thread thread_;
 };
 
-class ServerOperator : public ::testing::Test {
+class ServerOperator : public test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("tsmh-server-operator-" + std::to_string(getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  ServerOperator() : ScratchDirTest("tsmh-server-operator") {}
 
   /// The simulated console (the dead-man held by a simulated operator).
   fs::path config(const std::string& prefix, const std::string& device = "driver: sim") {
@@ -177,7 +171,6 @@ class ServerOperator : public ::testing::Test {
     argv.insert(argv.end(), more.begin(), more.end());
     return argv;
   }
-  fs::path dir_;
 };
 
 // Before issue 16: silent for the whole run, `state FAULT`, exit 0.
