@@ -3,13 +3,7 @@
 # tests/install/downstream against it with the same compilers.
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DDOWNSTREAM_DIR=... -DC_COMPILER=...
 #         -DCXX_COMPILER=... [-DLAUNCHER=...] -DVERSION=... [-DMAN_PAGES=1] -P run_downstream.cmake
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
-  endif()
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/common.cmake)
 
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
@@ -49,13 +43,6 @@ if(at EQUAL -1)
   message(FATAL_ERROR "installed tsm-devices does not default to the installed profiles:\n${out}")
 endif()
 
-set(args -S ${DOWNSTREAM_DIR} -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH=${prefix}
-    -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_CXX_COMPILER=${CXX_COMPILER} -DCMAKE_BUILD_TYPE=Release)
-if(LAUNCHER)
-  list(APPEND args -DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER} -DCMAKE_C_COMPILER_LAUNCHER=${LAUNCHER})
-endif()
-run(${CMAKE_COMMAND} ${args})
-run(${CMAKE_COMMAND} --build ${WORK_DIR}/build -j2)
-run(${WORK_DIR}/build/downstream)
+build_downstream(${WORK_DIR}/build ${prefix})
 message(STATUS "downstream: ${out}")
 run(${WORK_DIR}/build/downstream_all)

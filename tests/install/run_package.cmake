@@ -6,13 +6,7 @@
 #   cmake -DCPACK=... -DBUILD_DIR=... -DWORK_DIR=... -DVERSION=... -DARCH=...
 #         -DDOWNSTREAM_DIR=... -DC_COMPILER=... -DCXX_COMPILER=... [-DLAUNCHER=...]
 #         [-DMAN_PAGES=1] [-DLCM_JAVA=1] -P run_package.cmake
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
-  endif()
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/common.cmake)
 
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
@@ -82,12 +76,5 @@ if(at EQUAL -1)
 endif()
 # The -dev package is usable from where it was extracted (the config is
 # relocatable): the downstream project builds and runs against it.
-set(args -S ${DOWNSTREAM_DIR} -B ${WORK_DIR}/downstream -DCMAKE_PREFIX_PATH=${root}/usr
-    -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_CXX_COMPILER=${CXX_COMPILER} -DCMAKE_BUILD_TYPE=Release)
-if(LAUNCHER)
-  list(APPEND args -DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER} -DCMAKE_C_COMPILER_LAUNCHER=${LAUNCHER})
-endif()
-run(${CMAKE_COMMAND} ${args})
-run(${CMAKE_COMMAND} --build ${WORK_DIR}/downstream -j2)
-run(${WORK_DIR}/downstream/downstream)
+build_downstream(${WORK_DIR}/downstream ${root}/usr)
 message(STATUS "packages ok: ${runtime} ${dev}; downstream: ${out}")
