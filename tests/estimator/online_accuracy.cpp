@@ -6,7 +6,7 @@
 // derivatives at the same samples.
 //
 // Run: build/bin/online_accuracy [--seeds N] [--first-seed S] [--kinds a,b]
-//      [--jitter S] [--drops F] [--markdown]
+//      [--jitter S] [--drops F] [--markdown] [--dump FILE.csv]
 // Figures are % of the peak |true friction| of each recording; the verdict
 // line holds every seed to the target, not the mean.
 #include <CLI/CLI.hpp>
@@ -68,7 +68,7 @@ std::vector<double> offline_friction(const FrictionModel& truth, const Recording
 }
 
 Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
-             const DifferentiatorConfig& diff) {
+             const DifferentiatorConfig& diff, const std::string& dump_path) {
   const TsmFrictionModel truth(paper_spec());
   SyntheticConfig sc;
   sc.motion = c.kind;
@@ -90,13 +90,31 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
   DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::zero);
   DistalTorqueEstimator exact(truth.clone(), rec.radius_m, diff, StartState::zero);
   std::vector<double> f_causal(rec.size()), f_exact(rec.size());
+  std::vector<Estimate> trace(dump_path.empty() ? 0 : rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
-    f_causal[i] = causal.update(rec.t[i], rec.x_in[i], rec.tau_in[i]).friction;
+    const Estimate e = causal.update(rec.t[i], rec.x_in[i], rec.tau_in[i]);
+    f_causal[i] = e.friction;
+    if (!trace.empty()) trace[i] = e;
     f_exact[i] =
         exact.update_exact(rec.t[i], rec.x_in[i], rec.xd_in[i], rec.xdd_in[i], rec.tau_in[i])
             .friction;
   }
   const std::vector<double> f_offline = offline_friction(truth, rec);
+  if (!trace.empty()) {
+    // One recording sample by sample, to look at where the error sits.
+    std::FILE* f = std::fopen(dump_path.c_str(), "w");
+    if (f == nullptr) {
+      std::fprintf(stderr, "online_accuracy: cannot write %s\n", dump_path.c_str());
+      std::exit(2);
+    }
+    std::fprintf(
+        f, "t,x_in,xd_true,xd_est,xdd_true,xdd_est,sign_est,f_true,f_causal,f_exact,f_offline\n");
+    for (std::size_t i = 0; i < rec.size(); ++i)
+      std::fprintf(f, "%.4f,%.7f,%.6f,%.6f,%.5f,%.5f,%.4f,%.6f,%.6f,%.6f,%.6f\n", rec.t[i],
+                   rec.x_in[i], rec.xd_in[i], trace[i].xd, rec.xdd_in[i], trace[i].xdd,
+                   trace[i].acc_sign, data.true_friction[i], f_causal[i], f_exact[i], f_offline[i]);
+    std::fclose(f);
+  }
   // The recording starts at rest 1 s before t = 0 (from_rest), as the
   // estimators do, so truth and estimate share their initial state; that
   // warm-up second (a fade-in from rest for the multisine) is not scored.
@@ -123,6 +141,7 @@ int main(int argc, char** argv) {
   std::string kinds = "multisine,surgeon,reversals,creep,multisine-fast";
   double jitter = 0.0, drops = 0.0;
   bool markdown = false;
+  std::string dump;
   app.add_option("--seeds", seeds, "Seeds per motion kind")->check(CLI::PositiveNumber);
   app.add_option("--first-seed", first_seed, "First seed");
   app.add_option("--kinds", kinds,
@@ -132,6 +151,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 4e-4));
   app.add_option("--drops", drops, "Fraction of samples lost")->check(CLI::Range(0.0, 0.5));
   app.add_flag("--markdown", markdown, "Print the table as markdown");
+  app.add_option("--dump", dump,
+                 "CSV of the first seed of the first kind, sample by sample (truth, estimates)");
   DifferentiatorConfig diff{};
   app.add_option("--jerk-psd", diff.jerk_psd, "Velocity channel jerk PSD (default as deployed)");
   app.add_option("--snap-psd", diff.snap_psd, "Acceleration channel snap PSD");
@@ -170,13 +191,14 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   for (const auto& c : cases) {
     for (int s = 0; s < seeds; ++s)
-      rows.push_back(run_case(c, first_seed + static_cast<std::uint64_t>(s), jitter, drops, diff));
+      rows.push_back(run_case(c, first_seed + static_cast<std::uint64_t>(s), jitter, drops, diff,
+                              rows.empty() ? dump : std::string{}));
   }
 
   if (markdown) {
     std::printf(
-        "| motion | seed | causal RMSE %% | causal max %% | exact-derivative RMSE %% | exact max "
-        "%% |\n");
+        "| motion | seed | causal RMSE %% | causal max %% | offline (RTS) RMSE %% | "
+        "exact-derivative RMSE %% |\n");
     std::printf("| --- | --- | --- | --- | --- | --- |\n");
   } else {
     std::printf("%-15s %5s %12s %12s %12s %12s\n", "motion", "seed", "causal_rmse%", "causal_max%",
