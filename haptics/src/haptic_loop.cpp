@@ -136,8 +136,7 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
                        .device_ok = device_ok,
                        .slave_lost = !(age_s <= config_.slave_timeout_s) &&
                                      counters_.ticks * nominal_dt > config_.slave_timeout_s,
-                       .estimate_lost = lost_s > config_.estimate_fault_s,
-                       .internal_error = false});
+                       .estimate_lost = lost_s > config_.estimate_fault_s});
   if (now_state == LoopState::kFault && before != LoopState::kFault) {
     ++counters_.faults;
     events_.faults.store(counters_.faults, std::memory_order_relaxed);

@@ -24,8 +24,6 @@ std::string_view to_string(FaultReason r) noexcept {
       return "master device fault or disconnected";
     case FaultReason::kSlaveLost:
       return "slave state lost";
-    case FaultReason::kInternal:
-      return "internal error";
     case FaultReason::kEstimateLost:
       return "torque estimate lost";
   }
@@ -33,15 +31,12 @@ std::string_view to_string(FaultReason r) noexcept {
 }
 
 void SafetyStateMachine::go(LoopState s) noexcept {
-  if (s != state_) ++transitions_;
   state_ = s;
 }
 
 LoopState SafetyStateMachine::update(const SafetyInputs& in) noexcept {
   FaultReason cause = FaultReason::kNone;
-  if (in.internal_error)
-    cause = FaultReason::kInternal;
-  else if (in.e_stop)
+  if (in.e_stop)
     cause = FaultReason::kEStop;
   else if (!in.device_ok)
     cause = FaultReason::kDevice;

@@ -37,7 +37,6 @@ class SequenceTracker {
   /// Classifies the message and, when it is accepted, makes it the reference.
   OrderVerdict observe(std::int64_t seq, std::int64_t utime) noexcept;
 
-  bool has_reference() const noexcept { return has_last_; }
   std::int64_t last_seq() const noexcept { return last_seq_; }
   std::int64_t last_utime() const noexcept { return last_utime_; }
 

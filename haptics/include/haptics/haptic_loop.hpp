@@ -126,7 +126,6 @@ class HapticLoop {
   LoopState state() const noexcept { return machine_.state(); }
   FaultReason fault() const noexcept { return machine_.fault(); }
   const LoopCounters& counters() const noexcept { return counters_; }
-  const SafetyOutput& last_output() const noexcept { return safety_.last(); }
   const estimator::Estimate& estimate(int joint) const noexcept {
     return estimates_[static_cast<std::size_t>(joint)];
   }

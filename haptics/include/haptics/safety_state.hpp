@@ -21,7 +21,6 @@ enum class FaultReason : std::int32_t {
   kEStop,
   kDevice,        ///< the master device reports fault or disconnected
   kSlaveLost,     ///< no slave state for longer than the slave timeout
-  kInternal,      ///< an error path of the server itself
   kEstimateLost,  ///< slave state arrives but no valid estimate for longer than its timeout
 };
 
@@ -34,7 +33,6 @@ struct SafetyInputs {
   bool device_ok = false;
   bool slave_lost = false;
   bool estimate_lost = false;
-  bool internal_error = false;
 };
 
 class SafetyStateMachine {
@@ -43,14 +41,12 @@ class SafetyStateMachine {
   LoopState update(const SafetyInputs& in) noexcept;
   LoopState state() const noexcept { return state_; }
   FaultReason fault() const noexcept { return fault_; }
-  std::uint64_t transitions() const noexcept { return transitions_; }
 
  private:
   void go(LoopState s) noexcept;
 
   LoopState state_ = LoopState::kDisabled;
   FaultReason fault_ = FaultReason::kNone;
-  std::uint64_t transitions_ = 0;
 };
 
 }  // namespace tsmh::haptics

@@ -48,7 +48,6 @@ class DeviceClock {
 
   bool started() const noexcept { return have_; }
   /// Current estimate of host time minus device time, ns.
-  std::int64_t offset_ns() const noexcept { return offset_ns_; }
   double tolerance_ppm() const noexcept { return tolerance_ppm_; }
 
  private:

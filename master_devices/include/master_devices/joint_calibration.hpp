@@ -30,9 +30,6 @@ class CurrentLimiter {
   CurrentLimiter(double continuous_a, double peak_a, double tau_s);
   /// The current allowed for a request of `current_a` held for `dt_s`.
   double limit(double current_a, double dt_s) noexcept;
-  bool folded_back() const { return folded_back_; }
-  /// Filtered I^2 relative to the continuous limit squared (1.0 = at the limit).
-  double heat() const { return continuous_a_ > 0.0 ? i2_ / (continuous_a_ * continuous_a_) : 0.0; }
   void reset() {
     i2_ = 0.0;
     folded_back_ = false;

@@ -55,7 +55,6 @@ class JointController {
   double motor_reference() const { return motor_ref_; }
   double backlash_estimate() const { return c_hat_; }
   double side() const { return side_; }               ///< d, the side of the dead band
-  double integral_term() const { return integral_; }  ///< rad
   const ControllerParams& params() const { return params_; }
 
  private:

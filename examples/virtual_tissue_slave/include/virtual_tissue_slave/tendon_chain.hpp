@@ -51,7 +51,6 @@ class TendonChain {
   void set_wrap(double wrap_rad);
   double wrap() const { return wrap_rad_; }
   void set_friction(const ChainFriction& friction) { friction_ = friction; }
-  const ChainFriction& friction_law() const { return friction_; }
 
   /// Moves the two ends to s_proximal / s_distal (m) and finds the new
   /// equilibrium from the current shape. `dt` only matters for viscous drag.
