@@ -494,6 +494,290 @@ CandidateTrial refit_candidate(const FitData& d, std::span<const double> f_cur,
   return t;
 }
 
+// The workflow's steps, in the order find_model_gaps() runs them.
+
+struct Say {
+  const GapOptions& o;
+  void operator()(const std::string& s) const {
+    if (o.progress) o.progress(s);
+  }
+};
+
+// The model as the rounds have grown it, its simulation and its gap.
+struct GapState {
+  std::unique_ptr<TsmFrictionModel> model;
+  std::vector<double> f;
+  ErrorMetrics gap;
+  std::vector<RegimeError> regimes;
+};
+
+void fit_base(GapResult& g, const FrictionModel& base, const GapOptions& o, const Say& say) {
+  auto start = base.clone();
+  adapt_scale_to_data(*start, g.data);
+  FitOptions bo = o.base_fit;
+  if (!bo.progress) {
+    bo.progress = [&](const FitProgress& p) {
+      say("base fit: " + std::string(p.stage) + ", " + std::to_string(p.evaluations) +
+          " model runs, " + num(p.elapsed_s, 2) + " s");
+    };
+  }
+  FitResult base_fit = identify(*start, g.data, bo);
+  g.evaluations += base_fit.evaluations;
+  g.base_model = base_fit.model->clone();
+  g.base_simulated = base_fit.simulated;
+  g.gap_base = error_metrics(g.data, g.base_simulated, SampleRole::validation);
+  g.regimes_base = regime_errors(g.data, g.base_simulated, SampleRole::validation);
+}
+
+// Why no further round runs ("" to run one); `todo` gets the candidates not
+// yet in the model.
+std::string stop_before_round(const GapResult& g, const GapState& cur,
+                              const std::vector<TermKind>& kinds, const GapOptions& o,
+                              std::vector<TermKind>& todo) {
+  if (static_cast<int>(g.effects.size()) >= o.max_effects)
+    return "reached the maximum of " + std::to_string(o.max_effects) + " effects";
+  if (cur.gap.rmse <= o.noise_stop * g.noise)
+    return "the gap (" + num(cur.gap.rmse) + " N) is at the measurement-noise floor (" +
+           num(g.noise) + " N)";
+  for (TermKind k : kinds) {
+    if (!cur.model->spec().has(k) && !has_family(cur.model->spec(), k)) todo.push_back(k);
+  }
+  if (todo.empty()) return "every candidate is already in the model";
+  return {};
+}
+
+// Every candidate in `todo` added to the current model and refitted, on a
+// pool of worker threads; the trials sorted best gain first (ties to catalog
+// order, so the choice is deterministic).
+void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& todo,
+                const GapOptions& o, const Say& say, Clock::time_point t_start, GapRound& round) {
+  const FitData& d = g.data;
+  const auto residual = residual_of(d, cur.f);
+  const auto train_w = d.weights(SampleRole::train);
+  const double mse_cur = weighted_mse(d.measured, cur.f, train_w);
+  // Effective sample size for BIC: the residual is correlated in time.
+  std::vector<double> train_resid;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (d.role[i] == SampleRole::train) train_resid.push_back(residual[i]);
+  }
+  const double n_eff =
+      static_cast<double>(d.count(SampleRole::train)) / correlation_time(train_resid);
+  const double bic_cur = bic(mse_cur, n_eff, free_count(*cur.model));
+
+  round.trials.resize(todo.size());
+  std::vector<std::exception_ptr> errors(todo.size());
+  std::atomic<std::size_t> next{0};
+  std::atomic<std::size_t> done{0};
+  const auto work = [&] {
+    for (std::size_t c = next.fetch_add(1); c < todo.size(); c = next.fetch_add(1)) {
+      try {
+        const Prepared p = prepare_candidate(d, *cur.model, cur.f, residual, todo[c]);
+        CandidateTrial& t = round.trials[c];
+        if (p.explained < o.min_explained) {
+          // Its regressors explain next to nothing of the residual: a
+          // refit cannot shrink the gap (saves most of a null round).
+          t.name = std::string(term_info(todo[c]).name);
+          t.family = std::string(term_family(todo[c]));
+          t.explained = p.explained;
+          t.validation = cur.gap;
+          t.train_mse = mse_cur;
+          t.skipped = true;
+          t.bic = bic_cur;
+        } else {
+          t = refit_candidate(d, cur.f, cur.gap, g.noise, p, o, o.base_fit.seed + 101 * (c + 1));
+          t.bic = bic(t.train_mse, n_eff, t.free_parameters);
+          t.delta_bic = t.bic - bic_cur;
+        }
+      } catch (...) {
+        errors[c] = std::current_exception();
+      }
+      done.fetch_add(1);
+    }
+  };
+  const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
+  const int threads = o.threads > 0 ? o.threads : hw;
+  std::vector<std::thread> pool;
+  for (int w = 0; w < std::min<int>(threads, static_cast<int>(todo.size())); ++w)
+    pool.emplace_back(work);
+  while (done.load() < todo.size()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    say("round " + std::to_string(g.rounds.size() + 1) + ": " + std::to_string(done.load()) + "/" +
+        std::to_string(todo.size()) + " candidates refitted, " +
+        num(std::chrono::duration<double>(Clock::now() - t_start).count(), 3) + " s");
+  }
+  for (auto& t : pool)
+    t.join();
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  for (const auto& t : round.trials)
+    g.evaluations += t.evaluations;
+  std::stable_sort(round.trials.begin(), round.trials.end(),
+                   [](const auto& a, const auto& b) { return a.gain > b.gain; });
+}
+
+// Rivals: other effects that qualified nearly as well as the winner. Would
+// the winner still add after the rival? If not, this data cannot tell them
+// apart (decided after the last round: find_confounds).
+void check_rivals(GapResult& g, const GapState& cur, const CandidateTrial& win, const GapOptions& o,
+                  const Say& say, GapRound& round) {
+  const FitData& d = g.data;
+  const TermKind kind = *term_kind_from_name(win.name);
+  std::map<std::string, const CandidateTrial*> rivals;
+  for (const auto& t : round.trials) {
+    if (t.family == win.family || !t.qualifies || t.gain < o.confound_ratio * win.gain) continue;
+    if (!rivals.count(t.family) || rivals[t.family]->gain < t.gain) rivals[t.family] = &t;
+  }
+  for (const auto& [family, r] : rivals) {
+    say("checking whether " + win.family + " still adds after " + family);
+    TsmFrictionModel with_rival(with_neutral_term(cur.model->spec(), *term_kind_from_name(r->name),
+                                                  d.motion.front().t, d.motion.back().t));
+    with_rival.set_values(r->values);
+    const auto f_r = simulate_friction(with_rival, d.motion);
+    const auto gap_r = error_metrics(d, f_r, SampleRole::validation);
+    const Prepared pw = prepare_candidate(d, with_rival, f_r, residual_of(d, f_r), kind);
+    const CandidateTrial back =
+        refit_candidate(d, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
+    g.evaluations += back.evaluations;
+    round.rivals.push_back({family, r->gain, back.gain, back.qualifies});
+  }
+}
+
+// The candidate's refit polished only briefly on the full-rate data; this
+// converges the augmented model (warm Levenberg-Marquardt from the refit:
+// the base was already global). Kept when it fits the train data better
+// (validation is not used to choose). Time parameters (a step time) stay
+// where the scan and the refit put them: inside a validation block no train
+// sample sees a step time move, and a longer fit can drift it there
+// (virtual-slave re-routing at 20 s: t_step went to 18.5 s and the
+// validation gap grew 0.38 -> 0.85 N).
+void polish(GapResult& g, TsmFrictionModel& model, const CandidateTrial& win, const GapOptions& o,
+            const Say& say, std::vector<double>& f, ErrorMetrics& gap) {
+  say("polishing the model with " + win.name);
+  FitOptions ro = o.base_fit;
+  ro.progress = nullptr;
+  ro.global_stage = false;
+  ro.starts = 1;
+  for (const auto& p : model.parameters()) {
+    if (p.unit == "s" && !p.fixed) ro.bounds.push_back({p.name, p.value - 0.01, p.value + 0.01});
+  }
+  FitResult re = identify(model, g.data, ro);
+  g.evaluations += re.evaluations;
+  if (re.train_rmse < std::sqrt(win.train_mse)) {
+    model.set_values(re.values);
+    f = std::move(re.simulated);
+    gap = error_metrics(g.data, f, SampleRole::validation);
+  }
+}
+
+// The added friction against the variable the effect depends on, thinned
+// to a few hundred points and sorted by the variable.
+void describe_shape(const FitData& d, const TsmFrictionModel& model, TermKind kind,
+                    EffectFound& e) {
+  const auto& spec = model.spec();
+  const bool asym = spec.has(TermKind::direction_asymmetry);
+  e.variable = variable_of(term_family(kind));
+  for (const auto& t : spec.terms) {
+    if (t.kind != kind) continue;
+    const std::size_t stride = std::max<std::size_t>(1, d.size() / 400);
+    for (std::size_t i = 0; i < d.size(); i += stride) {
+      const Motion& m = d.motion[i];
+      const double v = e.variable == std::string("x")      ? m.x
+                       : e.variable == std::string("load") ? m.load
+                       : e.variable == std::string("t")    ? m.t
+                                                           : std::fabs(m.xd);
+      e.shape.push_back({v, spec.gamma * term_level(t, m, asym)});
+    }
+  }
+  std::sort(e.shape.begin(), e.shape.end());
+}
+
+// The winner joins the model: polished, described, and the new current state.
+void accept_effect(GapResult& g, GapState& cur, const CandidateTrial& win, const GapOptions& o,
+                   const Say& say) {
+  const FitData& d = g.data;
+  const TermKind kind = *term_kind_from_name(win.name);
+  auto next_model = std::make_unique<TsmFrictionModel>(
+      with_neutral_term(cur.model->spec(), kind, d.motion.front().t, d.motion.back().t));
+  next_model->set_values(win.values);
+  std::vector<double> f = simulate_friction(*next_model, d.motion);
+  ErrorMetrics gap_after = win.validation;
+  if (o.reidentify) polish(g, *next_model, win, o, say, f, gap_after);
+  auto regimes_after = regime_errors(d, f, SampleRole::validation);
+
+  EffectFound e;
+  e.name = std::string(term_family(kind));
+  e.form = win.name;
+  e.meaning = std::string(term_info(kind).meaning);
+  e.where = std::string(term_info(kind).where);
+  const std::string own = own_regimes(kind, cur.regimes);
+  if (!own.empty()) e.where += "; " + own;
+  const std::string fell = where_it_fell(cur.regimes, regimes_after);
+  if (!fell.empty()) e.where += "; residual fell most at " + fell;
+  e.gap_after = gap_after;
+  e.gain = 1.0 - gap_after.rmse / cur.gap.rmse;
+  describe_shape(d, *next_model, kind, e);
+  const auto params = next_model->parameters();
+  for (std::size_t k = 0; k < term_info(kind).params.size(); ++k) {
+    const auto name = qualified(kind, k);
+    e.parameters.push_back({name, params[index_of(params, name)].value});
+  }
+  g.effects.push_back(std::move(e));
+  say("found " + win.name + ": validation RMSE " + num(cur.gap.rmse) + " -> " +
+      num(gap_after.rmse) + " N");
+  cur = {std::move(next_model), std::move(f), gap_after, std::move(regimes_after)};
+}
+
+// Confounds: a rival that qualified in the round an effect was named, nearly
+// as well, was never named afterwards, and after which the named effect adds
+// nothing: the two explain the same residual. Never one confident name: both
+// are reported, with the experiment that would separate them. When the named
+// effect still adds after the rival, the rival only correlated with it; its
+// "where" says so.
+void find_confounds(GapResult& g, const GapOptions& o) {
+  std::size_t effect_index = 0;
+  for (const auto& round : g.rounds) {
+    if (round.accepted < 0) continue;
+    const auto& win = round.trials[static_cast<std::size_t>(round.accepted)];
+    for (const auto& rc : round.rivals) {
+      const bool named_later =
+          std::any_of(g.effects.begin(), g.effects.end(),
+                      [&](const EffectFound& e) { return e.name == rc.family; });
+      if (named_later) continue;
+      // The named effect must keep most of its own shrink on top of the
+      // rival to count as told apart from it.
+      if (rc.winner_still_qualifies && rc.winner_gain_after >= o.confound_extra * win.gain) {
+        if (effect_index < g.effects.size())
+          g.effects[effect_index].where += "; " + rc.family + " alone also shrank the gap (" +
+                                           pct(rc.gain) + "), but " + win.family +
+                                           " still shrinks it by " + pct(rc.winner_gain_after) +
+                                           " on top of it, and not the reverse: " + rc.family +
+                                           " only correlates with it in this data";
+        continue;
+      }
+      Confound c;
+      c.named = win.family;
+      c.rival = rc.family;
+      c.named_gain = win.gain;
+      c.rival_gain = rc.gain;
+      c.experiment = separating_experiment(c.named, c.rival);
+      c.warning = c.named + " and " + c.rival +
+                  " are confounded in this recording: each alone shrinks the gap (" +
+                  pct(c.named_gain) + " and " + pct(c.rival_gain) +
+                  "), and neither adds much once the other is in (" + c.named + " after " +
+                  c.rival + ": " + pct(rc.winner_gain_after) + "; " + c.rival + " after " +
+                  c.named + ": below the margin). " + c.named +
+                  " fitted slightly better, but the data cannot tell them apart; to separate "
+                  "them, record " +
+                  c.experiment;
+      if (effect_index < g.effects.size())
+        g.effects[effect_index].confounded_with.push_back(rc.family);
+      g.confounds.push_back(std::move(c));
+    }
+    ++effect_index;
+  }
+}
+
 }  // namespace
 
 ResidualDiagnostics diagnose_residual(const FitData& d, const TsmFrictionModel& model,
@@ -539,9 +823,7 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
         "tsm gap needs the composable tendon-sheath model (model: tsm; "
         "presets paper, dahl), not '" +
         base.kind() + "'");
-  const auto say = [&](const std::string& s) {
-    if (o.progress) o.progress(s);
-  };
+  const Say say{o};
   const std::vector<TermKind> kinds = candidate_kinds(o);
 
   GapResult g;
@@ -551,116 +833,19 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
   const FitData& d = g.data;
 
   // 1. The base model, fitted globally.
-  auto start = base.clone();
-  adapt_scale_to_data(*start, d);
-  FitOptions bo = o.base_fit;
-  if (!bo.progress) {
-    bo.progress = [&](const FitProgress& p) {
-      say("base fit: " + std::string(p.stage) + ", " + std::to_string(p.evaluations) +
-          " model runs, " + num(p.elapsed_s, 2) + " s");
-    };
-  }
-  FitResult base_fit = identify(*start, d, bo);
-  g.evaluations += base_fit.evaluations;
-  g.base_model = base_fit.model->clone();
-  g.base_simulated = base_fit.simulated;
-  g.gap_base = error_metrics(d, g.base_simulated, SampleRole::validation);
-  g.regimes_base = regime_errors(d, g.base_simulated, SampleRole::validation);
+  fit_base(g, base, o, say);
+  GapState cur{
+      std::make_unique<TsmFrictionModel>(dynamic_cast<const TsmFrictionModel&>(*g.base_model)),
+      g.base_simulated, g.gap_base, g.regimes_base};
 
-  auto current =
-      std::make_unique<TsmFrictionModel>(dynamic_cast<const TsmFrictionModel&>(*base_fit.model));
-  std::vector<double> f_cur = g.base_simulated;
-  ErrorMetrics gap_cur = g.gap_base;
-  std::vector<RegimeError> regimes_cur = g.regimes_base;
-  const std::size_t n_train = d.count(SampleRole::train);
-  const auto train_w = d.weights(SampleRole::train);
-
-  // 2-3. Rounds of candidates.
-  const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
-  const int threads = o.threads > 0 ? o.threads : hw;
+  // 2-3. Rounds of candidates, until one stop rule holds.
   while (true) {
     GapRound round;
-    round.before = gap_cur;
-    if (static_cast<int>(g.effects.size()) >= o.max_effects) {
-      g.stop_reason = "reached the maximum of " + std::to_string(o.max_effects) + " effects";
-      break;
-    }
-    if (gap_cur.rmse <= o.noise_stop * g.noise) {
-      g.stop_reason = "the gap (" + num(gap_cur.rmse) + " N) is at the measurement-noise floor (" +
-                      num(g.noise) + " N)";
-      break;
-    }
+    round.before = cur.gap;
     std::vector<TermKind> todo;
-    for (TermKind k : kinds) {
-      if (!current->spec().has(k) && !has_family(current->spec(), k)) todo.push_back(k);
-    }
-    if (todo.empty()) {
-      g.stop_reason = "every candidate is already in the model";
-      break;
-    }
-    const auto residual = residual_of(d, f_cur);
-    const double mse_cur = weighted_mse(d.measured, f_cur, train_w);
-    // Effective sample size for BIC: the residual is correlated in time.
-    std::vector<double> train_resid;
-    for (std::size_t i = 0; i < d.size(); ++i) {
-      if (d.role[i] == SampleRole::train) train_resid.push_back(residual[i]);
-    }
-    const double n_eff = static_cast<double>(n_train) / correlation_time(train_resid);
-    const double bic_cur = bic(mse_cur, n_eff, free_count(*current));
-
-    round.trials.resize(todo.size());
-    std::vector<std::exception_ptr> errors(todo.size());
-    std::atomic<std::size_t> next{0};
-    std::atomic<std::size_t> done{0};
-    const auto work = [&] {
-      for (std::size_t c = next.fetch_add(1); c < todo.size(); c = next.fetch_add(1)) {
-        try {
-          const Prepared p = prepare_candidate(d, *current, f_cur, residual, todo[c]);
-          if (p.explained < o.min_explained) {
-            // Its regressors explain next to nothing of the residual: a
-            // refit cannot shrink the gap (saves most of a null round).
-            CandidateTrial& t = round.trials[c];
-            t.name = std::string(term_info(todo[c]).name);
-            t.family = std::string(term_family(todo[c]));
-            t.explained = p.explained;
-            t.validation = gap_cur;
-            t.train_mse = mse_cur;
-            t.skipped = true;
-            t.bic = bic_cur;
-            done.fetch_add(1);
-            continue;
-          }
-          round.trials[c] =
-              refit_candidate(d, f_cur, gap_cur, g.noise, p, o, o.base_fit.seed + 101 * (c + 1));
-          CandidateTrial& t = round.trials[c];
-          t.bic = bic(t.train_mse, n_eff, t.free_parameters);
-          t.delta_bic = t.bic - bic_cur;
-        } catch (...) {
-          errors[c] = std::current_exception();
-        }
-        done.fetch_add(1);
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int w = 0; w < std::min<int>(threads, static_cast<int>(todo.size())); ++w)
-      pool.emplace_back(work);
-    while (done.load() < todo.size()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(250));
-      say("round " + std::to_string(g.rounds.size() + 1) + ": " + std::to_string(done.load()) +
-          "/" + std::to_string(todo.size()) + " candidates refitted, " +
-          num(std::chrono::duration<double>(Clock::now() - t_start).count(), 3) + " s");
-    }
-    for (auto& t : pool)
-      t.join();
-    for (const auto& e : errors) {
-      if (e) std::rethrow_exception(e);
-    }
-    for (const auto& t : round.trials)
-      g.evaluations += t.evaluations;
-
-    // Best gain first; ties to catalog order (stable), so the choice is deterministic.
-    std::stable_sort(round.trials.begin(), round.trials.end(),
-                     [](const auto& a, const auto& b) { return a.gain > b.gain; });
+    g.stop_reason = stop_before_round(g, cur, kinds, o, todo);
+    if (!g.stop_reason.empty()) break;
+    run_trials(g, cur, todo, o, say, t_start, round);
     if (!round.trials.front().qualifies) {
       const auto& best = round.trials.front();
       g.stop_reason = "no candidate qualifies (shrinks the validation gap by >= " + pct(o.margin) +
@@ -672,165 +857,19 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     round.accepted = 0;
     CandidateTrial& win = round.trials.front();
     win.accepted = true;
-    const TermKind kind = *term_kind_from_name(win.name);
-    {
-      // Rivals: other effects that qualified nearly as well. Would the
-      // winner still add after the rival? If not, this data cannot tell
-      // them apart (checked after the last round, see Confound).
-      std::map<std::string, const CandidateTrial*> rivals;
-      for (const auto& t : round.trials) {
-        if (t.family == win.family || !t.qualifies || t.gain < o.confound_ratio * win.gain)
-          continue;
-        if (!rivals.count(t.family) || rivals[t.family]->gain < t.gain) rivals[t.family] = &t;
-      }
-      for (const auto& [family, r] : rivals) {
-        say("checking whether " + win.family + " still adds after " + family);
-        TsmFrictionModel with_rival(with_neutral_term(
-            current->spec(), *term_kind_from_name(r->name), d.motion.front().t, d.motion.back().t));
-        with_rival.set_values(r->values);
-        const auto f_r = simulate_friction(with_rival, d.motion);
-        const auto gap_r = error_metrics(d, f_r, SampleRole::validation);
-        const Prepared pw = prepare_candidate(d, with_rival, f_r, residual_of(d, f_r), kind);
-        const CandidateTrial back =
-            refit_candidate(d, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
-        g.evaluations += back.evaluations;
-        round.rivals.push_back({family, r->gain, back.gain, back.qualifies});
-      }
-    }
-    auto next_model = std::make_unique<TsmFrictionModel>(
-        with_neutral_term(current->spec(), kind, d.motion.front().t, d.motion.back().t));
-    next_model->set_values(win.values);
-    f_cur = simulate_friction(*next_model, d.motion);
-    ErrorMetrics gap_after = win.validation;
-    if (o.reidentify) {
-      // The candidate's refit polished only briefly on the full-rate data;
-      // converge the augmented model (warm Levenberg-Marquardt from the
-      // refit: the base was already global). Kept when it fits the train
-      // data better (validation is not used to choose). Time parameters (a
-      // step time) stay where the scan and the refit put them: inside a
-      // validation block no train sample sees a step time move, and a
-      // longer fit can drift it there (virtual-slave re-routing at 20 s:
-      // t_step went to 18.5 s and the validation gap grew 0.38 -> 0.85 N).
-      say("polishing the model with " + win.name);
-      FitOptions ro = o.base_fit;
-      ro.progress = nullptr;
-      ro.global_stage = false;
-      ro.starts = 1;
-      for (const auto& p : next_model->parameters()) {
-        if (p.unit == "s" && !p.fixed)
-          ro.bounds.push_back({p.name, p.value - 0.01, p.value + 0.01});
-      }
-      FitResult re = identify(*next_model, d, ro);
-      g.evaluations += re.evaluations;
-      if (re.train_rmse < std::sqrt(win.train_mse)) {
-        next_model->set_values(re.values);
-        f_cur = std::move(re.simulated);
-        gap_after = error_metrics(d, f_cur, SampleRole::validation);
-      }
-    }
-    const auto regimes_after = regime_errors(d, f_cur, SampleRole::validation);
-
-    EffectFound e;
-    e.name = std::string(term_family(kind));
-    e.form = win.name;
-    e.meaning = std::string(term_info(kind).meaning);
-    e.where = std::string(term_info(kind).where);
-    const std::string own = own_regimes(kind, regimes_cur);
-    if (!own.empty()) e.where += "; " + own;
-    const std::string fell = where_it_fell(regimes_cur, regimes_after);
-    if (!fell.empty()) e.where += "; residual fell most at " + fell;
-    e.gap_after = gap_after;
-    e.gain = 1.0 - gap_after.rmse / gap_cur.rmse;
-    {
-      // The shape found: the added friction against its variable.
-      const auto& spec = next_model->spec();
-      const bool asym = spec.has(TermKind::direction_asymmetry);
-      e.variable = variable_of(term_family(kind));
-      for (const auto& t : spec.terms) {
-        if (t.kind != kind) continue;
-        const std::size_t stride = std::max<std::size_t>(1, d.size() / 400);
-        for (std::size_t i = 0; i < d.size(); i += stride) {
-          const Motion& m = d.motion[i];
-          const double v = e.variable == std::string("x")      ? m.x
-                           : e.variable == std::string("load") ? m.load
-                           : e.variable == std::string("t")    ? m.t
-                                                               : std::fabs(m.xd);
-          e.shape.push_back({v, spec.gamma * term_level(t, m, asym)});
-        }
-      }
-      std::sort(e.shape.begin(), e.shape.end());
-    }
-    const auto params = next_model->parameters();
-    for (std::size_t k = 0; k < term_info(kind).params.size(); ++k) {
-      const auto name = qualified(kind, k);
-      e.parameters.push_back({name, params[index_of(params, name)].value});
-    }
-    g.effects.push_back(std::move(e));
-    say("found " + win.name + ": validation RMSE " + num(gap_cur.rmse) + " -> " +
-        num(gap_after.rmse) + " N");
-    current = std::move(next_model);
-    gap_cur = gap_after;
-    regimes_cur = regimes_after;
+    check_rivals(g, cur, win, o, say, round);
+    accept_effect(g, cur, win, o, say);
     g.rounds.push_back(std::move(round));
   }
 
-  // Confounds: a rival that qualified in the round an effect was named,
-  // nearly as well, was never named afterwards, and after which the named
-  // effect adds nothing: the two explain the same residual. Never one
-  // confident name: both are reported, with the experiment that would
-  // separate them. When the named effect still adds after the rival, the
-  // rival only correlated with it; its "where" says so.
-  {
-    std::size_t effect_index = 0;
-    for (const auto& round : g.rounds) {
-      if (round.accepted < 0) continue;
-      const auto& win = round.trials[static_cast<std::size_t>(round.accepted)];
-      for (const auto& rc : round.rivals) {
-        const bool named_later =
-            std::any_of(g.effects.begin(), g.effects.end(),
-                        [&](const EffectFound& e) { return e.name == rc.family; });
-        if (named_later) continue;
-        // The named effect must keep most of its own shrink on top of the
-        // rival to count as told apart from it.
-        if (rc.winner_still_qualifies && rc.winner_gain_after >= o.confound_extra * win.gain) {
-          if (effect_index < g.effects.size())
-            g.effects[effect_index].where += "; " + rc.family + " alone also shrank the gap (" +
-                                             pct(rc.gain) + "), but " + win.family +
-                                             " still shrinks it by " + pct(rc.winner_gain_after) +
-                                             " on top of it, and not the reverse: " + rc.family +
-                                             " only correlates with it in this data";
-          continue;
-        }
-        Confound c;
-        c.named = win.family;
-        c.rival = rc.family;
-        c.named_gain = win.gain;
-        c.rival_gain = rc.gain;
-        c.experiment = separating_experiment(c.named, c.rival);
-        c.warning = c.named + " and " + c.rival +
-                    " are confounded in this recording: each alone shrinks the gap (" +
-                    pct(c.named_gain) + " and " + pct(c.rival_gain) +
-                    "), and neither adds much once the other is in (" + c.named + " after " +
-                    c.rival + ": " + pct(rc.winner_gain_after) + "; " + c.rival + " after " +
-                    c.named + ": below the margin). " + c.named +
-                    " fitted slightly better, but the data cannot tell them apart; to separate "
-                    "them, record " +
-                    c.experiment;
-        if (effect_index < g.effects.size())
-          g.effects[effect_index].confounded_with.push_back(rc.family);
-        g.confounds.push_back(std::move(c));
-      }
-      ++effect_index;
-    }
-  }
-
-  g.final_model = current->clone();
-  g.final_simulated = f_cur;
-  g.gap_final = gap_cur;
-  g.regimes_final = regimes_cur;
+  find_confounds(g, o);
+  g.final_model = cur.model->clone();
+  g.final_simulated = cur.f;
+  g.gap_final = cur.gap;
+  g.regimes_final = cur.regimes;
   g.diagnostics_base = diagnose_residual(d, dynamic_cast<const TsmFrictionModel&>(*g.base_model),
                                          g.base_simulated, kinds);
-  g.diagnostics_final = diagnose_residual(d, *current, g.final_simulated, kinds);
+  g.diagnostics_final = diagnose_residual(d, *cur.model, g.final_simulated, kinds);
   g.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   return g;
 }
