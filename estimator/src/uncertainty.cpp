@@ -16,13 +16,9 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-}  // namespace
-
-UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitData& data,
-                                       const UncertaintyOptions& o) {
-  UncertaintyReport rep;
-  const auto params = fitted.parameters();
-  const ParameterMap map(params);
+// Each parameter's value, bounds and whether it sits at a bound.
+void describe_parameters(const std::vector<Parameter>& params, const UncertaintyOptions& o,
+                         UncertaintyReport& rep) {
   for (const auto& p : params) {
     ParameterEstimate e;
     e.name = p.name;
@@ -37,37 +33,16 @@ UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitDat
                   p.upper - p.value <= o.bound_margin * range);
     rep.parameters.push_back(e);
   }
-  if (dynamic_cast<const TsmFrictionModel*>(&fitted) != nullptr) {
-    rep.notes.push_back(
-        "core.gamma is fixed: it is not identifiable, because (gamma c, theta / c, every level "
-        "/ c) gives exactly the same friction for any c > 0");
-    rep.notes.push_back("core.n is fixed: an integer shape exponent, chosen, not fitted");
-  }
+}
 
-  std::vector<std::size_t> train;
-  for (std::size_t i = 0; i < data.size(); ++i) {
-    if (data.role[i] == SampleRole::train) train.push_back(i);
-  }
-  const std::size_t n = train.size();
-  const std::size_t p = map.size();
-  if (p == 0 || n <= p) {
-    rep.warnings.push_back("no uncertainty: too few train samples or no free parameters");
-    return rep;
-  }
-
+// d friction / d parameter at the train samples, by central differences
+// inside the bounds (rows: train samples, columns: free parameters).
+Eigen::MatrixXd train_jacobian(const FrictionModel& fitted, const FitData& data,
+                               const ParameterMap& map, const std::vector<std::size_t>& train,
+                               const UncertaintyOptions& o) {
   auto model = fitted.clone();
-  std::vector<double> values = map.template_values();
-  const std::vector<double> base = simulate_friction(*model, data.motion);
-
-  std::vector<double> resid(n);
-  double ssr = 0.0;
-  for (std::size_t k = 0; k < n; ++k) {
-    resid[k] = data.measured[train[k]] - base[train[k]];
-    ssr += resid[k] * resid[k];
-  }
-  rep.residual_std = std::sqrt(ssr / static_cast<double>(n - p));
-  rep.correlation_time = correlation_time(resid);
-
+  const std::vector<double> values = map.template_values();
+  const std::size_t n = train.size(), p = map.size();
   Eigen::MatrixXd jac(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(p));
   std::vector<double> plus(data.size()), minus(data.size());
   for (std::size_t j = 0; j < p; ++j) {
@@ -90,53 +65,53 @@ UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitDat
           span > 0.0 ? (plus[train[k]] - minus[train[k]]) / span : 0.0;
     }
   }
+  return jac;
+}
 
+// The parameters' covariance from the Jacobian, in column-scaled units.
+struct ScaledCovariance {
+  Eigen::VectorXd norms;         // column norms (the scaling)
+  Eigen::MatrixXd cov;           // pseudo-inverse of the scaled J^T J
+  std::vector<bool> degenerate;  // in an undetermined direction
+  double condition_number = kInf;
+};
+
+ScaledCovariance scaled_covariance(Eigen::MatrixXd jac) {
+  const auto p = static_cast<std::size_t>(jac.cols());
+  ScaledCovariance c;
   // Scale columns to unit norm so the conditioning reflects redundancy, not units.
-  Eigen::VectorXd norms = jac.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < norms.size(); ++j) {
-    if (norms(j) > 0.0) jac.col(j) /= norms(j);
+  c.norms = jac.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < c.norms.size(); ++j) {
+    if (c.norms(j) > 0.0) jac.col(j) /= c.norms(j);
   }
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(jac, Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
   const double smax = sv.size() > 0 ? sv(0) : 0.0;
   const double smin = sv.size() > 0 ? sv(sv.size() - 1) : 0.0;
-  rep.condition_number = smin > 0.0 ? (smax / smin) * (smax / smin) : kInf;
+  c.condition_number = smin > 0.0 ? (smax / smin) * (smax / smin) : kInf;
   // Pseudo-inverse of the scaled J^T J: directions with singular values below
   // 1e-6 smax (condition 1e12) are treated as undetermined.
   const double tol = 1e-6 * smax;
-  Eigen::MatrixXd cov_s =
-      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
-  std::vector<bool> degenerate(p, false);
+  c.cov = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
+  c.degenerate.assign(p, false);
   for (Eigen::Index k = 0; k < sv.size(); ++k) {
     const Eigen::VectorXd vk = svd.matrixV().col(k);
     if (sv(k) > tol) {
-      cov_s += vk * vk.transpose() / (sv(k) * sv(k));
+      c.cov += vk * vk.transpose() / (sv(k) * sv(k));
     } else {
       for (std::size_t j = 0; j < p; ++j) {
-        if (std::fabs(vk(static_cast<Eigen::Index>(j))) > 0.3) degenerate[j] = true;
+        if (std::fabs(vk(static_cast<Eigen::Index>(j))) > 0.3) c.degenerate[j] = true;
       }
     }
   }
-  const double scale2 = rep.residual_std * rep.residual_std * rep.correlation_time;
+  return c;
+}
 
-  rep.correlation.assign(p, std::vector<double>(p, 0.0));
-  std::vector<double> stds(p);
-  for (std::size_t j = 0; j < p; ++j) {
-    const auto jj = static_cast<Eigen::Index>(j);
-    stds[j] = norms(jj) > 0.0 && !degenerate[j]
-                  ? std::sqrt(std::max(0.0, cov_s(jj, jj) * scale2)) / norms(jj)
-                  : kInf;
-    rep.free_names.push_back(map.free()[j].name);
-  }
-  for (std::size_t a = 0; a < p; ++a) {
-    for (std::size_t b = 0; b < p; ++b) {
-      const auto ia = static_cast<Eigen::Index>(a), ib = static_cast<Eigen::Index>(b);
-      const double d = std::sqrt(cov_s(ia, ia) * cov_s(ib, ib));
-      rep.correlation[a][b] = d > 0.0 ? cov_s(ia, ib) / d : (a == b ? 1.0 : 0.0);
-    }
-  }
-
-  for (std::size_t j = 0; j < p; ++j) {
+// A warning per poorly identified or bound-hugging parameter; sets
+// well_identified on each free parameter.
+void warn_per_parameter(const ParameterMap& map, const std::vector<double>& stds,
+                        const UncertaintyOptions& o, UncertaintyReport& rep) {
+  for (std::size_t j = 0; j < stds.size(); ++j) {
     const auto& fp = map.free()[j];
     auto& e = rep.parameters[fp.index];
     e.std_error = stds[j];
@@ -165,6 +140,10 @@ UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitDat
     }
     e.well_identified = !poor && !e.at_bound;
   }
+}
+
+void warn_correlated(const UncertaintyOptions& o, UncertaintyReport& rep) {
+  const std::size_t p = rep.free_names.size();
   for (std::size_t a = 0; a < p; ++a) {
     for (std::size_t b = a + 1; b < p; ++b) {
       const double r = rep.correlation[a][b];
@@ -175,6 +154,67 @@ UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitDat
       }
     }
   }
+}
+
+}  // namespace
+
+UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitData& data,
+                                       const UncertaintyOptions& o) {
+  UncertaintyReport rep;
+  const auto params = fitted.parameters();
+  const ParameterMap map(params);
+  describe_parameters(params, o, rep);
+  if (dynamic_cast<const TsmFrictionModel*>(&fitted) != nullptr) {
+    rep.notes.push_back(
+        "core.gamma is fixed: it is not identifiable, because (gamma c, theta / c, every level "
+        "/ c) gives exactly the same friction for any c > 0");
+    rep.notes.push_back("core.n is fixed: an integer shape exponent, chosen, not fitted");
+  }
+
+  std::vector<std::size_t> train;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    if (data.role[i] == SampleRole::train) train.push_back(i);
+  }
+  const std::size_t n = train.size();
+  const std::size_t p = map.size();
+  if (p == 0 || n <= p) {
+    rep.warnings.push_back("no uncertainty: too few train samples or no free parameters");
+    return rep;
+  }
+
+  // The residual's scale and correlation time: the standard errors count
+  // independent samples, not rows.
+  const std::vector<double> base = simulate_friction(*fitted.clone(), data.motion);
+  std::vector<double> resid(n);
+  double ssr = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    resid[k] = data.measured[train[k]] - base[train[k]];
+    ssr += resid[k] * resid[k];
+  }
+  rep.residual_std = std::sqrt(ssr / static_cast<double>(n - p));
+  rep.correlation_time = correlation_time(resid);
+
+  const ScaledCovariance c = scaled_covariance(train_jacobian(fitted, data, map, train, o));
+  rep.condition_number = c.condition_number;
+  const double scale2 = rep.residual_std * rep.residual_std * rep.correlation_time;
+  rep.correlation.assign(p, std::vector<double>(p, 0.0));
+  std::vector<double> stds(p);
+  for (std::size_t j = 0; j < p; ++j) {
+    const auto jj = static_cast<Eigen::Index>(j);
+    stds[j] = c.norms(jj) > 0.0 && !c.degenerate[j]
+                  ? std::sqrt(std::max(0.0, c.cov(jj, jj) * scale2)) / c.norms(jj)
+                  : kInf;
+    rep.free_names.push_back(map.free()[j].name);
+  }
+  for (std::size_t a = 0; a < p; ++a) {
+    for (std::size_t b = 0; b < p; ++b) {
+      const auto ia = static_cast<Eigen::Index>(a), ib = static_cast<Eigen::Index>(b);
+      const double d = std::sqrt(c.cov(ia, ia) * c.cov(ib, ib));
+      rep.correlation[a][b] = d > 0.0 ? c.cov(ia, ib) / d : (a == b ? 1.0 : 0.0);
+    }
+  }
+  warn_per_parameter(map, stds, o, rep);
+  warn_correlated(o, rep);
   return rep;
 }
 
