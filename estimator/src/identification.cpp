@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <nlopt.hpp>
 #include <random>
@@ -550,19 +551,82 @@ int worker_threads(const FitOptions& o) {
   return std::max(1, o.threads > 0 ? o.threads : hw);
 }
 
-FitResult identify_lm(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
-  const auto t_start = Clock::now();
-  const ParameterMap map = search_map(initial, data, o);
-  const std::size_t n = map.size();
-  const Scored full = full_rate(data);
-  const Scored coarse = decimated(data, o.global_sample_period_s);
-  const double noise = noise_floor(data.measured);
-  const double alpha = o.prior_weight * (std::isfinite(noise) && noise > 0.0 ? noise * noise : 1.0);
-  const int threads = worker_threads(o);
+// Runs job(0) .. job(total - 1) on up to `threads` workers; while they run,
+// calls on_wait() every progress interval (the caller's progress report).
+// The first exception a job threw is rethrown once all have finished.
+void run_on_workers(int total, int threads, SharedProgress& shared, double interval_s,
+                    const std::function<void(int)>& job, const std::function<void()>& on_wait) {
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(total));
+  std::atomic<int> next{0};
+  std::vector<std::thread> pool;
+  for (int w = 0; w < std::min(threads, total); ++w) {
+    pool.emplace_back([&] {
+      for (int s = next.fetch_add(1); s < total; s = next.fetch_add(1)) {
+        try {
+          job(s);
+        } catch (...) {
+          errors[static_cast<std::size_t>(s)] = std::current_exception();
+        }
+        shared.starts_done.fetch_add(1);
+      }
+    });
+  }
+  while (shared.starts_done.load() < total) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(interval_s));
+    on_wait();
+  }
+  for (auto& t : pool)
+    t.join();
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
 
-  FitResult r;
-  // Starting points (full value vectors): the given values, the extra ones,
-  // then (global) the informed grid, else perturbations of the given values.
+void report_progress(const FitOptions& o, const SharedProgress& shared, const char* stage, int done,
+                     int of, Clock::time_point t_start) {
+  if (!o.progress) return;
+  FitProgress pr;
+  pr.stage = stage;
+  pr.starts_done = done;
+  pr.starts_total = of;
+  pr.evaluations = shared.evaluations.load();
+  const double best = shared.best_mse.load();
+  pr.best_rmse = std::isfinite(best) ? std::sqrt(best) : std::nan("");
+  pr.elapsed_s = seconds_since(t_start);
+  o.progress(pr);
+}
+
+// The result at the best point found (unit coordinates). A search with a
+// small budget can end worse on the full-rate data than it began (its
+// descent ran on the decimated data): never return worse than the starting
+// values.
+void set_best_values(FitResult& r, const FrictionModel& initial, const FitData& data,
+                     const ParameterMap& map, const std::vector<double>& best_u,
+                     const std::vector<double>& weight) {
+  map.to_values(best_u, r.values);
+  r.model = initial.clone();
+  r.model->set_values(r.values);
+  r.simulated = simulate_friction(*r.model, data.motion);
+  r.train_rmse = std::sqrt(weighted_mse(data.measured, r.simulated, weight));
+  auto start_model = initial.clone();
+  auto start_sim = simulate_friction(*start_model, data.motion);
+  const double start_rmse = std::sqrt(weighted_mse(data.measured, start_sim, weight));
+  if (start_rmse < r.train_rmse) {
+    r.values.clear();
+    for (const auto& p : initial.parameters())
+      r.values.push_back(p.value);
+    r.model = std::move(start_model);
+    r.simulated = std::move(start_sim);
+    r.train_rmse = start_rmse;
+  }
+}
+
+// LM's starting points (full value vectors): the given values, the extra
+// ones, then (global) the informed grid, else perturbations of the given
+// values.
+std::vector<std::vector<double>> lm_starts(const FrictionModel& initial, const FitData& data,
+                                           const ParameterMap& map, const FitOptions& o,
+                                           std::vector<std::string>& notes) {
   std::vector<std::vector<double>> starts;
   starts.push_back(map.template_values());
   for (const auto& e : o.extra_starts)
@@ -570,7 +634,7 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
   if (o.global_stage) {
     const auto* tsm = dynamic_cast<const TsmFrictionModel*>(&initial);
     std::vector<std::vector<double>> informed;
-    if (tsm != nullptr) informed = informed_starts(*tsm, data, r.notes);
+    if (tsm != nullptr) informed = informed_starts(*tsm, data, notes);
     for (auto& v : informed)
       starts.push_back(std::move(v));
     // Models without a known structure (baselines), or data where the
@@ -579,7 +643,7 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
       std::mt19937_64 rng(o.seed * 1000003ULL);
       std::uniform_real_distribution<double> uni(0.0, 1.0);
       for (int s = 0; s < std::max(8, 2 * o.starts); ++s) {
-        std::vector<double> u(n);
+        std::vector<double> u(map.size());
         for (auto& v : u)
           v = uni(rng);
         std::vector<double> vals;
@@ -600,88 +664,75 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
       starts.push_back(std::move(vals));
     }
   }
+  return starts;
+}
 
-  SharedProgress shared;
-  const int total = static_cast<int>(starts.size());
-  // Screening: a short LM from every start on the decimated data, starts
-  // spread over the workers (each with its own problem and model clones).
-  struct Screened {
-    std::vector<double> u;
-    double cost = 0.0;
-    long evaluations = 0;
-  };
-  std::vector<Screened> screened(starts.size());
-  std::vector<std::exception_ptr> errors(starts.size());
-  std::atomic<int> next{0};
-  const bool screen = coarse.motion.size() < full.motion.size();
-  const auto screen_one = [&](int s) {
-    const auto u0 = map.to_unit(starts[static_cast<std::size_t>(s)]);
-    LmProblem p(initial, map, screen ? coarse : full, alpha, 1, shared, !screen);
-    p.set_reference(u0);
-    const LmOutcome lo = levenberg_marquardt(p, u0, o.screen_iterations);
-    screened[static_cast<std::size_t>(s)] = {lo.u, lo.cost, p.evaluations()};
-  };
-  std::vector<std::thread> pool;
-  for (int w = 0; w < std::min(threads, total); ++w) {
-    pool.emplace_back([&] {
-      for (int s = next.fetch_add(1); s < total; s = next.fetch_add(1)) {
-        try {
-          screen_one(s);
-        } catch (...) {
-          errors[static_cast<std::size_t>(s)] = std::current_exception();
-        }
-        shared.starts_done.fetch_add(1);
-      }
-    });
-  }
-  const auto report = [&](const char* stage, int done, int of) {
-    if (!o.progress) return;
-    FitProgress pr;
-    pr.stage = stage;
-    pr.starts_done = done;
-    pr.starts_total = of;
-    pr.evaluations = shared.evaluations.load();
-    const double best = shared.best_mse.load();
-    pr.best_rmse = std::isfinite(best) ? std::sqrt(best) : std::nan("");
-    pr.elapsed_s = seconds_since(t_start);
-    o.progress(pr);
-  };
-  while (shared.starts_done.load() < total) {
-    std::this_thread::sleep_for(std::chrono::duration<double>(o.progress_interval_s));
-    report("screening", shared.starts_done.load(), total);
-  }
-  for (auto& t : pool)
-    t.join();
-  for (const auto& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+struct Screened {
+  std::vector<double> u;
+  double cost = 0.0;
+  long evaluations = 0;
+};
 
-  // The best distinct candidates (ties to the lower index: deterministic).
-  std::vector<int> order(starts.size());
-  for (int s = 0; s < total; ++s)
-    order[static_cast<std::size_t>(s)] = s;
+// The best `count` distinct screened starts (ties to the lower index:
+// deterministic).
+std::vector<int> choose_distinct(const std::vector<Screened>& screened, int count) {
+  std::vector<int> order(screened.size());
+  for (std::size_t s = 0; s < screened.size(); ++s)
+    order[s] = static_cast<int>(s);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
     return screened[static_cast<std::size_t>(a)].cost < screened[static_cast<std::size_t>(b)].cost;
   });
   std::vector<int> chosen;
   for (int s : order) {
-    if (static_cast<int>(chosen.size()) >= std::max(1, o.starts)) break;
+    if (static_cast<int>(chosen.size()) >= std::max(1, count)) break;
     const auto& u = screened[static_cast<std::size_t>(s)].u;
     const bool distinct = std::all_of(chosen.begin(), chosen.end(), [&](int c) {
       const auto& v = screened[static_cast<std::size_t>(c)].u;
       double d2 = 0.0;
-      for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t j = 0; j < u.size(); ++j)
         d2 += (u[j] - v[j]) * (u[j] - v[j]);
       return std::sqrt(d2) > 0.02;
     });
     if (distinct) chosen.push_back(s);
   }
+  return chosen;
+}
+
+FitResult identify_lm(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+  const auto t_start = Clock::now();
+  const ParameterMap map = search_map(initial, data, o);
+  const Scored full = full_rate(data);
+  const Scored coarse = decimated(data, o.global_sample_period_s);
+  const double noise = noise_floor(data.measured);
+  const double alpha = o.prior_weight * (std::isfinite(noise) && noise > 0.0 ? noise * noise : 1.0);
+  const int threads = worker_threads(o);
+
+  FitResult r;
+  const std::vector<std::vector<double>> starts = lm_starts(initial, data, map, o, r.notes);
+  SharedProgress shared;
+  const int total = static_cast<int>(starts.size());
+
+  // Screening: a short LM from every start on the decimated data, starts
+  // spread over the workers (each with its own problem and model clones).
+  std::vector<Screened> screened(starts.size());
+  const bool screen = coarse.motion.size() < full.motion.size();
+  run_on_workers(
+      total, threads, shared, o.progress_interval_s,
+      [&](int s) {
+        const auto u0 = map.to_unit(starts[static_cast<std::size_t>(s)]);
+        LmProblem p(initial, map, screen ? coarse : full, alpha, 1, shared, !screen);
+        p.set_reference(u0);
+        const LmOutcome lo = levenberg_marquardt(p, u0, o.screen_iterations);
+        screened[static_cast<std::size_t>(s)] = {lo.u, lo.cost, p.evaluations()};
+      },
+      [&] { report_progress(o, shared, "screening", shared.starts_done.load(), total, t_start); });
+  const std::vector<int> chosen = choose_distinct(screened, o.starts);
 
   // Polish: LM on the full-rate data, Jacobian columns over all workers.
   std::vector<std::vector<double>> best_u;
   long evaluations = 0;
-  for (const auto& s : screened)
-    evaluations += s.evaluations;
+  for (const auto& sc : screened)
+    evaluations += sc.evaluations;
   for (std::size_t c = 0; c < chosen.size(); ++c) {
     const auto& sc = screened[static_cast<std::size_t>(chosen[c])];
     LmProblem p(initial, map, full, alpha, threads, shared, true);
@@ -703,31 +754,15 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
     evaluations += p.evaluations();
     r.starts.push_back(out);
     best_u.push_back(lo.u);
-    report("polish", static_cast<int>(c + 1), static_cast<int>(chosen.size()));
+    report_progress(o, shared, "polish", static_cast<int>(c + 1), static_cast<int>(chosen.size()),
+                    t_start);
   }
   int best = 0;
   for (std::size_t s = 1; s < r.starts.size(); ++s) {
     if (r.starts[s].rmse < r.starts[static_cast<std::size_t>(best)].rmse)
       best = static_cast<int>(s);
   }
-  map.to_values(best_u[static_cast<std::size_t>(best)], r.values);
-  r.model = initial.clone();
-  r.model->set_values(r.values);
-  r.simulated = simulate_friction(*r.model, data.motion);
-  r.train_rmse = std::sqrt(weighted_mse(data.measured, r.simulated, full.weight));
-  {
-    auto start_model = initial.clone();
-    auto start_sim = simulate_friction(*start_model, data.motion);
-    const double start_rmse = std::sqrt(weighted_mse(data.measured, start_sim, full.weight));
-    if (start_rmse < r.train_rmse) {
-      r.values.clear();
-      for (const auto& p : initial.parameters())
-        r.values.push_back(p.value);
-      r.model = std::move(start_model);
-      r.simulated = std::move(start_sim);
-      r.train_rmse = start_rmse;
-    }
-  }
+  set_best_values(r, initial, data, map, best_u[static_cast<std::size_t>(best)], full.weight);
   r.best_start = best;
   r.evaluations = evaluations;
   r.screened = total;
@@ -735,19 +770,13 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
   r.local_algorithm = "Levenberg-Marquardt (finite-difference Jacobian)";
   r.library = "own Levenberg-Marquardt (Eigen)";
   r.seconds = seconds_since(t_start);
-  report("done", static_cast<int>(chosen.size()), static_cast<int>(chosen.size()));
+  const int n_chosen = static_cast<int>(chosen.size());
+  report_progress(o, shared, "done", n_chosen, n_chosen, t_start);
   return r;
 }
 
-FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
-  const auto t_start = Clock::now();
-  const ParameterMap map = search_map(initial, data, o);
-  const std::size_t n = map.size();
-
-  const Scored full = full_rate(data);
-  const Scored coarse = decimated(data, o.global_sample_period_s);
-
-  // Start points: deterministic from the seed and the start's index only.
+// NLopt's start points: deterministic from the seed and the start's index only.
+std::vector<StartPlan> nlopt_plans(const ParameterMap& map, const FitOptions& o) {
   std::vector<StartPlan> plans;
   const int starts = std::max(1, o.starts);
   const auto u_init = map.to_unit(map.template_values());
@@ -767,103 +796,92 @@ FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, cons
     }
     plans.push_back(std::move(p));
   }
+  return plans;
+}
+
+constexpr nlopt::algorithm kNloptLocal = nlopt::LN_BOBYQA;
+
+// One NLopt start: the global stage on the decimated data (when planned),
+// then BOBYQA, first on the decimated data (most of the descent), then a
+// short polish on the full-rate data, which is what the result is judged
+// on. `u` holds the start point and receives the best point.
+StartOutcome run_nlopt_start(int s, const StartPlan& plan, const FrictionModel& initial,
+                             const ParameterMap& map, const Scored& full, const Scored& coarse,
+                             const FitOptions& o, SharedProgress& shared, std::vector<double>& u) {
+  const auto t0 = Clock::now();
+  const std::size_t n = map.size();
+  // NLopt's random stream is thread-local: seeding it here, per start,
+  // makes the start reproducible whichever thread runs it.
+  nlopt::srand(static_cast<unsigned long>(o.seed * 7919ULL + static_cast<std::uint64_t>(s)));
+  Objective obj(initial, map, shared);
+  obj.set_full_size(full.motion.size());
+  u = plan.u0;
+  StartOutcome out;
+  out.index = s;
+  const std::vector<double> lower(n, 0.0), upper(n, 1.0);
+  if (plan.global) {
+    nlopt::opt g(o.global_algorithm.c_str(), static_cast<unsigned>(n));
+    g.set_lower_bounds(lower);
+    g.set_upper_bounds(upper);
+    g.set_maxeval(o.global_evaluations);
+    if (o.global_population > 0) g.set_population(static_cast<unsigned>(o.global_population));
+    if (o.global_algorithm.find("MLSL") != std::string::npos) {
+      // MLSL runs local searches from low-discrepancy points; each local
+      // search is a short, loose BOBYQA.
+      nlopt::opt inner(kNloptLocal, static_cast<unsigned>(n));
+      inner.set_xtol_rel(1e-3);
+      inner.set_ftol_rel(1e-4);
+      inner.set_maxeval(o.mlsl_local_evaluations);
+      inner.set_initial_step(0.05);
+      g.set_local_optimizer(inner);
+    }
+    obj.use(coarse);
+    run_nlopt(g, obj, u);
+    out.global_rmse = std::sqrt(obj.best());
+  }
+  shared.in_local.fetch_add(1);
+  const auto polish = [&](const Scored& scored, int evaluations, double step) {
+    nlopt::opt l(kNloptLocal, static_cast<unsigned>(n));
+    l.set_lower_bounds(lower);
+    l.set_upper_bounds(upper);
+    l.set_maxeval(evaluations);
+    l.set_xtol_rel(1e-6);
+    l.set_ftol_rel(1e-9);
+    l.set_initial_step(step);
+    obj.use(scored);
+    return run_nlopt(l, obj, u);
+  };
+  if (o.coarse_local_evaluations > 0 && coarse.motion.size() < full.motion.size())
+    polish(coarse, o.coarse_local_evaluations, 0.05);
+  out.stop_reason = polish(full, o.local_evaluations, 0.01);
+  out.rmse = std::sqrt(obj.best());
+  out.evaluations = obj.evaluations();
+  out.seconds = seconds_since(t0);
+  return out;
+}
+
+FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+  const auto t_start = Clock::now();
+  const ParameterMap map = search_map(initial, data, o);
+  const Scored full = full_rate(data);
+  const Scored coarse = decimated(data, o.global_sample_period_s);
+  const std::vector<StartPlan> plans = nlopt_plans(map, o);
+  const int starts = static_cast<int>(plans.size());
 
   SharedProgress shared;
   std::vector<StartOutcome> outcomes(plans.size());
   std::vector<std::vector<double>> best_u(plans.size());
-  std::vector<std::exception_ptr> errors(plans.size());
-  std::atomic<int> next{0};
-  const nlopt::algorithm local_alg = nlopt::LN_BOBYQA;
-
-  const auto run_start = [&](int s) {
-    const auto t0 = Clock::now();
-    // NLopt's random stream is thread-local: seeding it here, per start,
-    // makes the start reproducible whichever thread runs it.
-    nlopt::srand(static_cast<unsigned long>(o.seed * 7919ULL + static_cast<std::uint64_t>(s)));
-    Objective obj(initial, map, shared);
-    obj.set_full_size(full.motion.size());
-    std::vector<double> u = plans[static_cast<std::size_t>(s)].u0;
-    StartOutcome& out = outcomes[static_cast<std::size_t>(s)];
-    out.index = s;
-    const std::vector<double> lower(n, 0.0), upper(n, 1.0);
-    if (plans[static_cast<std::size_t>(s)].global) {
-      nlopt::opt g(o.global_algorithm.c_str(), static_cast<unsigned>(n));
-      g.set_lower_bounds(lower);
-      g.set_upper_bounds(upper);
-      g.set_maxeval(o.global_evaluations);
-      if (o.global_population > 0) g.set_population(static_cast<unsigned>(o.global_population));
-      if (o.global_algorithm.find("MLSL") != std::string::npos) {
-        // MLSL runs local searches from low-discrepancy points; each local
-        // search is a short, loose BOBYQA.
-        nlopt::opt inner(local_alg, static_cast<unsigned>(n));
-        inner.set_xtol_rel(1e-3);
-        inner.set_ftol_rel(1e-4);
-        inner.set_maxeval(o.mlsl_local_evaluations);
-        inner.set_initial_step(0.05);
-        g.set_local_optimizer(inner);
-      }
-      obj.use(coarse);
-      run_nlopt(g, obj, u);
-      out.global_rmse = std::sqrt(obj.best());
-    }
-    shared.in_local.fetch_add(1);
-    const auto polish = [&](const Scored& scored, int evaluations, double step) {
-      nlopt::opt l(local_alg, static_cast<unsigned>(n));
-      l.set_lower_bounds(lower);
-      l.set_upper_bounds(upper);
-      l.set_maxeval(evaluations);
-      l.set_xtol_rel(1e-6);
-      l.set_ftol_rel(1e-9);
-      l.set_initial_step(step);
-      obj.use(scored);
-      return run_nlopt(l, obj, u);
-    };
-    // First on the cheap decimated data (most of the descent), then a short
-    // polish on the full-rate data, which is what the result is judged on.
-    if (o.coarse_local_evaluations > 0 && coarse.motion.size() < full.motion.size())
-      polish(coarse, o.coarse_local_evaluations, 0.05);
-    out.stop_reason = polish(full, o.local_evaluations, 0.01);
-    out.rmse = std::sqrt(obj.best());
-    out.evaluations = obj.evaluations();
-    out.seconds = seconds_since(t0);
-    best_u[static_cast<std::size_t>(s)] = u;
-  };
-
-  const int workers = std::min(starts, worker_threads(o));
-  std::vector<std::thread> pool;
-  for (int w = 0; w < workers; ++w) {
-    pool.emplace_back([&] {
-      for (int s = next.fetch_add(1); s < starts; s = next.fetch_add(1)) {
-        try {
-          run_start(s);
-        } catch (...) {
-          errors[static_cast<std::size_t>(s)] = std::current_exception();
-        }
-        shared.starts_done.fetch_add(1);
-      }
-    });
-  }
-  const auto report = [&](const char* stage) {
-    if (!o.progress) return;
-    FitProgress p;
-    p.stage = stage;
-    p.starts_done = shared.starts_done.load();
-    p.starts_total = starts;
-    p.evaluations = shared.evaluations.load();
-    const double best = shared.best_mse.load();
-    p.best_rmse = std::isfinite(best) ? std::sqrt(best) : std::nan("");
-    p.elapsed_s = seconds_since(t_start);
-    o.progress(p);
-  };
-  while (shared.starts_done.load() < starts) {
-    std::this_thread::sleep_for(std::chrono::duration<double>(o.progress_interval_s));
-    report(shared.in_local.load() > 0 ? "local" : "global");
-  }
-  for (auto& t : pool)
-    t.join();
-  for (const auto& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+  run_on_workers(
+      starts, std::min(starts, worker_threads(o)), shared, o.progress_interval_s,
+      [&](int s) {
+        const auto k = static_cast<std::size_t>(s);
+        outcomes[k] =
+            run_nlopt_start(s, plans[k], initial, map, full, coarse, o, shared, best_u[k]);
+      },
+      [&] {
+        report_progress(o, shared, shared.in_local.load() > 0 ? "local" : "global",
+                        shared.starts_done.load(), starts, t_start);
+      });
 
   // Best start; ties go to the lower index, so the choice is deterministic.
   int best = 0;
@@ -872,36 +890,16 @@ FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, cons
       best = s;
   }
   FitResult r;
-  map.to_values(best_u[static_cast<std::size_t>(best)], r.values);
-  r.model = initial.clone();
-  r.model->set_values(r.values);
-  r.simulated = simulate_friction(*r.model, data.motion);
-  r.train_rmse = std::sqrt(weighted_mse(data.measured, r.simulated, full.weight));
-  // A search with a small budget can end worse on the full-rate data than it
-  // began (its descent ran on the decimated data): never return worse than
-  // the starting values.
-  {
-    auto start_model = initial.clone();
-    auto start_sim = simulate_friction(*start_model, data.motion);
-    const double start_rmse = std::sqrt(weighted_mse(data.measured, start_sim, full.weight));
-    if (start_rmse < r.train_rmse) {
-      r.values.clear();
-      for (const auto& p : initial.parameters())
-        r.values.push_back(p.value);
-      r.model = std::move(start_model);
-      r.simulated = std::move(start_sim);
-      r.train_rmse = start_rmse;
-    }
-  }
+  set_best_values(r, initial, data, map, best_u[static_cast<std::size_t>(best)], full.weight);
   r.starts = std::move(outcomes);
   r.best_start = best;
   for (const auto& s : r.starts)
     r.evaluations += s.evaluations;
   r.global_algorithm = o.global_stage ? o.global_algorithm : "";
-  r.local_algorithm = nlopt::algorithm_name(local_alg);
+  r.local_algorithm = nlopt::algorithm_name(kNloptLocal);
   r.library = "NLopt";
   r.seconds = seconds_since(t_start);
-  report("done");
+  report_progress(o, shared, "done", shared.starts_done.load(), starts, t_start);
   return r;
 }
 }  // namespace
