@@ -6,8 +6,9 @@
 
 namespace tsmh::estimator {
 
-DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionModel> model, double radius_m,
-                                             const DifferentiatorConfig& diff, StartState start)
+DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> model,
+                                             double radius_m, const DifferentiatorConfig& diff,
+                                             StartState start)
     : model_(std::move(model)), radius_(radius_m), diff_(diff), start_(start) {
   if (!model_) throw std::invalid_argument("estimator: no friction model");
   if (!(radius_m > 0.0) || !std::isfinite(radius_m))

@@ -36,8 +36,9 @@ enum class StartState {
 
 class DistalTorqueEstimator {
  public:
-  /// `model` is owned; radius_m > 0 (throws std::invalid_argument otherwise).
-  DistalTorqueEstimator(std::unique_ptr<FrictionModel> model, double radius_m,
+  /// `model` is owned (only its real-time face is used); radius_m > 0
+  /// (throws std::invalid_argument otherwise).
+  DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> model, double radius_m,
                         const DifferentiatorConfig& diff = {},
                         StartState start = StartState::free_tip);
 
@@ -52,13 +53,13 @@ class DistalTorqueEstimator {
 
   void reset() noexcept;
   double radius() const { return radius_; }
-  const FrictionModel& model() const { return *model_; }
+  const FrictionDynamics& model() const { return *model_; }
 
  private:
   Estimate finish(double t, double x, double xd, double xdd, double acc_sign,
                   double tau_in) noexcept;
 
-  std::unique_ptr<FrictionModel> model_;
+  std::unique_ptr<FrictionDynamics> model_;
   double radius_;
   Differentiator diff_;
   StartState start_;

@@ -1,8 +1,11 @@
 #pragma once
-// The interface every friction model implements: the paper's composable
+// The interfaces every friction model implements: the paper's composable
 // tendon-sheath model and the baselines (Dahl, LuGre, Kaneko's Coulomb/capstan).
-// Models are stateful value objects: step() is called once per sample, never
-// allocates and never throws, so the 1 kHz loop can call it.
+// Two faces, for two kinds of user:
+// - FrictionDynamics, what the 1 kHz loop calls: step() once per sample,
+//   never allocates and never throws;
+// - FrictionModel, what identification and the params files add: the
+//   model's family, its parameters and how to set them, copies.
 
 #include <memory>
 #include <span>
@@ -24,18 +27,11 @@ struct Parameter {
   std::string unit;
 };
 
-class FrictionModel {
+/// The real-time face of a model: a stateful value object stepped once per
+/// sample.
+class FrictionDynamics {
  public:
-  virtual ~FrictionModel() = default;
-
-  /// Stable id of the model family: "tsm", "dahl", "lugre", "coulomb_capstan".
-  virtual std::string kind() const = 0;
-
-  /// Parameters in a fixed order; set_values() takes values in the same order.
-  virtual std::vector<Parameter> parameters() const = 0;
-  /// Replaces the parameter values (size must equal parameters().size(); values
-  /// are used as given, callers clamp to bounds). Resets the internal state.
-  virtual void set_values(std::span<const double> values) = 0;
+  virtual ~FrictionDynamics() = default;
 
   /// Clears the internal state (friction zero, at rest).
   virtual void reset() noexcept = 0;
@@ -52,6 +48,19 @@ class FrictionModel {
   /// (N) as the model allows at rest at `m` (e.g. within +-gamma Ff). Models
   /// without a settable state ignore it. Never allocates or throws.
   virtual void preset(double /*friction*/, const Motion& /*m*/) noexcept {}
+};
+
+/// The identification face: what a fit searches and a params file holds.
+class FrictionModel : public FrictionDynamics {
+ public:
+  /// Stable id of the model family: "tsm", "dahl", "lugre", "coulomb_capstan".
+  virtual std::string kind() const = 0;
+
+  /// Parameters in a fixed order; set_values() takes values in the same order.
+  virtual std::vector<Parameter> parameters() const = 0;
+  /// Replaces the parameter values (size must equal parameters().size(); values
+  /// are used as given, callers clamp to bounds). Resets the internal state.
+  virtual void set_values(std::span<const double> values) = 0;
 
   virtual std::unique_ptr<FrictionModel> clone() const = 0;
 };
