@@ -10,6 +10,7 @@
 #include <functional>
 #include <limits>
 #include <nlopt.hpp>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <thread>
@@ -398,69 +399,142 @@ double quantile_of(std::vector<double> v, double q) {
 // gamma theta. Returns starting value vectors (parameters() order) over a
 // small grid of the shapes the data cannot give directly (theta's share of
 // the reversal slope against lambda's, the Stribeck decay).
-std::vector<std::vector<double>> informed_starts(const TsmFrictionModel& initial, const FitData& d,
-                                                 std::vector<std::string>& notes) {
-  const TsmModelSpec& spec = initial.spec();
+// What the data shows directly: the sliding plateaus (median |F| / gamma
+// where |xd| is above half its 95th percentile), in each direction.
+struct Plateaus {
+  double level_pos = 0.0, level_neg = 0.0;  // sliding levels (F / gamma)
+  double v_fast = 0.0;                      // rad/s, the speed above which they are read
+  double v_mid = 0.0;                       // rad/s, median speed above v_fast
+};
+
+std::optional<Plateaus> sliding_plateaus(const FitData& d, double gamma) {
   std::vector<double> speed;
   for (std::size_t i = 0; i < d.size(); ++i) {
     if (d.role[i] != SampleRole::ignored) speed.push_back(std::fabs(d.motion[i].xd));
   }
-  const double v95 = quantile_of(speed, 0.95);
-  const double v_fast = 0.5 * v95;
+  Plateaus p;
+  p.v_fast = 0.5 * quantile_of(speed, 0.95);
   std::vector<double> fpos, fneg, vfast;
   for (std::size_t i = 0; i < d.size(); ++i) {
     if (d.role[i] == SampleRole::ignored) continue;
-    if (d.motion[i].xd > v_fast) fpos.push_back(d.measured[i]);
-    if (d.motion[i].xd < -v_fast) fneg.push_back(-d.measured[i]);
-    if (std::fabs(d.motion[i].xd) > v_fast) vfast.push_back(std::fabs(d.motion[i].xd));
+    if (d.motion[i].xd > p.v_fast) fpos.push_back(d.measured[i]);
+    if (d.motion[i].xd < -p.v_fast) fneg.push_back(-d.measured[i]);
+    if (std::fabs(d.motion[i].xd) > p.v_fast) vfast.push_back(std::fabs(d.motion[i].xd));
   }
-  if (fpos.size() < 20 || fneg.size() < 20) return {};
-  const double gamma = spec.gamma;
-  const double level_pos = std::max(0.02, quantile_of(fpos, 0.5) / gamma);
-  const double level_neg = std::max(0.02, quantile_of(fneg, 0.5) / gamma);
-  const double v_mid = quantile_of(vfast, 0.5);
+  if (fpos.size() < 20 || fneg.size() < 20) return std::nullopt;
+  p.level_pos = std::max(0.02, quantile_of(fpos, 0.5) / gamma);
+  p.level_neg = std::max(0.02, quantile_of(fneg, 0.5) / gamma);
+  p.v_mid = quantile_of(vfast, 0.5);
+  return p;
+}
 
-  // Reversal slopes: after each velocity reversal, regress F on x over the
-  // samples where |F| is below 40 % of the plateau (the steep part).
-  const double f_band = 0.4 * gamma * 0.5 * (level_pos + level_neg);
+// Reversal slopes: after each velocity reversal, regress F on x over the
+// samples where |F| is below `f_band` (the steep part); their median, N/rad.
+std::optional<double> reversal_slope(const FitData& d, double f_band) {
   std::vector<double> slopes;
-  {
-    int state = 0;
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    int cnt = 0;
-    const auto flush = [&] {
-      if (cnt >= 5) {
-        const double den = cnt * sxx - sx * sx;
-        if (den > 0.0) slopes.push_back(std::fabs((cnt * sxy - sx * sy) / den));
-      }
-      sx = sy = sxx = sxy = 0.0;
-      cnt = 0;
-    };
-    for (std::size_t i = 0; i < d.size(); ++i) {
-      const auto& m = d.motion[i];
-      const int now = m.xd > 0.05 ? 1 : (m.xd < -0.05 ? -1 : 0);
-      if (now != 0 && now != state) {
-        flush();
-        state = now;
-      }
-      if (d.role[i] != SampleRole::ignored && std::fabs(d.measured[i]) < f_band && state != 0) {
-        sx += m.x;
-        sy += d.measured[i];
-        sxx += m.x * m.x;
-        sxy += m.x * d.measured[i];
-        ++cnt;
-      }
+  int state = 0;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int cnt = 0;
+  const auto flush = [&] {
+    if (cnt >= 5) {
+      const double den = cnt * sxx - sx * sx;
+      if (den > 0.0) slopes.push_back(std::fabs((cnt * sxy - sx * sy) / den));
     }
-    flush();
+    sx = sy = sxx = sxy = 0.0;
+    cnt = 0;
+  };
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const auto& m = d.motion[i];
+    const int now = m.xd > 0.05 ? 1 : (m.xd < -0.05 ? -1 : 0);
+    if (now != 0 && now != state) {
+      flush();
+      state = now;
+    }
+    if (d.role[i] != SampleRole::ignored && std::fabs(d.measured[i]) < f_band && state != 0) {
+      sx += m.x;
+      sy += d.measured[i];
+      sxx += m.x * m.x;
+      sxy += m.x * d.measured[i];
+      ++cnt;
+    }
   }
-  if (slopes.empty()) return {};
-  const double theta_slope = std::clamp(quantile_of(slopes, 0.5) / gamma, 0.2, 500.0);
+  flush();
+  if (slopes.empty()) return std::nullopt;
+  return quantile_of(slopes, 0.5);
+}
+
+// One start of the grid: the spec with the read levels and slope, the grid's
+// theta factor, lambda and Stribeck rate; nullopt when it is not a valid spec.
+std::optional<std::vector<double>> grid_start(TsmModelSpec s, const Plateaus& pl, double theta,
+                                              double lam, double k1) {
+  const bool has_stribeck = s.has(TermKind::stribeck);
+  s.theta = theta;
+  const double mu1 = has_stribeck ? 0.5 * std::min(pl.level_pos, pl.level_neg) : 0.0;
+  const double strib = mu1 * std::exp(-k1 * pl.v_mid);
+  for (auto& t : s.terms) {
+    switch (t.kind) {
+      case TermKind::coulomb:
+        t.p[0] = std::max(0.02, pl.level_pos - strib);
+        break;
+      case TermKind::direction_asymmetry:
+        t.p[0] = std::max(0.02, pl.level_neg - strib);
+        break;
+      case TermKind::stribeck:
+        t.p[0] = mu1;
+        t.p[1] = k1;
+        break;
+      case TermKind::reversal_offset:
+        t.p[0] = lam;
+        break;
+      case TermKind::acceleration_dependence:
+        // An amplitude and its rate both at 0 (a "flat" start) is a
+        // saddle: mu2 (1 - e^(-kappa2 |xdd|)) has no gradient in either.
+        // Start such pairs at small values of the paper's order.
+        if (!(t.p[0] > 0.0) || !(t.p[1] > 0.0)) {
+          t.p[0] = 0.05 * pl.level_pos;
+          t.p[1] = 0.03;
+        }
+        if (!(t.p[2] > 0.0) || !(t.p[3] > 0.0)) {
+          t.p[2] = 0.1 * pl.level_neg;
+          t.p[3] = 10.0;
+        }
+        if (!(t.p[4] > 0.1)) t.p[4] = 6.0;
+        break;
+      default:
+        break;
+    }
+  }
+  if (!s.has(TermKind::direction_asymmetry)) {
+    for (auto& t : s.terms)
+      if (t.kind == TermKind::coulomb)
+        t.p[0] = std::max(0.02, 0.5 * (pl.level_pos + pl.level_neg) - strib);
+  }
+  try {
+    validate(s);
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;
+  }
+  std::vector<double> v;
+  for (const auto& p : TsmFrictionModel(s).parameters())
+    v.push_back(p.value);
+  return v;
+}
+
+std::vector<std::vector<double>> informed_starts(const TsmFrictionModel& initial, const FitData& d,
+                                                 std::vector<std::string>& notes) {
+  const TsmModelSpec& spec = initial.spec();
+  const double gamma = spec.gamma;
+  const auto pl = sliding_plateaus(d, gamma);
+  if (!pl) return {};
+  const auto slope = reversal_slope(d, 0.4 * gamma * 0.5 * (pl->level_pos + pl->level_neg));
+  if (!slope) return {};
+  const double theta_slope = std::clamp(*slope / gamma, 0.2, 500.0);
   char buf[240];
   std::snprintf(buf, sizeof buf,
                 "informed starts: sliding plateaus %.3g N (xd > 0) and %.3g N (xd < 0) above "
                 "%.3g rad/s, reversal slope %.3g N/rad (theta about %.3g with gamma %.4g)",
-                gamma * level_pos, gamma * level_neg, v_fast, theta_slope * gamma, theta_slope,
-                gamma);
+                gamma * pl->level_pos, gamma * pl->level_neg, pl->v_fast, theta_slope * gamma,
+                theta_slope, gamma);
   notes.push_back(buf);
 
   std::vector<std::vector<double>> out;
@@ -474,57 +548,7 @@ std::vector<std::vector<double>> informed_starts(const TsmFrictionModel& initial
       if (!has_lambda && lam != lambdas[0]) continue;
       for (double k1 : kappas) {
         if (!has_stribeck && k1 != kappas[0]) continue;
-        TsmModelSpec s = spec;
-        s.theta = theta_slope * tf;
-        const double mu1 = has_stribeck ? 0.5 * std::min(level_pos, level_neg) : 0.0;
-        const double strib = mu1 * std::exp(-k1 * v_mid);
-        for (auto& t : s.terms) {
-          switch (t.kind) {
-            case TermKind::coulomb:
-              t.p[0] = std::max(0.02, level_pos - strib);
-              break;
-            case TermKind::direction_asymmetry:
-              t.p[0] = std::max(0.02, level_neg - strib);
-              break;
-            case TermKind::stribeck:
-              t.p[0] = mu1;
-              t.p[1] = k1;
-              break;
-            case TermKind::reversal_offset:
-              t.p[0] = lam;
-              break;
-            case TermKind::acceleration_dependence:
-              // An amplitude and its rate both at 0 (a "flat" start) is a
-              // saddle: mu2 (1 - e^(-kappa2 |xdd|)) has no gradient in either.
-              // Start such pairs at small values of the paper's order.
-              if (!(t.p[0] > 0.0) || !(t.p[1] > 0.0)) {
-                t.p[0] = 0.05 * level_pos;
-                t.p[1] = 0.03;
-              }
-              if (!(t.p[2] > 0.0) || !(t.p[3] > 0.0)) {
-                t.p[2] = 0.1 * level_neg;
-                t.p[3] = 10.0;
-              }
-              if (!(t.p[4] > 0.1)) t.p[4] = 6.0;
-              break;
-            default:
-              break;
-          }
-        }
-        if (!s.has(TermKind::direction_asymmetry)) {
-          for (auto& t : s.terms)
-            if (t.kind == TermKind::coulomb)
-              t.p[0] = std::max(0.02, 0.5 * (level_pos + level_neg) - strib);
-        }
-        try {
-          validate(s);
-        } catch (const std::invalid_argument&) {
-          continue;
-        }
-        std::vector<double> v;
-        for (const auto& p : TsmFrictionModel(s).parameters())
-          v.push_back(p.value);
-        out.push_back(std::move(v));
+        if (auto v = grid_start(spec, *pl, theta_slope * tf, lam, k1)) out.push_back(std::move(*v));
       }
     }
   }
