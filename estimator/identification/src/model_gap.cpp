@@ -874,42 +874,45 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
   return g;
 }
 
-nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
-                               const std::vector<std::string>& plots, const std::string& plot_error,
-                               double seconds) {
-  const auto gap = [](const ErrorMetrics& m) {
-    return nlohmann::json{{"rmse", m.rmse},
-                          {"p2p", m.p2p},
-                          {"fit_percent", m.fit_percent},
-                          {"bias", m.bias},
-                          {"samples", m.samples}};
-  };
-  const auto regimes = [&](const std::vector<RegimeError>& rs) {
-    nlohmann::json a = nlohmann::json::array();
-    for (const auto& r : rs) {
-      a.push_back({{"name", r.name},
-                   {"group", r.group},
-                   {"where", r.where},
-                   {"rmse", r.metrics.rmse},
-                   {"mean_error", r.mean_error},
-                   {"magnitude_excess", r.magnitude_excess},
-                   {"concentration", r.concentration},
-                   {"samples", r.metrics.samples}});
-    }
-    return a;
-  };
-  const auto diagnostics = [](const ResidualDiagnostics& dg) {
-    nlohmann::json regs = nlohmann::json::array();
-    for (const auto& r : dg.regressors)
-      regs.push_back({{"name", r.name}, {"explained", r.explained}});
-    return nlohmann::json{{"lag1_autocorrelation", dg.lag1_autocorrelation},
-                          {"correlation_time_samples", dg.correlation_time},
-                          {"ljung_box_q20", dg.ljung_box},
-                          {"white", dg.white},
-                          {"candidate_regressors", regs}};
-  };
+namespace {
+
+nlohmann::json gap_json(const ErrorMetrics& m) {
+  return nlohmann::json{{"rmse", m.rmse},
+                        {"p2p", m.p2p},
+                        {"fit_percent", m.fit_percent},
+                        {"bias", m.bias},
+                        {"samples", m.samples}};
+}
+
+nlohmann::json regimes_json(const std::vector<RegimeError>& rs) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& r : rs) {
+    a.push_back({{"name", r.name},
+                 {"group", r.group},
+                 {"where", r.where},
+                 {"rmse", r.metrics.rmse},
+                 {"mean_error", r.mean_error},
+                 {"magnitude_excess", r.magnitude_excess},
+                 {"concentration", r.concentration},
+                 {"samples", r.metrics.samples}});
+  }
+  return a;
+}
+
+nlohmann::json diagnostics_json(const ResidualDiagnostics& dg) {
+  nlohmann::json regs = nlohmann::json::array();
+  for (const auto& r : dg.regressors)
+    regs.push_back({{"name", r.name}, {"explained", r.explained}});
+  return nlohmann::json{{"lag1_autocorrelation", dg.lag1_autocorrelation},
+                        {"correlation_time_samples", dg.correlation_time},
+                        {"ljung_box_q20", dg.ljung_box},
+                        {"white", dg.white},
+                        {"candidate_regressors", regs}};
+}
+
+nlohmann::json effects_json(const std::vector<EffectFound>& found) {
   nlohmann::json effects = nlohmann::json::array();
-  for (const auto& e : g.effects) {
+  for (const auto& e : found) {
     nlohmann::json params = nlohmann::json::object();
     for (const auto& [name, value] : e.parameters)
       params[name] = value;
@@ -924,18 +927,22 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
                        {"confident", e.confounded_with.empty()},
                        {"where", e.where},
                        {"meaning", e.meaning},
-                       {"gap_after", gap(e.gap_after)},
+                       {"gap_after", gap_json(e.gap_after)},
                        {"gain", e.gain},
                        {"parameters", params}});
   }
+  return effects;
+}
+
+nlohmann::json rounds_json(const std::vector<GapRound>& all) {
   nlohmann::json rounds = nlohmann::json::array();
-  for (const auto& r : g.rounds) {
+  for (const auto& r : all) {
     nlohmann::json trials = nlohmann::json::array();
     for (const auto& t : r.trials) {
       trials.push_back({{"name", t.name},
                         {"family", t.family},
                         {"explained_first_order", t.explained},
-                        {"validation", gap(t.validation)},
+                        {"validation", gap_json(t.validation)},
                         {"gain", t.gain},
                         {"delta_bic", t.delta_bic},
                         {"z", t.z},
@@ -950,13 +957,15 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
                         {"gain", rc.gain},
                         {"accepted_gain_after_rival", rc.winner_gain_after},
                         {"accepted_still_qualifies", rc.winner_still_qualifies}});
-    rounds.push_back({{"gap_before", gap(r.before)}, {"candidates", trials}, {"rivals", rivals}});
+    rounds.push_back(
+        {{"gap_before", gap_json(r.before)}, {"candidates", trials}, {"rivals", rivals}});
   }
-  nlohmann::json warnings = nlohmann::json::array();
-  if (!plot_error.empty()) warnings.push_back("plots: " + plot_error);
+  return rounds;
+}
+
+nlohmann::json confounds_json(const std::vector<Confound>& all) {
   nlohmann::json confounds = nlohmann::json::array();
-  for (const auto& c : g.confounds) {
-    warnings.push_back(c.warning);
+  for (const auto& c : all) {
     confounds.push_back({{"named", c.named},
                          {"rival", c.rival},
                          {"named_gain", c.named_gain},
@@ -964,11 +973,36 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
                          {"experiment", c.experiment},
                          {"warning", c.warning}});
   }
+  return confounds;
+}
+
+nlohmann::json acceptance_json(const GapOptions& o) {
+  return {{"margin", o.margin},
+          {"rule",
+           "accept the candidate with the largest validation-RMSE reduction when it is "
+           ">= margin, or when its improvement is significant (z >= min_z) and removes >= "
+           "min_excess_share of the MSE above the noise floor; stop when none qualifies, or "
+           "when the gap is within noise_stop x the "
+           "noise floor. BIC (effective sample size) is reported with every trial"},
+          {"noise_stop", o.noise_stop},
+          {"min_z", o.min_z},
+          {"min_excess_share", o.min_excess_share}};
+}
+
+}  // namespace
+
+nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
+                               const std::vector<std::string>& plots, const std::string& plot_error,
+                               double seconds) {
+  nlohmann::json warnings = nlohmann::json::array();
+  if (!plot_error.empty()) warnings.push_back("plots: " + plot_error);
+  for (const auto& c : g.confounds)
+    warnings.push_back(c.warning);
   return {{"tool", "tsm gap"},
           {"base", g.base_name},
-          {"gap_base", gap(g.gap_base)},
-          {"effects", effects},
-          {"gap_final", gap(g.gap_final)},
+          {"gap_base", gap_json(g.gap_base)},
+          {"effects", effects_json(g.effects)},
+          {"gap_final", gap_json(g.gap_final)},
           {"data",
            {{"source", g.data.source},
             {"samples", g.data.size()},
@@ -978,24 +1012,14 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
             {"validation_samples", g.data.count(SampleRole::validation)},
             {"block_s", g.data.block_s}}},
           {"noise_floor", g.noise},
-          {"acceptance",
-           {{"margin", o.margin},
-            {"rule",
-             "accept the candidate with the largest validation-RMSE reduction when it is "
-             ">= margin, or when its improvement is significant (z >= min_z) and removes >= "
-             "min_excess_share of the MSE above the noise floor; stop when none qualifies, or "
-             "when the gap is within noise_stop x the "
-             "noise floor. BIC (effective sample size) is reported with every trial"},
-            {"noise_stop", o.noise_stop},
-            {"min_z", o.min_z},
-            {"min_excess_share", o.min_excess_share}}},
-          {"regimes_base", regimes(g.regimes_base)},
-          {"regimes_final", regimes(g.regimes_final)},
-          {"diagnostics_base", diagnostics(g.diagnostics_base)},
-          {"diagnostics_final", diagnostics(g.diagnostics_final)},
-          {"rounds", rounds},
+          {"acceptance", acceptance_json(o)},
+          {"regimes_base", regimes_json(g.regimes_base)},
+          {"regimes_final", regimes_json(g.regimes_final)},
+          {"diagnostics_base", diagnostics_json(g.diagnostics_base)},
+          {"diagnostics_final", diagnostics_json(g.diagnostics_final)},
+          {"rounds", rounds_json(g.rounds)},
           {"stop_reason", g.stop_reason},
-          {"confounds", confounds},
+          {"confounds", confounds_json(g.confounds)},
           {"noise_floor_ratio", g.noise > 0.0 ? g.gap_final.rmse / g.noise : 0.0},
           {"params_file", "params.yaml"},
           {"plots", plots},
