@@ -59,19 +59,24 @@ struct Rig {
   }
 
   ~Rig() {
-    if (!manual || device->status() == DeviceStatus::kClosed) return;
-    // close() waits (up to 100 ms of real time) for the I/O context to send
-    // a last zero-torque report; on a manual bus that context is tick(), so
-    // a real thread ticks while close() waits.
-    std::atomic<bool> closed{false};
+    if (manual && device->status() != DeviceStatus::kClosed)
+      ticking_while([&] { device->close(); });
+  }
+
+  // Runs `f`, which waits in real time for the driver's I/O context
+  // (close() for its last report, clear_fault() for the firmware's answer):
+  // on a manual bus that context is tick(), so a real thread ticks meanwhile.
+  template <class F>
+  void ticking_while(F f) {
+    std::atomic<bool> done{false};
     std::thread io([&] {
-      while (!closed) {
+      while (!done) {
         tick();
         std::this_thread::sleep_for(200us);
       }
     });
-    device->close();
-    closed = true;
+    f();
+    done = true;
     io.join();
   }
 
@@ -372,26 +377,18 @@ TEST(ConsoleDevice, ZeroOffsetAndDirectionFromTheProfile) {
 }
 
 TEST(ConsoleDevice, DeviceFaultLatchesZeroTorqueAndClears) {
-  EmulatorBus::Options o = Rig::manual_options();
-  // clear_fault() waits in real time for the firmware's answer: reports must
-  // flow on the emulator's own thread, so this test runs in real time.
-  o.pacing = EmulatorBus::Pacing::kRealTime;
-  Rig rig({}, builtin_console_profile(), o);
+  Rig rig;
   rig.device->open();
   rig.device->set_enabled(true);
-  std::atomic<bool> stop{false};
-  std::thread loop([&] {
-    while (!stop) {
-      rig.device->write_torque(JointArray{0.05, 0.05});
-      std::this_thread::sleep_for(1ms);
-    }
-  });
-  std::this_thread::sleep_for(30ms);
+  for (int k = 0; k < 30; ++k) {
+    rig.device->write_torque(JointArray{0.05, 0.05});
+    rig.cycle();
+  }
+  EXPECT_NEAR(rig.applied_torque(0), 0.05, 1e-6);
   rig.bus->with_firmware(
       [](Firmware& fw) { fw.inject_fault(protocol::FirmwareFault::kOverCurrent); });
-  for (int i = 0; i < 2000 && rig.device->status() != DeviceStatus::kFault; ++i) {
-    std::this_thread::sleep_for(1ms);
-  }
+  rig.device->write_torque(JointArray{0.05, 0.05});
+  rig.cycle();  // the report saying so
   EXPECT_EQ(rig.device->status(), DeviceStatus::kFault);
   const DeviceReading r = rig.device->read(rig.now());
   EXPECT_EQ(r.fault, FaultCode::kDeviceReported);
@@ -399,11 +396,15 @@ TEST(ConsoleDevice, DeviceFaultLatchesZeroTorqueAndClears) {
   EXPECT_NE(rig.device->last_error().find("over-current"), std::string::npos)
       << rig.device->last_error();
   EXPECT_EQ(rig.applied_torque(0), 0.0);
-  EXPECT_TRUE(rig.device->clear_fault());
+  bool cleared = false;
+  rig.ticking_while([&] { cleared = rig.device->clear_fault(); });
+  EXPECT_TRUE(cleared);
   EXPECT_EQ(rig.device->status(), DeviceStatus::kOk);
-  EXPECT_FALSE(rig.device->read(rig.now()).enabled) << "a cleared fault leaves torque disabled";
-  stop = true;
-  loop.join();
+  rig.device->write_torque(JointArray{0.05, 0.05});
+  const DeviceReading after = rig.cycle();
+  EXPECT_EQ(after.status, DeviceStatus::kOk) << "the firmware cleared it too (else it re-latches)";
+  EXPECT_FALSE(after.enabled) << "a cleared fault leaves torque disabled";
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
 }
 
 TEST(ConsoleDevice, WorkspaceViolationIsAFaultNamingTheJoint) {
@@ -471,23 +472,25 @@ TEST(ConsoleDevice, StaleReadingsReadAsDisconnected) {
 }
 
 TEST(ConsoleDevice, CloseSendsZeroAndDisable) {
-  EmulatorBus::Options o = Rig::manual_options();
-  // close() waits in real time for the I/O context to send its last report;
-  // this test checks what the emulator's own thread received.
-  o.pacing = EmulatorBus::Pacing::kRealTime;
-  Rig rig({}, builtin_console_profile(), o);
+  Rig rig;
   rig.device->open();
   rig.device->set_enabled(true);
   for (int k = 0; k < 20; ++k) {
     rig.device->write_torque(JointArray{0.1, 0.1});
-    std::this_thread::sleep_for(1ms);
+    rig.cycle();
   }
-  rig.device->close();
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+  rig.ticking_while([&] { rig.device->close(); });
   EXPECT_EQ(rig.device->status(), DeviceStatus::kClosed);
   bool enabled = true;
-  rig.bus->with_firmware([&](Firmware& fw) { enabled = fw.torque_enabled(); });
+  std::uint64_t watchdog_trips = 1;
+  rig.bus->with_firmware([&](Firmware& fw) {
+    enabled = fw.torque_enabled();
+    watchdog_trips = fw.stats().watchdog_trips;
+  });
   EXPECT_FALSE(enabled);
   EXPECT_EQ(rig.applied_torque(0), 0.0);
+  EXPECT_EQ(watchdog_trips, 0u) << "disabled by close()'s last report, not by the watchdog";
 }
 
 TEST(ConsoleDevice, RealTimeEmulatorStreamsToAOneKilohertzLoop) {
