@@ -42,7 +42,7 @@ class EmulatorBus final : public TransportProvider {
     std::uint16_t product_id = 0x0001;
     std::string serial = "EMU-0001";
     std::string path = "emu:0";
-    /// Called on the bus's pacing (the firmware locked) before each firmware
+    /// Called at each tick (the firmware locked) before each firmware
     /// step, e.g. to apply an operator's hand torque. Optional.
     std::function<void(Firmware&, std::int64_t dt_ns)> world;
     /// Called (firmware locked) right after the firmware accepted an output
