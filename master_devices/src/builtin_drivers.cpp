@@ -25,8 +25,10 @@ std::vector<ConnectedDevice> list_with(TransportProvider& provider, const std::s
   return out;
 }
 
-std::shared_ptr<EmulatorBus> make_emulator(FieldReader& r, const DeviceProfile& profile) {
+std::shared_ptr<EmulatorBus> make_emulator(FieldReader& r, const DeviceProfile& profile,
+                                           std::shared_ptr<const Clock> clock) {
   EmulatorBus::Options options;
+  options.clock = std::move(clock);
   options.firmware = firmware_for_profile(profile);
   options.vendor_id = profile.vendor_id;
   options.product_id = profile.product_id;
@@ -125,28 +127,30 @@ DeviceProfile select_profile(FieldReader& r, const std::vector<DeviceProfile>& k
 void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions options) {
   auto profiles = std::make_shared<std::vector<DeviceProfile>>(std::move(options.profiles));
   if (profiles->empty()) profiles->push_back(builtin_console_profile());
+  const std::shared_ptr<const Clock> clock = options.clock ? options.clock : monotonic_clock();
 
   auto console_factory =
-      [profiles](
+      [profiles, clock](
           const std::string& driver,
           std::function<std::shared_ptr<TransportProvider>(FieldReader&, const DeviceProfile&)>
               make_provider) {
-        return [profiles, driver, make_provider](const YAML::Node& settings,
-                                                 const DriverContext& ctx) {
+        return [profiles, clock, driver, make_provider](const YAML::Node& settings,
+                                                        const DriverContext& ctx) {
           FieldReader r(settings, ctx.source, ctx.path);
           DeviceProfile profile = select_profile(r, *profiles, ctx);
           ConsoleSettings cs = parse_console_settings(r);
           std::shared_ptr<TransportProvider> provider = make_provider(r, profile);
           r.reject_unknown();
           return std::unique_ptr<Device>(std::make_unique<ConsoleDevice>(
-              driver, std::move(profile), std::move(cs), std::move(provider)));
+              driver, std::move(profile), std::move(cs), std::move(provider), clock));
         };
       };
 
   registry.add("hid", "our 2-DOF console over hidapi (hidraw), protocol in docs/hid-protocol.md",
                console_factory("hid",
-                               [](FieldReader& r, const DeviceProfile&) {
+                               [clock](FieldReader& r, const DeviceProfile&) {
                                  HidapiProvider::Options o;
+                                 o.clock = clock;
                                  o.read_timeout_ms = static_cast<int>(
                                      r.get_int("read_timeout_ms", o.read_timeout_ms));
                                  if (o.read_timeout_ms < 1)
@@ -160,8 +164,9 @@ void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions opt
 
   registry.add("usb", "our 2-DOF console over libusb (vendor interface, async transfers, hotplug)",
                console_factory("usb",
-                               [](FieldReader& r, const DeviceProfile&) {
+                               [clock](FieldReader& r, const DeviceProfile&) {
                                  LibusbProvider::Options o;
+                                 o.clock = clock;
                                  o.in_transfers =
                                      static_cast<int>(r.get_int("in_transfers", o.in_transfers));
                                  if (o.in_transfers < 1 || o.in_transfers > 32)
@@ -175,19 +180,19 @@ void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions opt
                  return list_with(provider, "usb", *profiles);
                });
 
-  registry.add("emulator",
-               "our console's firmware emulated in-process, through the hid/usb driver code",
-               console_factory("emulator", [](FieldReader& r, const DeviceProfile& profile) {
-                 return std::static_pointer_cast<TransportProvider>(make_emulator(r, profile));
-               }));
+  registry.add(
+      "emulator", "our console's firmware emulated in-process, through the hid/usb driver code",
+      console_factory("emulator", [clock](FieldReader& r, const DeviceProfile& profile) {
+        return std::static_pointer_cast<TransportProvider>(make_emulator(r, profile, clock));
+      }));
 
   registry.add("sim",
                "simulated master with an operator hand model (scenarios palpate, sine, step)",
-               [](const YAML::Node& settings, const DriverContext& ctx) {
+               [clock](const YAML::Node& settings, const DriverContext& ctx) {
                  FieldReader r(settings, ctx.source, ctx.path);
                  SimSettings s = parse_sim_settings(r);
                  r.reject_unknown();
-                 return std::unique_ptr<Device>(std::make_unique<SimDevice>(std::move(s)));
+                 return std::unique_ptr<Device>(std::make_unique<SimDevice>(std::move(s), clock));
                });
 }
 

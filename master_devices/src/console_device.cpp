@@ -5,8 +5,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "master_devices/clock.hpp"
-
 namespace tsmh::master_devices {
 
 namespace {
@@ -59,17 +57,19 @@ ConsoleSettings parse_console_settings(FieldReader& r) {
 }
 
 ConsoleDevice::ConsoleDevice(std::string driver, DeviceProfile profile, ConsoleSettings settings,
-                             std::shared_ptr<TransportProvider> provider)
+                             std::shared_ptr<TransportProvider> provider,
+                             std::shared_ptr<const Clock> clock)
     : driver_(std::move(driver)),
       profile_(std::move(profile)),
       settings_(std::move(settings)),
       provider_(std::move(provider)),
+      clock_(clock ? std::move(clock) : monotonic_clock()),
       spec_(spec_from_profile(profile_, driver_)),
       fresh_bound_ns_(
           settings_.stale_timeout_ms > 0
               ? settings_.stale_timeout_ms * 1'000'000LL
               : std::llround(settings_.stale_periods * 1e9 / std::max(1.0, spec_.nominal_rate_hz))),
-      clock_(settings_.clock_tolerance_ppm) {
+      device_clock_(settings_.clock_tolerance_ppm) {
   if (profile_.joints.size() > protocol::kJoints) {
     throw DeviceError(profile_.source + ": profile '" + profile_.name + "' has " +
                       std::to_string(profile_.joints.size()) +
@@ -186,7 +186,7 @@ void ConsoleDevice::connect() {
   // A new session: the device comes back disabled, the I/O state starts over.
   enable_requested_ = false;
   have_previous_ = false;
-  clock_.reset();
+  device_clock_.reset();
   bad_in_a_row_ = 0;
   for (auto& v : velocity_)
     v.reset();
@@ -322,7 +322,7 @@ void ConsoleDevice::on_input_report(std::span<const std::uint8_t> report,
   // while this thread was starved, or the last ones before an unplug) is as
   // old as the device says, and one later than the freshness bound carries
   // no torque: read() tells the loop it is stale, so it must not drive.
-  const DeviceClock::Sample when = clock_.map(in.device_time_us, t_ns);
+  const DeviceClock::Sample when = device_clock_.map(in.device_time_us, t_ns);
   const bool late = when.late_ns > fresh_bound_ns_.load(std::memory_order_relaxed);
   if (late) n_late_++;
 
@@ -414,7 +414,7 @@ DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
 }
 
 void ConsoleDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.publish(Command{tau_nm, monotonic_ns(), true});
+  commands_.publish(Command{tau_nm, clock_->now_ns(), true});
 }
 
 void ConsoleDevice::set_enabled(bool on) noexcept {

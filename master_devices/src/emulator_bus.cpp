@@ -87,12 +87,14 @@ EmulatorBus::EmulatorBus(Options options)
       period_ns_(1'000'000'000LL / std::max<int>(1, options_.firmware.info.nominal_rate_hz)),
       firmware_(options_.firmware),
       plugged_(!options_.start_unplugged) {
-  if (options_.clock == Clock::kRealTime) clock_thread_ = std::thread([this] { run_clock(); });
+  if (!options_.clock) options_.clock = monotonic_clock();
+  if (options_.pacing == Pacing::kRealTime)
+    pacing_thread_ = std::thread([this] { run_real_time(); });
 }
 
 EmulatorBus::~EmulatorBus() {
   stopping_ = true;
-  if (clock_thread_.joinable()) clock_thread_.join();
+  if (pacing_thread_.joinable()) pacing_thread_.join();
 }
 
 std::vector<TransportDeviceInfo> EmulatorBus::enumerate(std::uint16_t vendor_id,
@@ -194,11 +196,14 @@ void EmulatorBus::tick_once() {
   if (deliver_lost) {
     listener->on_link_lost("device unplugged (emulator)");
   } else {
-    listener->on_input_report(std::span<const std::uint8_t>(report.data(), size), monotonic_ns());
+    listener->on_input_report(std::span<const std::uint8_t>(report.data(), size),
+                              options_.clock->now_ns());
   }
 }
 
-void EmulatorBus::run_clock() {
+void EmulatorBus::run_real_time() {
+  // Real-time pacing is real by definition: CLOCK_MONOTONIC, whatever
+  // Options::clock stamps the reports with.
   timespec next{};
   clock_gettime(CLOCK_MONOTONIC, &next);
   while (!stopping_) {

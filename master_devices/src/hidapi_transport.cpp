@@ -45,8 +45,12 @@ std::string hid_error_text(hid_device* dev) {
 
 class HidapiTransport final : public Transport {
  public:
-  HidapiTransport(hid_device* dev, TransportDeviceInfo info, int read_timeout_ms)
-      : dev_(dev), info_(std::move(info)), read_timeout_ms_(read_timeout_ms) {}
+  HidapiTransport(hid_device* dev, TransportDeviceInfo info, int read_timeout_ms,
+                  std::shared_ptr<const Clock> clock)
+      : dev_(dev),
+        info_(std::move(info)),
+        read_timeout_ms_(read_timeout_ms),
+        clock_(std::move(clock)) {}
   ~HidapiTransport() override {
     stop();
     hid_close(dev_);
@@ -120,7 +124,7 @@ class HidapiTransport final : public Transport {
       const int n = hid_read_timeout(dev_, bufs[0].data(), bufs[0].size(), read_timeout_ms_);
       if (n < 0) return lost(listener);
       if (n == 0) continue;  // timeout: staleness is judged by the driver's read()
-      const std::int64_t arrival = monotonic_ns();
+      const std::int64_t arrival = clock_->now_ns();
       // Take everything already queued (a starved thread finds a backlog):
       // each report still reaches the driver, which dates it on the device
       // clock, but only the newest is answered. Answering each with a write
@@ -150,6 +154,7 @@ class HidapiTransport final : public Transport {
   hid_device* dev_;
   TransportDeviceInfo info_;
   int read_timeout_ms_;
+  std::shared_ptr<const Clock> clock_;
   std::atomic<bool> stopping_{false};
   std::thread reader_;
   // Reader thread only.
@@ -162,7 +167,8 @@ class HidapiTransport final : public Transport {
 
 HidapiProvider::HidapiProvider() : HidapiProvider(Options{}) {}
 
-HidapiProvider::HidapiProvider(Options options) : options_(options) {
+HidapiProvider::HidapiProvider(Options options) : options_(std::move(options)) {
+  if (!options_.clock) options_.clock = monotonic_clock();
   // hidapi keeps process-wide state; hid_init() is idempotent and we never
   // call hid_exit() (another provider may still be using it).
   hid_init();
@@ -191,7 +197,7 @@ std::unique_ptr<Transport> HidapiProvider::open(const TransportDeviceInfo& devic
     throw TransportError(device.path + ": hid_open_path failed" + (why.empty() ? "" : ": " + why) +
                          " (no permission? install the udev rules, see docs/master-devices.md)");
   }
-  return std::make_unique<HidapiTransport>(dev, device, options_.read_timeout_ms);
+  return std::make_unique<HidapiTransport>(dev, device, options_.read_timeout_ms, options_.clock);
 }
 
 }  // namespace tsmh::master_devices

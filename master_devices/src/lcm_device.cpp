@@ -7,8 +7,6 @@
 #include <tsmh/master_force_t.hpp>
 #include <tsmh/master_state_t.hpp>
 
-#include "master_devices/clock.hpp"
-
 namespace tsmh::master_devices {
 
 LcmSettings parse_lcm_settings(FieldReader& r) {
@@ -65,7 +63,7 @@ struct LcmDevice::Impl {
   }
 
   void on_state(const lcm::ReceiveBuffer*, const std::string&, const tsmh::master_state_t* msg) {
-    const std::int64_t now = monotonic_ns();
+    const std::int64_t now = device.clock_->now_ns();
     const std::size_t dof = device.settings_.dof;
     if (msg->num_joints != static_cast<int32_t>(dof)) {
       reject("num_joints " + std::to_string(msg->num_joints) + ", expected " + std::to_string(dof));
@@ -120,10 +118,14 @@ struct LcmDevice::Impl {
   }
 };
 
-LcmDevice::LcmDevice(LcmSettings settings) : LcmDevice(std::move(settings), nullptr) {}
+LcmDevice::LcmDevice(LcmSettings settings, std::shared_ptr<const Clock> clock)
+    : LcmDevice(std::move(settings), nullptr, std::move(clock)) {}
 
-LcmDevice::LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm)
-    : settings_(std::move(settings)), lcm_(std::move(lcm)) {
+LcmDevice::LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm,
+                     std::shared_ptr<const Clock> clock)
+    : settings_(std::move(settings)),
+      lcm_(std::move(lcm)),
+      clock_(clock ? std::move(clock) : monotonic_clock()) {
   spec_.model = "lcm:" + settings_.state_channel();
   spec_.driver = "lcm";
   spec_.dof = static_cast<std::uint32_t>(settings_.dof);
@@ -204,7 +206,7 @@ DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
 }
 
 void LcmDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.publish(Command{tau_nm, monotonic_ns(), true});
+  commands_.publish(Command{tau_nm, clock_->now_ns(), true});
 }
 
 void LcmDevice::set_enabled(bool on) noexcept {
@@ -223,13 +225,13 @@ DeviceStatus LcmDevice::status() const noexcept {
   return DeviceStatus::kOk;
 }
 
-void register_lcm_driver(DriverRegistry& registry) {
+void register_lcm_driver(DriverRegistry& registry, std::shared_ptr<const Clock> clock) {
   registry.add("lcm", "external master driver over LCM (MASTER_STATE in, MASTER_FORCE out)",
-               [](const YAML::Node& settings, const DriverContext& ctx) {
+               [clock](const YAML::Node& settings, const DriverContext& ctx) {
                  FieldReader r(settings, ctx.source, ctx.path);
                  LcmSettings s = parse_lcm_settings(r);
                  r.reject_unknown();
-                 return std::unique_ptr<Device>(std::make_unique<LcmDevice>(std::move(s)));
+                 return std::unique_ptr<Device>(std::make_unique<LcmDevice>(std::move(s), clock));
                });
 }
 

@@ -236,7 +236,7 @@ class LibusbTransport final : public Transport {
         if (!stopping_ && !lost_ && listener_ != nullptr) {
           listener_->on_input_report(
               std::span<const std::uint8_t>(t->buffer, static_cast<std::size_t>(t->actual_length)),
-              monotonic_ns());
+              provider_.options.clock->now_ns());
         }
         [[fallthrough]];
       case LIBUSB_TRANSFER_TIMED_OUT:
@@ -379,7 +379,8 @@ std::vector<SysfsUsbDevice> scan_sysfs_usb(const std::string& root, std::uint16_
 LibusbProvider::LibusbProvider() : LibusbProvider(Options{}) {}
 
 LibusbProvider::LibusbProvider(Options options) : impl_(std::make_unique<Impl>()) {
-  impl_->options = options;
+  impl_->options = std::move(options);
+  if (!impl_->options.clock) impl_->options.clock = monotonic_clock();
   // Our own context: no process-wide libusb state shared with anyone.
   const int rc = libusb_init(&impl_->ctx);
   if (rc != 0) {

@@ -62,8 +62,9 @@ SimSettings parse_sim_settings(FieldReader& r) {
   return s;
 }
 
-SimDevice::SimDevice(SimSettings settings)
+SimDevice::SimDevice(SimSettings settings, std::shared_ptr<const Clock> clock)
     : settings_(std::move(settings)),
+      clock_(clock ? std::move(clock) : monotonic_clock()),
       operator_(settings_.scenario, settings_.dof, settings_.hand, settings_.handle) {
   spec_.model = "sim-" + std::string(scenario_name(settings_.scenario));
   spec_.driver = "sim";
@@ -93,7 +94,7 @@ void SimDevice::open() {
   opened_ = true;
   if (!settings_.simulated_time) {
     stopping_ = false;
-    advance(0.0, monotonic_ns());  // a first reading at once
+    advance(0.0, clock_->now_ns());  // a first reading at once
     thread_ = std::thread([this] { run_real_time(); });
   }
 }
@@ -166,13 +167,14 @@ void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
 
 void SimDevice::run_real_time() {
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / settings_.rate_hz);
+  // Paced on CLOCK_MONOTONIC (a thread sleeps in real time), stamped on clock_.
   std::int64_t next = monotonic_ns();
   while (!stopping_) {
     next += period_ns;
     timespec ts{static_cast<time_t>(next / 1'000'000'000LL),
                 static_cast<long>(next % 1'000'000'000LL)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-    advance(static_cast<double>(period_ns) * 1e-9, monotonic_ns());
+    advance(static_cast<double>(period_ns) * 1e-9, clock_->now_ns());
   }
 }
 
@@ -201,7 +203,7 @@ DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
 }
 
 void SimDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.publish(Command{tau_nm, settings_.simulated_time ? 0 : monotonic_ns(), true});
+  commands_.publish(Command{tau_nm, settings_.simulated_time ? 0 : clock_->now_ns(), true});
 }
 
 }  // namespace tsmh::master_devices

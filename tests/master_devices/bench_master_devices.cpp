@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   std::printf("== 1 kHz loop vs real-time emulator through the console driver, %.1f s\n", seconds);
   {
     md::EmulatorBus::Options o;
-    o.clock = md::EmulatorBus::Clock::kRealTime;
+    o.pacing = md::EmulatorBus::Pacing::kRealTime;
     o.firmware = md::firmware_for_profile(md::builtin_console_profile());
     // Command-to-motor latency: the loop writes a torque that encodes its
     // tick (k % 1000 + 1) x 0.2 mN m; the firmware side decodes the torque it

@@ -1,7 +1,12 @@
 // The console driver (the code behind `hid`, `usb` and `emulator`) against
 // the emulated firmware: handshake, 1 kHz read/write, limits, unplug and
-// replug, faults, malformed reports. Manual-clock tests tick the emulator
-// one firmware period at a time on the test thread, so they are exact.
+// replug, faults, malformed reports. Manual-paced tests tick the emulator
+// one firmware period at a time on the test thread and advance a ManualClock
+// (the host time the driver and the bus read) by the same period, so they
+// are exact and let time pass without sleeping. Real sleeps remain only
+// where a real thread must run: the driver's supervisor reconnecting, the
+// emulator's real-time thread (clear_fault() and close() wait for its
+// reports), real-time pacing under test.
 
 #include <gtest/gtest.h>
 
@@ -31,29 +36,71 @@ ConsoleSettings relaxed() {
 }
 
 struct Rig {
+  // Manual pacing: simulated host time. Real-time pacing: the real clock,
+  // since the emulator's thread then runs in real time.
+  std::shared_ptr<ManualClock> manual;
+  std::shared_ptr<const Clock> clock;
   std::shared_ptr<EmulatorBus> bus;
   std::unique_ptr<ConsoleDevice> device;
 
   explicit Rig(ConsoleSettings settings = relaxed(),
                DeviceProfile profile = builtin_console_profile(),
                EmulatorBus::Options options = manual_options()) {
+    if (options.pacing == EmulatorBus::Pacing::kManual) {
+      manual = std::make_shared<ManualClock>();
+      clock = manual;
+    } else {
+      clock = std::make_shared<MonotonicClock>();
+    }
+    options.clock = clock;
     bus = std::make_shared<EmulatorBus>(std::move(options));
-    device =
-        std::make_unique<ConsoleDevice>("emulator", std::move(profile), std::move(settings), bus);
+    device = std::make_unique<ConsoleDevice>("emulator", std::move(profile), std::move(settings),
+                                             bus, clock);
+  }
+
+  ~Rig() {
+    if (manual && device->status() != DeviceStatus::kClosed)
+      ticking_while([&] { device->close(); });
+  }
+
+  // Runs `f`, which waits in real time for the driver's I/O context
+  // (close() for its last report, clear_fault() for the firmware's answer):
+  // on a manual bus that context is tick(), so a real thread ticks meanwhile.
+  template <class F>
+  void ticking_while(F f) {
+    std::atomic<bool> done{false};
+    std::thread io([&] {
+      while (!done) {
+        tick();
+        std::this_thread::sleep_for(200us);
+      }
+    });
+    f();
+    done = true;
+    io.join();
   }
 
   static EmulatorBus::Options manual_options() {
     EmulatorBus::Options o;
-    o.clock = EmulatorBus::Clock::kManual;
+    o.pacing = EmulatorBus::Pacing::kManual;
     o.firmware = firmware_for_profile(builtin_console_profile());
     return o;
+  }
+
+  std::int64_t now() const { return clock->now_ns(); }
+  // Host time passes with no report (manual pacing only).
+  void wait(std::chrono::nanoseconds dt) { manual->advance(dt.count()); }
+  // One firmware period: host time moves on with the device's, one report.
+  void tick() {
+    manual->advance(bus->period_ns());
+    bus->tick();
   }
 
   // One loop cycle: the device produces a report (and gets our previous
   // command back), then the loop reads.
   DeviceReading cycle() {
-    bus->tick();
-    return device->read(monotonic_ns());
+    tick();
+    return device->read(now());
   }
 
   double applied_torque(std::size_t j) {
@@ -62,8 +109,9 @@ struct Rig {
     return tau;
   }
 
-  // Ticks (in real time, so the supervisor thread can reconnect) until the
-  // device is OK again; bounded so a broken reconnect fails instead of hanging.
+  // Cycles until the device is OK again; bounded so a broken reconnect fails
+  // instead of hanging. Real sleeps: the supervisor thread reconnects in
+  // real time (its reconnect interval is a real wait).
   bool wait_ok(std::chrono::milliseconds limit = 3000ms) {
     const auto end = std::chrono::steady_clock::now() + limit;
     while (std::chrono::steady_clock::now() < end) {
@@ -179,9 +227,12 @@ TEST(ConsoleDevice, TorqueStopsWhenTheLoopStopsWriting) {
   rig.cycle();
   rig.cycle();
   EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
-  std::this_thread::sleep_for(100ms);  // the loop "hangs": no write_torque() for > 50 ms
+  // The loop "hangs": no write_torque() after this one, written 2 ms ago.
+  rig.wait(47ms);
   rig.cycle();
-  EXPECT_EQ(rig.applied_torque(0), 0.0);
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6) << "a command exactly 50 ms old still drives";
+  rig.cycle();
+  EXPECT_EQ(rig.applied_torque(0), 0.0) << "51 ms old: past command_timeout_ms";
 }
 
 TEST(ConsoleDevice, UnplugIsDetectedWithinOneCycleWithZeroTorqueAndReplugRecovers) {
@@ -206,7 +257,8 @@ TEST(ConsoleDevice, UnplugIsDetectedWithinOneCycleWithZeroTorqueAndReplugRecover
   EXPECT_EQ(rig.applied_torque(1), 0.0);
   EXPECT_NE(rig.device->last_error().find("link lost"), std::string::npos);
 
-  // Stays disconnected while unplugged, the loop keeps running.
+  // Stays disconnected while unplugged, the loop keeps running. Real sleeps:
+  // the supervisor's reconnect attempts (every 10 ms, real time) run and fail.
   for (int k = 0; k < 20; ++k) {
     EXPECT_EQ(rig.cycle().status, DeviceStatus::kDisconnected);
     rig.device->write_torque(JointArray{0.1, -0.1});
@@ -325,37 +377,34 @@ TEST(ConsoleDevice, ZeroOffsetAndDirectionFromTheProfile) {
 }
 
 TEST(ConsoleDevice, DeviceFaultLatchesZeroTorqueAndClears) {
-  EmulatorBus::Options o = Rig::manual_options();
-  o.clock = EmulatorBus::Clock::kRealTime;  // clear_fault() needs reports to flow
-  Rig rig({}, builtin_console_profile(), o);
+  Rig rig;
   rig.device->open();
   rig.device->set_enabled(true);
-  std::atomic<bool> stop{false};
-  std::thread loop([&] {
-    while (!stop) {
-      rig.device->write_torque(JointArray{0.05, 0.05});
-      std::this_thread::sleep_for(1ms);
-    }
-  });
-  std::this_thread::sleep_for(30ms);
+  for (int k = 0; k < 30; ++k) {
+    rig.device->write_torque(JointArray{0.05, 0.05});
+    rig.cycle();
+  }
+  EXPECT_NEAR(rig.applied_torque(0), 0.05, 1e-6);
   rig.bus->with_firmware(
       [](Firmware& fw) { fw.inject_fault(protocol::FirmwareFault::kOverCurrent); });
-  for (int i = 0; i < 2000 && rig.device->status() != DeviceStatus::kFault; ++i) {
-    std::this_thread::sleep_for(1ms);
-  }
+  rig.device->write_torque(JointArray{0.05, 0.05});
+  rig.cycle();  // the report saying so
   EXPECT_EQ(rig.device->status(), DeviceStatus::kFault);
-  const DeviceReading r = rig.device->read(monotonic_ns());
+  const DeviceReading r = rig.device->read(rig.now());
   EXPECT_EQ(r.fault, FaultCode::kDeviceReported);
   EXPECT_EQ(r.tau_commanded[0], 0.0);
   EXPECT_NE(rig.device->last_error().find("over-current"), std::string::npos)
       << rig.device->last_error();
   EXPECT_EQ(rig.applied_torque(0), 0.0);
-  EXPECT_TRUE(rig.device->clear_fault());
+  bool cleared = false;
+  rig.ticking_while([&] { cleared = rig.device->clear_fault(); });
+  EXPECT_TRUE(cleared);
   EXPECT_EQ(rig.device->status(), DeviceStatus::kOk);
-  EXPECT_FALSE(rig.device->read(monotonic_ns()).enabled)
-      << "a cleared fault leaves torque disabled";
-  stop = true;
-  loop.join();
+  rig.device->write_torque(JointArray{0.05, 0.05});
+  const DeviceReading after = rig.cycle();
+  EXPECT_EQ(after.status, DeviceStatus::kOk) << "the firmware cleared it too (else it re-latches)";
+  EXPECT_FALSE(after.enabled) << "a cleared fault leaves torque disabled";
+  EXPECT_EQ(rig.applied_torque(0), 0.0);
 }
 
 TEST(ConsoleDevice, WorkspaceViolationIsAFaultNamingTheJoint) {
@@ -416,31 +465,37 @@ TEST(ConsoleDevice, StaleReadingsReadAsDisconnected) {
   Rig rig(s);
   rig.device->open();
   EXPECT_EQ(rig.cycle().status, DeviceStatus::kOk);
-  std::this_thread::sleep_for(100ms);  // the device goes silent (no tick)
-  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected);
+  rig.wait(50ms);  // the device goes silent (no tick)
+  EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kOk) << "50 ms is within the bound";
+  rig.wait(1ms);
+  EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kDisconnected);
 }
 
 TEST(ConsoleDevice, CloseSendsZeroAndDisable) {
-  EmulatorBus::Options o = Rig::manual_options();
-  o.clock = EmulatorBus::Clock::kRealTime;
-  Rig rig({}, builtin_console_profile(), o);
+  Rig rig;
   rig.device->open();
   rig.device->set_enabled(true);
   for (int k = 0; k < 20; ++k) {
     rig.device->write_torque(JointArray{0.1, 0.1});
-    std::this_thread::sleep_for(1ms);
+    rig.cycle();
   }
-  rig.device->close();
+  EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
+  rig.ticking_while([&] { rig.device->close(); });
   EXPECT_EQ(rig.device->status(), DeviceStatus::kClosed);
   bool enabled = true;
-  rig.bus->with_firmware([&](Firmware& fw) { enabled = fw.torque_enabled(); });
+  std::uint64_t watchdog_trips = 1;
+  rig.bus->with_firmware([&](Firmware& fw) {
+    enabled = fw.torque_enabled();
+    watchdog_trips = fw.stats().watchdog_trips;
+  });
   EXPECT_FALSE(enabled);
   EXPECT_EQ(rig.applied_torque(0), 0.0);
+  EXPECT_EQ(watchdog_trips, 0u) << "disabled by close()'s last report, not by the watchdog";
 }
 
 TEST(ConsoleDevice, RealTimeEmulatorStreamsToAOneKilohertzLoop) {
   EmulatorBus::Options o = Rig::manual_options();
-  o.clock = EmulatorBus::Clock::kRealTime;
+  o.pacing = EmulatorBus::Pacing::kRealTime;  // real-time pacing is what is under test
   Rig rig({}, builtin_console_profile(), o);
   rig.device->open();
   rig.device->set_enabled(true);
@@ -452,7 +507,7 @@ TEST(ConsoleDevice, RealTimeEmulatorStreamsToAOneKilohertzLoop) {
     next += 1'000'000;
     timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-    const DeviceReading r = rig.device->read(monotonic_ns());
+    const DeviceReading r = rig.device->read(rig.now());
     fresh += r.fresh ? 1 : 0;
     monotonic = monotonic && r.sequence >= last_seq;
     last_seq = r.sequence;
@@ -476,10 +531,7 @@ ConsoleSettings fresh_by_periods() {
   return s;
 }
 
-// A console that announces 20 Hz: its freshness bound (2 periods, 100 ms) is
-// far above any scheduling delay of a loaded test machine, so tests that read
-// at the test's own clock stay exact; manual ticks still advance its clock
-// faster than real time.
+// A console that announces 20 Hz: a freshness bound of 2 periods, 100 ms.
 struct SlowRig : Rig {
   SlowRig() : Rig(fresh_by_periods(), builtin_console_profile(), slow_options()) {}
   static EmulatorBus::Options slow_options() {
@@ -498,11 +550,21 @@ struct SlowRig : Rig {
     return Rig::cycle();
   }
   void tick() {
+    hold();
+    Rig::tick();
+  }
+  // One report the device had already sent (queued by the host meanwhile):
+  // the device's clock moves on, the host's does not.
+  DeviceReading drain() {
+    hold();
+    bus->tick();
+    return device->read(now());
+  }
+  void hold() {
     bus->with_firmware([](Firmware& fw) {
       fw.set_position(0, 0.0);
       fw.set_position(1, 0.0);
     });
-    bus->tick();
   }
 };
 
@@ -580,9 +642,9 @@ TEST(ConsoleDevice, AReportReadLateIsStaleAndCarriesNoTorque) {
   // of its clock): the report is read 200 ms after the device's clock says
   // it was taken (what the QEMU guest showed with reports queued before an
   // unplug, at this device's slower pace).
-  std::this_thread::sleep_for(250ms);
-  rig.tick();
-  const std::int64_t now = monotonic_ns();
+  rig.wait(200ms);
+  rig.tick();  // 50 ms more
+  const std::int64_t now = rig.now();
   const DeviceReading late = rig.device->read(now);
   EXPECT_TRUE(late.fresh);
   EXPECT_EQ(late.status, DeviceStatus::kDisconnected);
@@ -592,15 +654,16 @@ TEST(ConsoleDevice, AReportReadLateIsStaleAndCarriesNoTorque) {
   EXPECT_EQ(rig.applied_torque(0), 0.0) << "its answer carried no torque";
   EXPECT_EQ(rig.device->stats().late_reports, 1u);
 
-  // Reports on time again (the device clock catches up with the host's):
-  // OK with torque, without re-enabling.
+  // The host reads the reports the device sent meanwhile: the device clock
+  // catches up with the host's, the reports are on time again, OK with
+  // torque, without re-enabling.
   bool back = false;
-  for (int k = 0; k < 100 && !back; ++k) {
+  for (int k = 0; k < 4 && !back; ++k) {
     rig.device->write_torque(JointArray{0.1, -0.1});
-    const DeviceReading r = rig.cycle();
+    const DeviceReading r = rig.drain();
     back = r.status == DeviceStatus::kOk && r.enabled;
   }
-  EXPECT_TRUE(back);
+  EXPECT_TRUE(back) << "within the 4 reports of the starved 200 ms";
   rig.device->write_torque(JointArray{0.1, -0.1});
   rig.cycle();
   EXPECT_NEAR(rig.applied_torque(0), 0.1, 1e-6);
@@ -623,7 +686,7 @@ TEST(ConsoleDevice, UnplugIsNotOkFromTheBoundEvenBeforeTheLinkLossPathFires) {
   EXPECT_FALSE(before_link.enabled);
   EXPECT_EQ(rig.device->stats().disconnects, 0u);
   rig.tick();  // the link-loss path
-  const DeviceReading after_link = rig.device->read(monotonic_ns());
+  const DeviceReading after_link = rig.device->read(rig.now());
   EXPECT_EQ(after_link.status, DeviceStatus::kDisconnected);
   EXPECT_FALSE(after_link.stale) << "a lost link, not a silence";
   EXPECT_EQ(rig.device->stats().disconnects, 1u);

@@ -1,5 +1,7 @@
 // The lcm driver against an "external driver" in the same process, over an
 // in-memory LCM provider (memq://), so no network or multicast route is needed.
+// Host time is a ManualClock: timeouts are tested by advancing it, exactly.
+// The only real waits are for the device's LCM thread to answer a message.
 
 #include <gtest/gtest.h>
 
@@ -37,6 +39,7 @@ struct ForceLog {
 };
 
 struct Rig {
+  std::shared_ptr<ManualClock> clock = std::make_shared<ManualClock>();
   std::shared_ptr<lcm::LCM> lcm = std::make_shared<lcm::LCM>("memq://");
   ForceLog log;
   std::unique_ptr<LcmDevice> device;
@@ -52,14 +55,17 @@ struct Rig {
       }
     }
     lcm->subscribe(s.force_channel(), &ForceLog::on_force, &log);
-    device = std::make_unique<LcmDevice>(s, lcm);
+    device = std::make_unique<LcmDevice>(s, lcm, clock);
     device->open();
   }
 
-  // Publishes a MASTER_STATE and waits until the device's LCM thread has answered it.
+  std::int64_t now() const { return clock->now_ns(); }
+
+  // Publishes a MASTER_STATE and waits until the device's LCM thread has
+  // answered it (real sleeps: that thread must run).
   void send_state(double q0, double q1, int buttons = 1, int status = 0, int num_joints = 2) {
     tsmh::master_state_t m;
-    m.utime = monotonic_ns() / 1000;
+    m.utime = now() / 1000;
     m.seq = seq++;
     m.num_joints = num_joints;
     m.q.assign(static_cast<std::size_t>(num_joints), 0.0);
@@ -82,7 +88,7 @@ struct Rig {
 TEST(LcmDevice, StateInForceOut) {
   Rig rig;
   rig.send_state(0.25, -0.5, /*dead-man + clutch*/ 5);
-  DeviceReading r = rig.device->read(monotonic_ns());
+  DeviceReading r = rig.device->read(rig.now());
   EXPECT_EQ(r.status, DeviceStatus::kOk);
   EXPECT_DOUBLE_EQ(r.q[0], 0.25);
   EXPECT_DOUBLE_EQ(r.q[1], -0.5);
@@ -102,7 +108,7 @@ TEST(LcmDevice, StateInForceOut) {
   EXPECT_TRUE(f.enable);
   EXPECT_DOUBLE_EQ(f.torque[0], 0.1);
   EXPECT_DOUBLE_EQ(f.torque[1], 0.3) << "clamped to peak";
-  r = rig.device->read(monotonic_ns());
+  r = rig.device->read(rig.now());
   EXPECT_TRUE(r.enabled);
   EXPECT_DOUBLE_EQ(r.tau_commanded[1], 0.3);
 }
@@ -118,7 +124,7 @@ TEST(LcmDevice, RejectsMalformedStateMessages) {
   EXPECT_EQ(rig.device->rejected_messages(), 2u);
   rig.send_state(0.1, 0.1, 0x10);
   EXPECT_EQ(rig.device->rejected_messages(), 3u);
-  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected)
+  EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kDisconnected)
       << "nothing valid received yet";
 }
 
@@ -133,9 +139,32 @@ TEST(LcmDevice, ExternalFaultLatchesAndStaleStateDisconnects) {
   EXPECT_FALSE(rig.log.last().enable);
   EXPECT_TRUE(rig.device->clear_fault());
   rig.send_state(0, 0);
-  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kOk);
-  std::this_thread::sleep_for(400ms);
-  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected);
+  EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kOk);
+  rig.clock->advance(200'000'000);  // MASTER_STATE stops
+  EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kOk) << "200 ms: within the bound";
+  rig.clock->advance(1'000'000);
+  EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kDisconnected);
+}
+
+TEST(LcmDevice, CommandsOlderThanTheTimeoutAreAnsweredWithZero) {
+  LcmSettings s;
+  s.command_timeout_ms = 20;
+  s.stale_timeout_ms = 2000;  // not what this test is about
+  Rig rig(s);
+  rig.device->set_enabled(true);
+  rig.device->write_torque(JointArray{0.1, -0.1});
+  rig.send_state(0, 0);
+  EXPECT_TRUE(rig.log.last().enable);
+  EXPECT_DOUBLE_EQ(rig.log.last().torque[0], 0.1);
+  rig.clock->advance(20'000'000);  // the loop stops writing
+  rig.send_state(0, 0);
+  EXPECT_DOUBLE_EQ(rig.log.last().torque[0], 0.1) << "exactly 20 ms old still drives";
+  rig.clock->advance(1'000'000);
+  rig.send_state(0, 0);
+  EXPECT_FALSE(rig.log.last().enable);
+  EXPECT_EQ(rig.log.last().torque[0], 0.0);
+  EXPECT_EQ(rig.log.last().torque[1], 0.0);
+  EXPECT_EQ(rig.device->read(rig.now()).tau_commanded[0], 0.0);
 }
 
 TEST(LcmDevice, ChannelPrefixAndRegistration) {
@@ -146,7 +175,7 @@ TEST(LcmDevice, ChannelPrefixAndRegistration) {
   Rig rig(s);
   rig.device_state_channel = "LEFT_MASTER_STATE";
   rig.send_state(0.3, 0.0);
-  EXPECT_DOUBLE_EQ(rig.device->read(monotonic_ns()).q[0], 0.3);
+  EXPECT_DOUBLE_EQ(rig.device->read(rig.now()).q[0], 0.3);
 
   DriverRegistry registry;
   register_lcm_driver(registry);

@@ -83,12 +83,28 @@ TEST(Registry, EmulatorDriverRunsTheConsoleCodeWithASimulatedOperator) {
   const YAML::Node settings = YAML::Load("operator: {scenario: sine}\nstale_timeout_ms: 2000\n");
   auto dev = builtin().create("emulator", settings);
   dev->open();
+  // A real sleep: the registry's emulator is paced in real time by its own
+  // thread, and that streaming is what this test checks.
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  const DeviceReading r = dev->read(monotonic_ns());
+  const DeviceReading r = dev->read(monotonic_ns());  // the registry's default clock
   EXPECT_EQ(r.status, DeviceStatus::kOk);
   EXPECT_GT(r.sequence, 100u);
   EXPECT_GT(std::abs(r.q[0]), 0.01) << "the simulated hand moves the emulated handle";
   EXPECT_TRUE(r.buttons.dead_man);
+  dev->close();
+}
+
+TEST(Registry, DevicesReadTheClockTheRegistryWasGiven) {
+  const auto clock = std::make_shared<ManualClock>(5'000'000'000);
+  BuiltinDriverOptions options;
+  options.clock = clock;
+  DriverRegistry registry;
+  register_builtin_drivers(registry, options);
+  auto dev = registry.create("sim", YAML::Load("stale_timeout_ms: 20\n"));
+  dev->open();
+  const DeviceReading r = dev->read(clock->now_ns());
+  EXPECT_EQ(r.t_ns, 5'000'000'000) << "stamped with the given clock, not CLOCK_MONOTONIC";
+  EXPECT_EQ(r.status, DeviceStatus::kOk);
   dev->close();
 }
 

@@ -101,27 +101,40 @@ TEST(SimDevice, DisabledOrFaultedRendersNothing) {
 }
 
 TEST(SimDevice, RealTimeModeStreamsAndZeroesStaleCommands) {
+  // The sim's thread runs in real time (streaming is under test), so this
+  // waits for its readings; how old the commands are is simulated time.
+  const auto clock = std::make_shared<ManualClock>();
   SimSettings s;
   s.command_timeout_ms = 5;
   s.stale_timeout_ms = 2000;  // not what this test is about
-  SimDevice dev(s);
+  SimDevice dev(s, clock);
   dev.open();
   dev.set_enabled(true);
+  // A reading integrated wholly after now (the one in progress may have
+  // fetched the previous command).
+  const auto reading_after_now = [&] {
+    const std::uint64_t seen = dev.read(clock->now_ns()).sequence;
+    DeviceReading r = dev.read(clock->now_ns());
+    for (int i = 0; i < 2000 && r.sequence < seen + 2; ++i) {
+      std::this_thread::sleep_for(1ms);  // the sim's real-time thread integrates meanwhile
+      r = dev.read(clock->now_ns());
+    }
+    return r;
+  };
   dev.write_torque(JointArray{0.1, 0.0});
-  std::this_thread::sleep_for(3ms);
-  DeviceReading r = dev.read(monotonic_ns());
+  DeviceReading r = reading_after_now();
   EXPECT_EQ(r.status, DeviceStatus::kOk);
-  const std::uint64_t first = r.sequence;
-  // No more commands: the sim must stop rendering once they are 5 ms old.
-  for (int i = 0; i < 2000; ++i) {
-    std::this_thread::sleep_for(1ms);
-    r = dev.read(monotonic_ns());
-    if (r.sequence > first + 10 && r.tau_commanded[0] == 0.0) break;
-  }
-  EXPECT_GT(r.sequence, first);
-  EXPECT_EQ(r.tau_commanded[0], 0.0);
+  EXPECT_EQ(r.t_ns, clock->now_ns()) << "stamped with the device's clock";
+  EXPECT_EQ(r.tau_commanded[0], 0.1);
+  clock->advance(5'000'000);  // no more commands
+  r = reading_after_now();
+  EXPECT_EQ(r.tau_commanded[0], 0.1) << "a command exactly 5 ms old still renders";
+  clock->advance(1'000'000);
+  r = reading_after_now();
+  EXPECT_EQ(r.status, DeviceStatus::kOk);
+  EXPECT_EQ(r.tau_commanded[0], 0.0) << "6 ms old: past command_timeout_ms";
   dev.close();
-  EXPECT_EQ(dev.read(monotonic_ns()).status, DeviceStatus::kClosed);
+  EXPECT_EQ(dev.read(clock->now_ns()).status, DeviceStatus::kClosed);
 }
 
 TEST(SimDevice, SettingsErrorsNameTheField) {

@@ -9,8 +9,10 @@
 //
 // The lcm driver lives in the master_devices_lcm target (lcm_device.hpp).
 
+#include <memory>
 #include <vector>
 
+#include "master_devices/clock.hpp"
 #include "master_devices/firmware.hpp"
 #include "master_devices/profile.hpp"
 #include "master_devices/registry.hpp"
@@ -21,6 +23,10 @@ struct BuiltinDriverOptions {
   /// Profiles the console drivers know: what `profile: NAME` may name and
   /// what --list-devices matches against. Empty: builtin_console_profile().
   std::vector<DeviceProfile> profiles;
+  /// The host clock every device (and its transport) reads; a test may give
+  /// a ManualClock. The emulator's and sim's real-time threads are still
+  /// paced on CLOCK_MONOTONIC.
+  std::shared_ptr<const Clock> clock = monotonic_clock();
 };
 
 void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions options = {});

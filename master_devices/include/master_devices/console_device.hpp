@@ -30,6 +30,7 @@
 #include <string>
 #include <thread>
 
+#include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/device_clock.hpp"
 #include "master_devices/joint_calibration.hpp"
@@ -77,8 +78,11 @@ struct ConsoleStats {
 
 class ConsoleDevice final : public Device, private TransportListener {
  public:
+  /// `clock` stamps torque commands (their age is checked against each
+  /// report's arrival): give it the clock the transport stamps arrivals with.
   ConsoleDevice(std::string driver, DeviceProfile profile, ConsoleSettings settings,
-                std::shared_ptr<TransportProvider> provider);
+                std::shared_ptr<TransportProvider> provider,
+                std::shared_ptr<const Clock> clock = monotonic_clock());
   ~ConsoleDevice() override;
 
   const DeviceSpec& spec() const override { return spec_; }
@@ -123,6 +127,7 @@ class ConsoleDevice final : public Device, private TransportListener {
   DeviceProfile profile_;
   ConsoleSettings settings_;
   std::shared_ptr<TransportProvider> provider_;
+  std::shared_ptr<const Clock> clock_;  // the host's time (commands' stamps)
   DeviceSpec spec_;
 
   // Loop <-> I/O thread.
@@ -140,7 +145,7 @@ class ConsoleDevice final : public Device, private TransportListener {
   bool have_previous_ = false;
   std::uint16_t previous_sequence_ = 0;
   std::uint32_t previous_device_us_ = 0;
-  DeviceClock clock_;
+  DeviceClock device_clock_;
   int bad_in_a_row_ = 0;
   std::uint64_t reading_count_ = 0;
   std::array<VelocityEstimator, kMaxDof> velocity_{};

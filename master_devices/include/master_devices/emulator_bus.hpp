@@ -4,9 +4,12 @@
 // (decoding, calibration, limits, watchdog feeding, disconnect and reconnect)
 // runs in tests exactly as against hidapi or libusb.
 //
-// Two clocks: kRealTime runs the firmware on its own thread at its nominal
-// rate (absolute deadlines), like hardware; kManual advances one firmware
-// period per tick() call on the caller's thread, for deterministic tests.
+// Two pacings: kRealTime runs the firmware on its own thread at its nominal
+// rate (absolute deadlines on CLOCK_MONOTONIC), like hardware; kManual
+// advances one firmware period per tick() call on the caller's thread, for
+// deterministic tests. Either way, input reports are stamped on arrival with
+// Options::clock, the host clock the driver reads too: a manual-paced test
+// gives both the same ManualClock and advances it with its ticks.
 // unplug()/replug() simulate the cable: the open transport reports the link
 // lost on its next tick (as hid_read() returns -1), enumerate() stops
 // listing the device until replugged.
@@ -20,6 +23,7 @@
 #include <string>
 #include <thread>
 
+#include "master_devices/clock.hpp"
 #include "master_devices/firmware.hpp"
 #include "master_devices/transport.hpp"
 
@@ -27,16 +31,18 @@ namespace tsmh::master_devices {
 
 class EmulatorBus final : public TransportProvider {
  public:
-  enum class Clock { kManual, kRealTime };
+  enum class Pacing { kManual, kRealTime };
 
   struct Options {
-    Clock clock = Clock::kRealTime;
+    Pacing pacing = Pacing::kRealTime;
+    /// Stamps each input report's arrival (TransportListener::on_input_report).
+    std::shared_ptr<const Clock> clock = monotonic_clock();
     FirmwareConfig firmware = default_console_firmware();
     std::uint16_t vendor_id = 0x1209;
     std::uint16_t product_id = 0x0001;
     std::string serial = "EMU-0001";
     std::string path = "emu:0";
-    /// Called on the bus's clock (the firmware locked) before each firmware
+    /// Called at each tick (the firmware locked) before each firmware
     /// step, e.g. to apply an operator's hand torque. Optional.
     std::function<void(Firmware&, std::int64_t dt_ns)> world;
     /// Called (firmware locked) right after the firmware accepted an output
@@ -75,7 +81,7 @@ class EmulatorBus final : public TransportProvider {
 
  private:
   friend class EmulatorTransport;
-  void run_clock();
+  void run_real_time();
   void tick_once();
 
   Options options_;
@@ -88,7 +94,7 @@ class EmulatorBus final : public TransportProvider {
   std::shared_ptr<Session> session_;  // the open transport, if any
   std::function<void()> arrival_;
   std::atomic<bool> stopping_{false};
-  std::thread clock_thread_;
+  std::thread pacing_thread_;
 };
 
 }  // namespace tsmh::master_devices

@@ -11,6 +11,7 @@
 
 #include <memory>
 
+#include "master_devices/clock.hpp"
 #include "master_devices/transport.hpp"
 
 namespace tsmh::master_devices {
@@ -23,6 +24,8 @@ class HidapiProvider final : public TransportProvider {
     /// page), so a composite device's keyboard interface is never opened.
     /// 0 = any.
     unsigned short usage_page = 0xFF00;
+    /// Stamps each input report's arrival (the driver's clock).
+    std::shared_ptr<const Clock> clock = monotonic_clock();
   };
   HidapiProvider();
   explicit HidapiProvider(Options options);

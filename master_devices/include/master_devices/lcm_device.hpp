@@ -17,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/latest_value.hpp"
 #include "master_devices/registry.hpp"
@@ -49,11 +50,13 @@ LcmSettings parse_lcm_settings(FieldReader& r);
 
 class LcmDevice final : public Device {
  public:
-  /// Uses its own LCM instance from settings.url.
-  explicit LcmDevice(LcmSettings settings);
+  /// Uses its own LCM instance from settings.url. `clock` stamps each
+  /// MASTER_STATE's arrival and each torque command.
+  explicit LcmDevice(LcmSettings settings, std::shared_ptr<const Clock> clock = monotonic_clock());
   /// Uses a given LCM instance (e.g. "memq://" shared with a test); this
   /// device's thread is then the one that handles it.
-  LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm);
+  LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm,
+            std::shared_ptr<const Clock> clock = monotonic_clock());
   ~LcmDevice() override;
 
   const DeviceSpec& spec() const override { return spec_; }
@@ -84,6 +87,7 @@ class LcmDevice final : public Device {
   LcmSettings settings_;
   DeviceSpec spec_;
   std::shared_ptr<lcm::LCM> lcm_;
+  std::shared_ptr<const Clock> clock_;
   std::unique_ptr<Impl> impl_;
 
   LatestValue<DeviceReading> readings_;
@@ -98,7 +102,8 @@ class LcmDevice final : public Device {
   std::string error_;
 };
 
-/// Registers the `lcm` driver.
-void register_lcm_driver(DriverRegistry& registry);
+/// Registers the `lcm` driver; its devices read `clock`.
+void register_lcm_driver(DriverRegistry& registry,
+                         std::shared_ptr<const Clock> clock = monotonic_clock());
 
 }  // namespace tsmh::master_devices

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "master_devices/clock.hpp"
 #include "master_devices/transport.hpp"
 
 namespace tsmh::master_devices {
@@ -33,6 +34,8 @@ class LibusbProvider final : public TransportProvider {
     std::string sysfs_root = "/sys/bus/usb/devices";
     /// usbfs device nodes, <root>/BBB/DDD.
     std::string usbfs_root = "/dev/bus/usb";
+    /// Stamps each input report's arrival (the driver's clock).
+    std::shared_ptr<const Clock> clock = monotonic_clock();
   };
   LibusbProvider();
   explicit LibusbProvider(Options options);

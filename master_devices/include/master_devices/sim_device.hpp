@@ -11,12 +11,17 @@
 //                  real time (or single-steps in a test) stays
 //                  deterministic. read() and write_torque() must then be
 //                  called from the same thread.
+//
+// In real time the thread is paced by CLOCK_MONOTONIC, but readings and
+// commands are stamped with the clock given to the constructor, so a test
+// can age them with a ManualClock instead of sleeping.
 
 #include <atomic>
 #include <cstdint>
 #include <string>
 #include <thread>
 
+#include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/latest_value.hpp"
 #include "master_devices/settings.hpp"
@@ -47,7 +52,7 @@ SimSettings parse_sim_settings(FieldReader& r);
 
 class SimDevice final : public Device {
  public:
-  explicit SimDevice(SimSettings settings);
+  explicit SimDevice(SimSettings settings, std::shared_ptr<const Clock> clock = monotonic_clock());
   ~SimDevice() override;
 
   const DeviceSpec& spec() const override { return spec_; }
@@ -78,6 +83,7 @@ class SimDevice final : public Device {
   void run_real_time();
 
   SimSettings settings_;
+  std::shared_ptr<const Clock> clock_;  // real-time mode: stamps readings and commands
   DeviceSpec spec_;
   SimulatedOperator operator_;
   LatestValue<DeviceReading> readings_;
