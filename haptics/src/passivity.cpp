@@ -1,0 +1,71 @@
+#include "haptics/passivity.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace tsmh::haptics {
+
+void validate(const PassivityConfig& c) {
+  if (!(c.max_damping_nms_per_rad > 0.0) || !(c.max_damping_nms_per_rad <= 100.0))
+    throw std::invalid_argument("passivity.max_damping_nms_per_rad: must be within (0, 100]");
+}
+
+PassivityChannel::PassivityChannel(const PassivityConfig& c) : c_(c) {
+  validate(c_);
+}
+
+void PassivityChannel::reset() noexcept {
+  master_ = {};
+  slave_ = {};
+  have_q_ = have_x_ = false;
+  dq_ = 0.0;
+  dissipated_ = damping_ = 0.0;
+  active_ = false;
+}
+
+void PassivityChannel::slave_sample(double torque, double angle) noexcept {
+  if (!std::isfinite(torque) || !std::isfinite(angle)) return;
+  // The torque reported with the previous sample acted over the motion to
+  // this one (it is what the master rendered meanwhile).
+  if (have_x_) slave_.add(f_prev_ * (angle - x_prev_));
+  x_prev_ = angle;
+  f_prev_ = torque;
+  have_x_ = true;
+}
+
+double PassivityChannel::control(double q, double request, double dt_s) noexcept {
+  active_ = false;
+  damping_ = 0.0;
+  if (!std::isfinite(q)) {
+    dq_ = 0.0;
+    return request;
+  }
+  dq_ = have_q_ ? q - q_prev_ : 0.0;
+  q_prev_ = q;
+  have_q_ = true;
+  if (!c_.enabled || !std::isfinite(request) || !(dt_s > 0.0)) return request;
+  // Energy the master port would put into the network this tick; when < 0
+  // the network hands it to the operator and W_M falls by as much.
+  const double into = -request * dq_;
+  const double would_be = observed_energy() + std::min(into, 0.0);
+  if (would_be >= 0.0 || dq_ == 0.0) return request;
+  // Solve F dq = W (the energy available, >= 0 unless safety cut an earlier
+  // correction short): the torque that leaves W_M exactly at 0, as a damper
+  // alpha = (request - F) / v, bounded.
+  const double v = dq_ / dt_s;
+  const double wanted = observed_energy() / dq_;
+  const double alpha = std::min((request - wanted) / v, c_.max_damping_nms_per_rad);
+  if (!(alpha > 0.0)) return request;
+  const double corrected = request - alpha * v;
+  damping_ = alpha;
+  active_ = true;
+  dissipated_ += alpha * v * dq_;
+  return corrected;
+}
+
+void PassivityChannel::commit(double rendered) noexcept {
+  if (std::isfinite(rendered)) master_.add(-rendered * dq_);
+}
+
+}  // namespace tsmh::haptics
