@@ -62,7 +62,8 @@ inline double slave_side_energy(double master_in_delayed, double slave_out) noex
 
 class PassivityChannel {
  public:
-  explicit PassivityChannel(const PassivityConfig& c = {});
+  PassivityChannel() : PassivityChannel(PassivityConfig{}) {}
+  explicit PassivityChannel(const PassivityConfig& c);
 
   /// A new slave sample: `torque` the master-frame torque it reports, `angle`
   /// the slave joint angle in master radians. Non-finite values skip it.
