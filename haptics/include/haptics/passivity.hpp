@@ -23,7 +23,10 @@
 // estimate rendered from it), so W_M needs no extra message. Whenever the
 // torque about to be rendered would make W_M negative, the controller adds
 // just the damping (bounded by max_damping) that keeps it at zero: nothing
-// changes while W_M is positive. The slave-side controller (on W_S) would
+// changes while W_M is positive. When the correction reverses the torque
+// into a brake, the energy the brake absorbs is the controller's
+// dissipation and is credited to W_M (Artigas et al. add the controller's
+// dissipated energy to the observer the same way). The slave-side controller (on W_S) would
 // run in the slave's node; here only W_S's formula is provided.
 //
 // Discrete accounting as in Ryu-Hannaford: the force of tick n times the
@@ -81,7 +84,8 @@ class PassivityChannel {
   /// Start afresh (enabling, a slave clock jump): energies and positions.
   void reset() noexcept;
 
-  double observed_energy() const noexcept { return slave_.in - master_.out; }  ///< W_M, J
+  /// W_M, J: E_in_S - E_out_M + what the controller's brake absorbed.
+  double observed_energy() const noexcept { return slave_.in - master_.out + absorbed_; }
   double dissipated() const noexcept { return dissipated_; }  ///< by the controller, J
   bool active() const noexcept { return active_; }            ///< damping added this tick
   double damping() const noexcept { return damping_; }        ///< this tick's, N m s/rad
@@ -96,6 +100,7 @@ class PassivityChannel {
   double x_prev_ = 0.0, f_prev_ = 0.0;
   bool have_x_ = false;
   double dissipated_ = 0.0;
+  double absorbed_ = 0.0;  // by the controller's brake (torque reversed against the motion)
   double damping_ = 0.0;
   bool active_ = false;
 };
