@@ -9,6 +9,8 @@ namespace tsmh::haptics {
 void validate(const PassivityConfig& c) {
   if (!(c.max_damping_nms_per_rad > 0.0) || !(c.max_damping_nms_per_rad <= 100.0))
     throw std::invalid_argument("passivity.max_damping_nms_per_rad: must be within (0, 100]");
+  if (!(c.max_brake_nm >= 0.0) || !(c.max_brake_nm <= 1000.0))
+    throw std::invalid_argument("passivity.max_brake_nm: must be within [0, 1000]");
 }
 
 PassivityChannel::PassivityChannel(const PassivityConfig& c) : c_(c) {
@@ -61,10 +63,15 @@ double PassivityChannel::control(double q, double request, double dt_s) noexcept
   const double wanted = observed_energy() / dq_;
   const double alpha = std::min((request - wanted) / v, c_.max_damping_nms_per_rad);
   if (!(alpha > 0.0)) return request;
-  const double corrected = request - alpha * v;
-  damping_ = alpha;
+  double corrected = request - alpha * v;
+  // A brake (the correction reversed the torque) is capped: repaying a
+  // deficit slowly is safe, a kick against the operator is not.
+  if (corrected * request < 0.0 && std::fabs(corrected) > c_.max_brake_nm)
+    corrected = std::copysign(c_.max_brake_nm, corrected);
+  const double alpha_used = (request - corrected) / v;
+  damping_ = alpha_used;
   active_ = true;
-  dissipated_ += alpha * v * dq_;
+  dissipated_ += (request - corrected) * dq_;
   return corrected;
 }
 

@@ -68,6 +68,7 @@ PassivityConfig parse_passivity(FieldReader& p) {
   c.enabled = p.get_bool("enabled", c.enabled);
   c.max_damping_nms_per_rad =
       in_range(p, "max_damping_nms_per_rad", c.max_damping_nms_per_rad, 0.0, 100.0, true);
+  c.max_brake_nm = in_range(p, "max_brake_nm", c.max_brake_nm, 0.0, 1000.0);
   p.reject_unknown();
   return c;
 }

@@ -138,6 +138,32 @@ TEST(PassivityController, DampingIsBoundedAndOffMeansUnchanged) {
                std::invalid_argument);
 }
 
+TEST(PassivityController, ADeficitIsRepaidByABoundedBrakeThatLetsGo) {
+  PassivityConfig on;
+  on.enabled = true;
+  on.max_brake_nm = 0.02;
+  PassivityChannel pc(on);
+  // Safety's rate limit renders 0.2 N m for a tick where the controller cut
+  // it: 0.2 N m along 1 mrad of motion is 2e-4 J the channel did not have.
+  pc.control(0.0, 0.2, kDt);
+  pc.commit(0.2);
+  pc.control(0.001, 0.2, kDt);
+  pc.commit(0.2);
+  ASSERT_NEAR(pc.observed_energy(), -2e-4, 1e-12);
+  // The master keeps moving at 1 rad/s with the same active request: the
+  // controller brakes, never harder than max_brake_nm, until repaid.
+  int braking_ticks = 0;
+  for (int i = 2; i < 100; ++i) {
+    const double out = pc.control(0.001 * i, 0.2, kDt);
+    ASSERT_GE(out, -0.02 - 1e-12) << "tick " << i;
+    if (out < 0.0) ++braking_ticks;
+    pc.commit(out);
+  }
+  EXPECT_EQ(braking_ticks, 10) << "2e-4 J at 0.02 N m x 1 mrad per tick";
+  EXPECT_NEAR(pc.observed_energy(), 0.0, 1e-12) << "repaid, then held at 0";
+  EXPECT_THROW(PassivityChannel({.enabled = true, .max_brake_nm = -1.0}), std::invalid_argument);
+}
+
 TEST(PassivityController, ResetStartsAfresh) {
   PassivityChannel pc;
   pc.slave_sample(-1.0, 0.0);

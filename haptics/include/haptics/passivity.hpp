@@ -39,6 +39,11 @@ struct PassivityConfig {
   /// Bound on the controller's damping, N m s/rad: keeps the correction from
   /// becoming a stiff, chattering brake on encoder noise.
   double max_damping_nms_per_rad = 1.0;
+  /// Bound on a brake, N m: when paying back a deficit reverses the torque
+  /// against the motion, at most this much (bench_teleop_delay: +0.16 N m
+  /// kicks on release at 100 ms without it, +0.02 with it; the hold is the
+  /// same either way).
+  double max_brake_nm = 0.02;
 };
 
 /// Throws std::invalid_argument naming the field (passivity.*).
