@@ -145,6 +145,8 @@ class HapticLoop {
   double rate_hz() const noexcept { return config_.rate_hz; }
   /// Mean tick rate measured over the whole run (ticks / elapsed time).
   double measured_rate_hz() const noexcept;
+  int joints() const noexcept { return config_.joints; }
+  bool passivity_enabled() const noexcept { return config_.passivity.enabled; }
   const OscillationDetector& oscillation() const noexcept { return oscillation_; }
   const PassivityChannel& passivity(int joint) const noexcept {
     return passivity_[static_cast<std::size_t>(joint)];
