@@ -96,6 +96,10 @@ void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m) {
   put(s.friction_est, s.num_joints, m.friction_est);
   put(s.torque_cmd, s.num_joints, m.torque_cmd);
   put(s.master_q, s.num_joints, m.master_q);
+  m.oscillation_trips = s.oscillation_trips;
+  put(s.oscillation_rms, s.num_joints, m.oscillation_rms);
+  put(s.passivity_energy, s.num_joints, m.passivity_energy);
+  put(s.passivity_dissipated, s.num_joints, m.passivity_dissipated);
 }
 
 void to_message(const MasterStateSample& s, tsmh::master_state_t& m) {
@@ -171,6 +175,10 @@ void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcep
   get(m.friction_est, m.num_joints, s.friction_est);
   get(m.torque_cmd, m.num_joints, s.torque_cmd);
   get(m.master_q, m.num_joints, s.master_q);
+  s.oscillation_trips = m.oscillation_trips;
+  get(m.oscillation_rms, m.num_joints, s.oscillation_rms);
+  get(m.passivity_energy, m.num_joints, s.passivity_energy);
+  get(m.passivity_dissipated, m.num_joints, s.passivity_dissipated);
 }
 
 void from_message(const tsmh::master_state_t& m, MasterStateSample& s) noexcept {

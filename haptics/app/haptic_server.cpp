@@ -249,6 +249,25 @@ int list_devices() {
 
 /// The exit summary, printed once. Every figure says what it counts and what
 /// is normal, so an operator can read it without the source.
+/// Issue 21: what the oscillation detector and the passivity controller did.
+void print_delay_summary(const haptics::HapticLoop& loop) {
+  const auto& c = loop.counters();
+  double w_min = 0.0, dissipated = 0.0;
+  for (int j = 0; j < loop.joints(); ++j) {
+    w_min = j == 0 ? loop.passivity(j).observed_energy()
+                   : std::min(w_min, loop.passivity(j).observed_energy());
+    dissipated += loop.passivity(j).dissipated();
+  }
+  std::fprintf(stderr,
+               "  delay:  oscillation trips %llu (%llu ticks faded); passivity %s: controller "
+               "active %llu ticks, dissipated %.4f J, observed energy W_M at the end (lowest "
+               "joint) %.4f J\n",
+               static_cast<unsigned long long>(c.oscillation_trips),
+               static_cast<unsigned long long>(c.oscillation_ticks),
+               loop.passivity_enabled() ? "on" : "off",
+               static_cast<unsigned long long>(c.passivity_ticks), dissipated, w_min);
+}
+
 void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink& link,
                    const std::string& slave_channel, double seconds, int exit_code,
                    const char* verdict) {
@@ -303,6 +322,7 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
                static_cast<ull>(c.rate_limited_ticks), static_cast<ull>(c.nonfinite_requests),
                static_cast<ull>(c.estimate_lost_ticks), static_cast<ull>(c.estimator_resets),
                static_cast<ull>(c.faults));
+  print_delay_summary(loop);
   std::fprintf(stderr, "  end:    state %s; exit %d (%s)\n",
                std::string(to_string(loop.state())).c_str(), exit_code, verdict);
 }

@@ -27,7 +27,8 @@ HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device,
       link_(link),
       estimators_(std::move(estimators)),
       trace_(trace),
-      safety_(config.joints, config.limits, config.timing) {
+      safety_(config.joints, config.limits, config.timing),
+      oscillation_(config.joints, config.oscillation, config.rate_hz) {
   if (static_cast<int>(estimators_.size()) != config_.joints)
     throw std::invalid_argument("haptic loop: one estimator per joint is needed");
   for (const auto& e : estimators_)
@@ -37,9 +38,11 @@ HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device,
   if (config_.status_every < 1) throw std::invalid_argument("status_every: must be >= 1");
   if (trace_ && trace_->joints() != config_.joints)
     throw std::invalid_argument("haptic loop: trace joint count differs");
-  for (int j = 0; j < config_.joints; ++j)
-    position_[static_cast<std::size_t>(j)] =
-        PositionMapping(config_.position[static_cast<std::size_t>(j)]);
+  for (int j = 0; j < config_.joints; ++j) {
+    const auto i = static_cast<std::size_t>(j);
+    position_[i] = PositionMapping(config_.position[i]);
+    passivity_[i] = PassivityChannel(config_.passivity);
+  }
 }
 
 double HapticLoop::measured_rate_hz() const noexcept {
@@ -97,23 +100,8 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
 
   // 3. Feedback request per joint (NaN passes through: the safety filter zeroes it).
   JointArray request{};
-  for (std::size_t j = 0; j < n; ++j) {
-    // A joint without a valid estimate renders its last valid one, fading.
-    const estimator::Estimate& e = estimates_[j].valid ? estimates_[j] : held_[j];
-    double slave_tau = 0.0;
-    switch (config_.source) {
-      case FeedbackSource::kEstimated:
-        slave_tau = e.tau_out_est;
-        break;
-      case FeedbackSource::kNaive:
-        slave_tau = e.tau_in;
-        break;
-      case FeedbackSource::kNone:
-        slave_tau = 0.0;
-        break;
-    }
-    request[j] = config_.force[j](slave_tau);
-  }
+  for (std::size_t j = 0; j < n; ++j)
+    request[j] = config_.force[j](slave_torque(j));
 
   // 4. State machine. A late master reading zeroes torque this tick (below)
   // without latching a fault unless it persists.
@@ -158,9 +146,11 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
     device_enabled_ = enabled;
   }
 
-  // 5. Safety, then the device.
+  // 5. Oscillation fade and passivity control, safety, then the device.
+  shape_request(request, dt, enabled && device_fresh);
   const SafetyOutput& out =
       safety_.apply(request, dt, std::max(age_s, lost_s), enabled && device_fresh);
+  observe_rendered(out);
   if (out.flags & safety_flags::kNonFinite) ++counters_.nonfinite_requests;
   if (out.flags & safety_flags::kSaturated) ++counters_.saturated_ticks;
   if (out.flags & safety_flags::kRateLimited) ++counters_.rate_limited_ticks;
@@ -223,6 +213,20 @@ void HapticLoop::record_compute(std::int64_t compute_ns, std::int64_t skipped) n
   }
 }
 
+double HapticLoop::slave_torque(std::size_t j) const noexcept {
+  // A joint without a valid estimate renders its last valid one, fading.
+  const estimator::Estimate& e = estimates_[j].valid ? estimates_[j] : held_[j];
+  switch (config_.source) {
+    case FeedbackSource::kEstimated:
+      return e.tau_out_est;
+    case FeedbackSource::kNaive:
+      return e.tau_in;
+    case FeedbackSource::kNone:
+      return 0.0;
+  }
+  return 0.0;
+}
+
 void HapticLoop::estimate() noexcept {
   const auto n = static_cast<std::size_t>(config_.joints);
   // A slave clock that jumps -- back (the slave rebooted) or forward by more
@@ -234,8 +238,10 @@ void HapticLoop::estimate() noexcept {
     const double jump_s =
         (static_cast<double>(state_.utime) - static_cast<double>(last_utime_)) * 1e-6;
     if (!(jump_s > 0.0) || jump_s > config_.slave_timeout_s) {
-      for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t j = 0; j < n; ++j) {
         estimators_[j]->reset();
+        passivity_[j].reset();  // the slave's angles are in another time base too
+      }
       ++counters_.estimator_resets;
       clock_reset_in_period_ = true;
       events_.last_reset_jump_us.store(
@@ -261,6 +267,7 @@ void HapticLoop::estimate() noexcept {
       estimators_[j]->reset();
     }
   }
+  observe_slave_ports();
 }
 
 void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
@@ -305,8 +312,12 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
   if (estimate_lost_since_ns_ >= 0) flags |= status_flags::kEstimateLost;
   if (clock_reset_in_period_) flags |= status_flags::kClockReset;
   if (overrun_in_period_) flags |= status_flags::kOverrun;
+  if (oscillation_.tripped()) flags |= status_flags::kOscillation;
+  if (passivity_in_period_) flags |= status_flags::kPassivityActive;
   clock_reset_in_period_ = false;
   overrun_in_period_ = false;
+  passivity_in_period_ = false;
+  status_.oscillation_trips = static_cast<std::int64_t>(oscillation_.trips());
   status_.flags = flags;
   for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j) {
     status_.tau_in[j] = estimates_[j].tau_in;
@@ -314,6 +325,9 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
     status_.friction_est[j] = estimates_[j].friction;
     status_.torque_cmd[j] = out.torque[j];
     status_.master_q[j] = reading_.q[j];
+    status_.passivity_energy[j] = passivity_[j].observed_energy();
+    status_.passivity_dissipated[j] = passivity_[j].dissipated();
+    status_.oscillation_rms[j] = oscillation_.band_rms(static_cast<int>(j));
   }
   link_.publish_status(status_);
   // The same figures for the server's live status line (main thread).

@@ -45,6 +45,34 @@ std::string resolve(const std::filesystem::path& base, const std::string& p) {
   return (base / p).lexically_normal().string();
 }
 
+// safety.oscillation (issue 21); every field optional.
+OscillationConfig parse_oscillation(FieldReader& o, double rate_hz) {
+  OscillationConfig c;
+  c.enabled = o.get_bool("enabled", c.enabled);
+  c.band_low_hz = in_range(o, "band_low_hz", c.band_low_hz, 0.0, 1e3, true);
+  c.band_high_hz = in_range(o, "band_high_hz", c.band_high_hz, 0.0, 0.45 * rate_hz, true);
+  if (c.band_high_hz <= c.band_low_hz) o.fail("band_high_hz", "must be above band_low_hz");
+  c.threshold_nm = in_range(o, "threshold_nm", c.threshold_nm, 0.0, 1e3, true);
+  c.min_crossings = static_cast<int>(in_range(o, "min_crossings", c.min_crossings, 1, 1000));
+  c.window_s = in_range(o, "window_ms", c.window_s * 1e3, 0.0, 1e4, true) * 1e-3;
+  c.fade_s = in_range(o, "fade_ms", c.fade_s * 1e3, 0.0, 1e4, true) * 1e-3;
+  c.hold_s = in_range(o, "hold_ms", c.hold_s * 1e3, 0.0, 6e4) * 1e-3;
+  c.recover_s = in_range(o, "recover_ms", c.recover_s * 1e3, 0.0, 6e4, true) * 1e-3;
+  o.reject_unknown();
+  return c;
+}
+
+// passivity (issue 21); off unless enabled.
+PassivityConfig parse_passivity(FieldReader& p) {
+  PassivityConfig c;
+  c.enabled = p.get_bool("enabled", c.enabled);
+  c.max_damping_nms_per_rad =
+      in_range(p, "max_damping_nms_per_rad", c.max_damping_nms_per_rad, 0.0, 100.0, true);
+  c.max_brake_nm = in_range(p, "max_brake_nm", c.max_brake_nm, 0.0, 1000.0);
+  p.reject_unknown();
+  return c;
+}
+
 }  // namespace
 
 FeedbackSource feedback_source_from_string(const std::string& s) {
@@ -106,7 +134,12 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.loop.slave_timeout_s = ms("slave_timeout_ms", 1000.0);
   c.loop.device_stale_fault_s = ms("device_stale_fault_ms", 50.0);
   c.loop.estimate_fault_s = ms("estimate_fault_ms", 500.0);
+  FieldReader oscillation(safety.node("oscillation"), origin, "safety.oscillation");
+  c.loop.oscillation = parse_oscillation(oscillation, c.loop.rate_hz);
   safety.reject_unknown();
+
+  FieldReader passivity(r.node("passivity"), origin, "passivity");
+  c.loop.passivity = parse_passivity(passivity);
 
   FieldReader slave(r.node("slave_state"), origin, "slave_state");
   auto& sl = c.slave_limits;

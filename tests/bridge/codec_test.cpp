@@ -63,13 +63,21 @@ TEST(Codec, EveryTypeRoundTrips) {
   h.slave_seq_gaps = 4;
   h.slave_latency_p99_us = 55.5;
   h.torque_cmd = {0.3, 0.4};
-  h.flags = 0b10101;
+  h.flags = 0b10101 | (1 << 12) | (1 << 13);
+  h.oscillation_trips = 2;  // issue 21's fields
+  h.oscillation_rms = {0.01, 0.02};
+  h.passivity_energy = {-0.003, 0.5};
+  h.passivity_dissipated = {0.04, 0.0};
   const auto h2 = round_trip(h);
+  EXPECT_EQ(h2.oscillation_trips, 2);
+  EXPECT_EQ(h2.oscillation_rms[1], 0.02);
+  EXPECT_EQ(h2.passivity_energy[0], -0.003);
+  EXPECT_EQ(h2.passivity_dissipated[0], 0.04);
   EXPECT_EQ(h2.rate_hz, 1000.0);
   EXPECT_EQ(h2.slave_seq_gaps, 4);
   EXPECT_EQ(h2.slave_latency_p99_us, 55.5);
   EXPECT_EQ(h2.torque_cmd[1], 0.4);
-  EXPECT_EQ(h2.flags, 0b10101);
+  EXPECT_EQ(h2.flags, 0b10101 | (1 << 12) | (1 << 13));
 
   MasterStateSample ms;
   ms.num_joints = 2;

@@ -85,7 +85,8 @@ struct HapticStatusSample {
   std::int32_t state = 0;            ///< 0 DISABLED, 1 ENABLED, 2 FAULT
   std::int32_t feedback_source = 0;  ///< 0 estimated, 1 naive, 2 none
   /// bit 0 stale fade, 1 e-stop, 2 dead-man released, 3 saturated, 4 rate
-  /// limited, 5 estimate lost, 6 slave clock jumped, 7 deadline missed
+  /// limited, 5 estimate lost, 6 slave clock jumped, 7 deadline missed,
+  /// 12 oscillation detected, 13 passivity controller active
   std::int32_t flags = 0;
   double rate_hz = 0;
   double lateness_p50_us = 0;
@@ -102,6 +103,10 @@ struct HapticStatusSample {
   JointArray friction_est{};
   JointArray torque_cmd{};
   JointArray master_q{};
+  std::int64_t oscillation_trips = 0;  ///< sustained oscillations detected since start
+  JointArray oscillation_rms{};        ///< band RMS of the rendered torque, N m
+  JointArray passivity_energy{};       ///< master-side observed energy W_M, J
+  JointArray passivity_dissipated{};   ///< removed by the passivity controller, J
 };
 
 /// How long ago the sample was received, by the receiver's clock (always valid).

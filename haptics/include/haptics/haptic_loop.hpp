@@ -18,6 +18,8 @@
 #include "estimator/distal_estimator.hpp"
 #include "haptics/force_mapping.hpp"
 #include "haptics/joint_array.hpp"
+#include "haptics/oscillation_detector.hpp"
+#include "haptics/passivity.hpp"
 #include "haptics/position_mapping.hpp"
 #include "haptics/safety_filter.hpp"
 #include "haptics/safety_state.hpp"
@@ -50,7 +52,9 @@ struct LoopConfig {
   /// FAULT. Before that the last valid estimate is held and faded like a
   /// stale slave (SafetyTiming), so losing the estimate is never a step.
   double estimate_fault_s = 0.5;
-  int status_every = 10;  ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
+  int status_every = 10;            ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
+  OscillationConfig oscillation{};  ///< safety.oscillation (issue 21)
+  PassivityConfig passivity{};      ///< passivity (issue 21), off by default
 };
 
 struct LoopCounters {
@@ -66,6 +70,9 @@ struct LoopCounters {
   std::uint64_t estimator_resets = 0;    ///< slave clock discontinuities: estimators re-initialised
   std::uint64_t estimate_lost_ticks = 0;  ///< ticks with some joint's estimate invalid
   std::uint64_t faults = 0;               ///< entries into FAULT
+  std::uint64_t oscillation_trips = 0;    ///< sustained oscillations detected (force faded)
+  std::uint64_t oscillation_ticks = 0;    ///< ticks with the oscillation fade below full force
+  std::uint64_t passivity_ticks = 0;  ///< ticks with the passivity controller damping some joint
 };
 
 /// HAPTIC_STATUS flags (lcmtypes/haptic_status_t.lcm).
@@ -78,6 +85,10 @@ inline constexpr std::int32_t kRateLimited = 1 << 4;
 inline constexpr std::int32_t kEstimateLost = 1 << 5;  ///< some joint has no valid estimate
 inline constexpr std::int32_t kClockReset = 1 << 6;    ///< slave clock jumped in this period
 inline constexpr std::int32_t kOverrun = 1 << 7;       ///< a deadline was missed in this period
+// Bits 8-11 are left to other features; these two are issue 21's.
+inline constexpr std::int32_t kOscillation = 1 << 12;  ///< oscillation detected: force faded
+inline constexpr std::int32_t kPassivityActive =
+    1 << 13;  ///< passivity controller damped in this period
 }  // namespace status_flags
 
 /// What the loop thread reports to a non-real-time thread (which logs it):
@@ -134,12 +145,25 @@ class HapticLoop {
   double rate_hz() const noexcept { return config_.rate_hz; }
   /// Mean tick rate measured over the whole run (ticks / elapsed time).
   double measured_rate_hz() const noexcept;
+  int joints() const noexcept { return config_.joints; }
+  bool passivity_enabled() const noexcept { return config_.passivity.enabled; }
+  const OscillationDetector& oscillation() const noexcept { return oscillation_; }
+  const PassivityChannel& passivity(int joint) const noexcept {
+    return passivity_[static_cast<std::size_t>(joint)];
+  }
   /// For a non-real-time thread: events to log (any thread may read).
   LoopEvents& events() noexcept { return events_; }
 
  private:
   void publish_status(std::int64_t now_ns) noexcept;
-  void estimate() noexcept;  // a new SLAVE_STATE in state_
+  void estimate() noexcept;                               // a new SLAVE_STATE in state_
+  double slave_torque(std::size_t joint) const noexcept;  // what the source renders, slave N m
+  // Issue 21 (haptic_loop_passivity.cpp): the slave port's energy from each
+  // new sample; the oscillation gain and the passivity correction of the
+  // request; the master port's energy from what was rendered.
+  void observe_slave_ports() noexcept;
+  void shape_request(JointArray& request, double dt, bool enabled) noexcept;
+  void observe_rendered(const SafetyOutput& out) noexcept;
 
   LoopConfig config_;
   master_devices::Device& device_;
@@ -149,6 +173,10 @@ class HapticLoop {
 
   SafetyStateMachine machine_;
   SafetyFilter safety_;
+  OscillationDetector oscillation_;
+  std::array<PassivityChannel, kMaxJoints> passivity_;
+  bool passivity_in_period_ = false;
+  bool passivity_enabled_ = false;  // the loop was enabled at the last tick
   std::array<PositionMapping, kMaxJoints> position_;
   std::array<estimator::Estimate, kMaxJoints> estimates_{};
   std::array<estimator::Estimate, kMaxJoints> held_{};  // the last valid estimate per joint
