@@ -88,6 +88,7 @@ Discrimination discriminate(const Trace& trace, const ServerConfig& config, int 
     const auto j = static_cast<std::size_t>(d.joint);
     d.boundary_m = find_boundary(trace, j);
     d.force_scale = config.loop.force[j].scale;
+    d.force_sign = config.loop.force[j].sign;
     d.position_scale = config.loop.position[j].scale;
     const double gain = d.force_scale * d.position_scale;
     std::vector<double> qm[2], tm[2], xs[2], ts[2];
@@ -222,6 +223,7 @@ std::string report_to_json(const EvaluationReport& r) {
                 {"soft_ideal", num(d.soft.ideal)},
                 {"hard_ideal", num(d.hard.ideal)},
                 {"force_scale", num(d.force_scale)},
+                {"force_sign", num(d.force_sign)},
                 {"position_scale", num(d.position_scale)},
                 {"units", "N m/rad, slave joint space"}}}};
   return doc.dump(2) + "\n";

@@ -216,9 +216,9 @@ Result run(const Options& o, double rtt_ms, bool pc) {
   haptics::LoopConfig cfg;
   cfg.joints = 2;
   for (std::size_t j = 0; j < 2; ++j) {
-    // Sign -1: the rendered torque opposes the press (the sim hand is pushed
-    // back). tau_out_est is the torque the slave exerts on the tissue.
-    cfg.force[j] = {1.0, -1.0, 0.0};
+    // The rendered torque opposes the press (the sim hand is pushed back):
+    // the force mapping renders the tissue's reaction.
+    cfg.force[j] = {1.0, 1.0, 0.0};
     cfg.position[j] = {};
     cfg.limits[j] = {0.3, 30.0};
   }

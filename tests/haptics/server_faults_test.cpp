@@ -289,7 +289,7 @@ class ServerFaults : public test::ScratchDirTest {
 // the peer's tensions ask for.
 bool rendering(const Peer& peer) {
   const auto f = peer.force();
-  return f.enable && f.torque[0] > 0.05;
+  return f.enable && std::fabs(f.torque[0]) > 0.05;
 }
 
 // Every catchable signal that ends a process by default must end

@@ -21,7 +21,7 @@ LoopConfig config(FeedbackSource source = FeedbackSource::kEstimated) {
   c.joints = 2;
   c.source = source;
   for (int j = 0; j < 2; ++j) {
-    c.force[j] = {2.0, 1.0, 0.0};
+    c.force[j] = {2.0, -1.0, 0.0};  // sign -1: renders +2 x the slave torque
     c.position[j] = {.scale = 0.5};
     c.limits[j] = {0.8, 100.0};
   }

@@ -24,7 +24,7 @@ LoopConfig config(bool passivity) {
   c.joints = 2;
   c.source = FeedbackSource::kNaive;  // tau_in = R (T1 - T3): the test sets it directly
   for (int j = 0; j < 2; ++j) {
-    c.force[j] = {2.0, 1.0, 0.0};
+    c.force[j] = {2.0, -1.0, 0.0};  // sign -1: renders +2 x the slave torque
     c.position[j] = {};
     c.limits[j] = {0.8, 100.0};
   }

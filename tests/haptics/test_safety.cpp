@@ -122,9 +122,18 @@ TEST(ForceMapping, ScaleSignAndContinuousDeadband) {
   const ForceMapping m{2.0, -1.0, 0.01};
   EXPECT_DOUBLE_EQ(m(0.005), 0.0);
   EXPECT_DOUBLE_EQ(m(0.01), 0.0);
-  EXPECT_NEAR(m(0.03), -2.0 * 0.02, 1e-15);
-  EXPECT_NEAR(m(-0.03), 2.0 * 0.02, 1e-15);
+  EXPECT_NEAR(m(0.03), 2.0 * 0.02, 1e-15);
+  EXPECT_NEAR(m(-0.03), -2.0 * 0.02, 1e-15);
   EXPECT_TRUE(std::isnan(m(std::nan(""))));  // left for the safety filter to catch
+}
+
+TEST(ForceMapping, RendersTheReactionThatPushesTheHandOutOfTheTissue) {
+  // Joints turning the same way: the tool presses in + (positive distal
+  // torque), so the hand, which moved the master in +, is pushed back in -.
+  EXPECT_LT((ForceMapping{1.0, 1.0, 0.0})(0.2), 0.0);
+  EXPECT_GT((ForceMapping{1.0, 1.0, 0.0})(-0.2), 0.0);
+  // Opposite conventions: the master moved in - to press in +; pushed back in +.
+  EXPECT_GT((ForceMapping{1.0, -1.0, 0.0})(0.2), 0.0);
 }
 
 TEST(PositionMapping, ClutchFreezesThenContinuesWithoutJump) {

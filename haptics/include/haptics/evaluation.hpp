@@ -49,6 +49,7 @@ struct Stiffness {
 struct Discrimination {
   int joint = -1;               ///< the joint that pressed the tissue (-1: no contact seen)
   double force_scale = 1.0;     ///< of that joint: master N m per slave N m
+  double force_sign = 1.0;      ///< of that joint (the master renders -sign x scale x tau)
   double position_scale = 1.0;  ///< of that joint: slave rad per master rad
   double boundary_m = 0.0;      ///< indentation separating soft layer from nodule
   Stiffness soft, hard;
