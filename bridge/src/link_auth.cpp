@@ -106,7 +106,8 @@ LinkKey LinkKey::from_hex(std::string_view text, std::string_view where) {
     const int hi = hex_value(hex[2 * i]);
     const int lo = hex_value(hex[2 * i + 1]);
     if (hi < 0 || lo < 0)
-      throw LinkKeyError(std::string(where) + ": character " + std::to_string(2 * i + 1) +
+      throw LinkKeyError(std::string(where) + ": character " +
+                         std::to_string(2 * i + (hi < 0 ? 1 : 2)) +
                          " of the key is not a hex digit");
     k.bytes_[i] = static_cast<std::uint8_t>(hi * 16 + lo);
   }

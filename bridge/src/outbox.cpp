@@ -31,8 +31,7 @@ std::size_t Outbox<Sample>::flush(lcm::LCM& lcm, MessageSigner* signer) noexcept
       }
       // Signed here, in the publish thread: the loop's publish() stays a copy.
       if (signer != nullptr)
-        signer->sign(channel_, bytes_.data(), static_cast<std::size_t>(size),
-                     bytes_.data() + size);
+        signer->sign(channel_, bytes_.data(), static_cast<std::size_t>(size), bytes_.data() + size);
       if (lcm.publish(channel_, bytes_.data(), static_cast<unsigned int>(size + trailer)) != 0) {
         publish_errors_.fetch_add(1, std::memory_order_relaxed);
         continue;

@@ -109,8 +109,9 @@ std::string describe(const Rejection& r, std::string_view channel) {
     case RejectReason::Stale:
       out += "sent ";
       out += value;
-      out += " us from this host's clock, outside the freshness window (a recording, or clocks "
-             "not synchronised): ";
+      out +=
+          " us from this host's clock, outside the freshness window (a recording, or clocks "
+          "not synchronised): ";
       out += field;
       break;
     case RejectReason::Replayed:

@@ -60,7 +60,7 @@ class LinkKey {
   ~LinkKey();
 
   /// Writes the key as 64 hex digits + newline to a new file created with
-  /// mode 0600 (parent folders 0700). Refuses to overwrite unless `overwrite`.
+  /// mode 0600 (missing parent folders are created). Refuses to overwrite unless `overwrite`.
   void save(const std::filesystem::path& file, bool overwrite = false) const;
 
   const std::array<std::uint8_t, kLinkKeyBytes>& bytes() const noexcept { return bytes_; }
