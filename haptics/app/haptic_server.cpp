@@ -1,6 +1,6 @@
 // haptic-server: the 1 kHz haptic loop (docs/haptic-server.md).
 //
-//   haptic-server --config server.yaml [--lcm-url URL] [--duration S]
+//   haptic-server --config server.yaml [--lcm-url URL] [--key FILE | --insecure] [--duration S]
 //                 [--feedback estimated|naive|none] [--trace F] [--report F]
 //   haptic-server --list-devices
 //
@@ -23,6 +23,7 @@
 
 #include "bridge/clock.hpp"
 #include "bridge/lcm_url.hpp"
+#include "bridge/link_security.hpp"
 #include "bridge/stop_signals.hpp"
 #include "estimator/model_io.hpp"
 #include "haptics/evaluation.hpp"
@@ -49,6 +50,7 @@ struct Options {
   std::string report;
   bool list_devices = false;
   bool quiet = false;
+  bridge::LinkSecurityOptions link;  ///< --key, --insecure
 };
 
 // Exit status (docs/haptic-server.md, "Exit status"): 0 only for a clean
@@ -373,6 +375,11 @@ int run(const Options& o, const sigset_t& stop_signals) {
   haptics::LcmSlaveLinkConfig link_cfg;
   link_cfg.bridge.url = bridge::resolve_lcm_url(o.lcm_url.empty() ? cfg.lcm_url : o.lcm_url);
   link_cfg.bridge.prefix = cfg.lcm_prefix;
+  // Only authenticated peers move the master (docs/bridge.md, "Authentication").
+  const auto security = bridge::resolve_link_security(link_cfg.bridge.url, o.link);
+  link_cfg.bridge.key = security.key;
+  if (!security.key || !o.quiet)
+    std::fprintf(stderr, "haptic-server: %s\n", security.notice.c_str());
   link_cfg.joints = cfg.loop.joints;
   link_cfg.state_limits = cfg.slave_limits;
   link_cfg.subscribe_truth = cfg.evaluation.truth;
@@ -543,6 +550,12 @@ int main(int argc, char** argv) {
   app.add_flag("--list-devices", o.list_devices,
                "List connected master devices matching known profiles");
   app.add_flag("--quiet", o.quiet, "Only warnings and the exit summary");
+  app.add_option("--key", o.link.key_file,
+                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
+                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_flag("--insecure", o.link.insecure,
+               "Run without a link key on a network LCM URL: anyone who reaches it can "
+               "command the robot and the master (isolated networks only)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -557,6 +570,9 @@ int main(int argc, char** argv) {
     }
     return run(o, stop_signals);
   } catch (const haptics::ConfigError& e) {
+    std::cerr << "haptic-server: error: " << e.what() << "\n";
+    return kExitConfig;
+  } catch (const bridge::LinkKeyError& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
     return kExitConfig;
   } catch (const DeviceError& e) {
