@@ -30,6 +30,7 @@
 #include "haptics/lcm_slave_link.hpp"
 #include "haptics/loop_runner.hpp"
 #include "haptics/server_config.hpp"
+#include "lcm_device_auth.hpp"
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
@@ -236,10 +237,14 @@ int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventL
   return 0;
 }
 
-master_devices::DriverRegistry make_registry() {
+/// `lcm_auth`: the link key's authentication for the lcm driver's
+/// MASTER_STATE / MASTER_FORCE (null: unauthenticated).
+master_devices::DriverRegistry make_registry(
+    std::shared_ptr<master_devices::LcmMessageAuth> lcm_auth = nullptr) {
   master_devices::DriverRegistry registry;
   master_devices::register_builtin_drivers(registry);
-  master_devices::register_lcm_driver(registry);
+  master_devices::register_lcm_driver(registry, master_devices::monotonic_clock(),
+                                      std::move(lcm_auth));
   return registry;
 }
 
@@ -385,7 +390,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
   link_cfg.subscribe_truth = cfg.evaluation.truth;
   haptics::LcmSlaveLink link(link_cfg);
 
-  const auto registry = make_registry();
+  const auto registry = make_registry(haptics::make_lcm_device_auth(security.key));
   master_devices::DriverContext ctx{cfg.source, "device.settings",
                                     std::filesystem::path(cfg.source).parent_path()};
   std::unique_ptr<master_devices::Device> device;
