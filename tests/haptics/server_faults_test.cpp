@@ -220,7 +220,7 @@ class Peer {
       const std::int64_t t = now_us();
       m.utime = t;
       m.seq = mseq++;
-      bridge::publish_sample(lcm_, master_channel, m);
+      bridge::publish_sample(lcm_, master_channel, m, master_signer_.get());
       if (restart_seq_.exchange(false)) seq = 0;
       const int n = 1 + flood_per_ms_.load();
       for (int k = 0; k < n; ++k) {
@@ -250,6 +250,8 @@ class Peer {
   // would), unless sign_slave_with() says otherwise. Signers are kept until
   // the Peer ends: the publishing thread may still hold the previous one.
   std::vector<std::unique_ptr<bridge::MessageSigner>> signers_;
+  // The console's MASTER_STATE, always with the key (the lcm device verifies it).
+  std::unique_ptr<bridge::MessageSigner> master_signer_ = test::test_signer();
   std::atomic<bridge::MessageSigner*> slave_signer_{nullptr};
   bridge::Receiver rx_;
   bridge::Inbox<bridge::MasterForceSample>& force_;
