@@ -93,14 +93,31 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
   int max_joints_seen = 0;
   std::size_t lacking_joint = 0;
 
+  // With a key, a log in which no event carries a MAC predates authentication
+  // (or unkeyed senders recorded it): read as unsigned, and say so. One with
+  // any MAC is verified event by event: an unsigned event among signed ones
+  // is left out (injected, or a sender without the key).
+  const LinkKey* verify_key = options.verify_key;
+  if (verify_key != nullptr && !options.skip_mac) {
+    bool any_mac = false;
+    LogEventReader scan(bytes);
+    LogEvent e;
+    while (!any_mac && scan.next(e))
+      any_mac = (e.channel == state_channel || e.channel == truth_channel) &&
+                has_auth_trailer(e.data.data(), e.data.size());
+    if (!any_mac) {
+      verify_key = nullptr;
+      out.no_macs = true;
+    }
+  }
   std::size_t signed_unverified = 0;
   // The payload size of an event to use, or nullopt to leave it out (MAC).
   const auto authentic_size = [&](const LogEvent& ev) -> std::optional<std::size_t> {
     const std::size_t size = ev.data.size();
     const bool has_mac = has_auth_trailer(ev.data.data(), size);
     if (options.skip_mac) return has_mac ? size - kAuthTrailerBytes : size;
-    if (options.verify_key != nullptr) {
-      switch (verify_stored(*options.verify_key, ev.channel, ev.data.data(), size)) {
+    if (verify_key != nullptr) {
+      switch (verify_stored(*verify_key, ev.channel, ev.data.data(), size)) {
         case AuthVerdict::Ok:
           return size - kAuthTrailerBytes;
         case AuthVerdict::Missing:

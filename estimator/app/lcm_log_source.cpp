@@ -43,10 +43,15 @@ estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
                " without matching SLAVE_TRUTH" +
                (js.x_out.empty() ? "; no x_out (NaN in the log)" : "") +
                (sel.skip_mac ? "; MACs not checked (--skip-mac)"
+                : js.no_macs ? "; no MACs in the log (read unverified)"
                 : key        ? "; MACs verified, left out " + std::to_string(js.skipped_no_mac) +
                             " without and " + std::to_string(js.skipped_bad_mac) + " with a bad MAC"
                       : "");
   }
+  if (js.no_macs)
+    std::cerr << "tsm: warning: " << path.string()
+              << ": no event carries a MAC (recorded before authentication, or from senders "
+                 "without the link key): read unverified\n";
   // Accepted damage is never silent, whether or not a summary was asked for.
   if (js.damage.any())
     std::cerr << "tsm: warning: " << path.string() << ": " << js.damage.describe() << "; using the "

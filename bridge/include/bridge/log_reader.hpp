@@ -59,6 +59,10 @@ struct JointSeries {
   /// was given and they had no MAC trailer, or one that does not verify.
   std::size_t skipped_no_mac = 0;
   std::size_t skipped_bad_mac = 0;
+  /// verify_key was given but no event of the two channels carries a MAC (a
+  /// log recorded before authentication, or from unkeyed senders): read
+  /// unverified, as without a key. The caller says so.
+  bool no_macs = false;
 
   std::size_t rows() const noexcept { return t.size(); }
 };
@@ -69,7 +73,8 @@ struct LogReadOptions {
   bool accept_damage = false;
   /// Authenticated logs (docs/bridge.md, "Authentication"): with a key, only
   /// events whose MAC verifies with it are used (the others are counted in
-  /// skipped_no_mac / skipped_bad_mac); with skip_mac, trailers are stripped
+  /// skipped_no_mac / skipped_bad_mac) unless no event has a MAC at all
+  /// (JointSeries::no_macs); with skip_mac, trailers are stripped
   /// unverified. With neither, a log whose events carry MACs is an error
   /// (they would be used without anyone having checked them).
   const LinkKey* verify_key = nullptr;
