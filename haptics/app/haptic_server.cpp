@@ -298,6 +298,19 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
                slave_channel.c_str(), static_cast<ull>(st.accepted), rate,
                static_cast<ull>(c.slave_samples), static_cast<ull>(st.rejected()),
                static_cast<ull>(st.duplicates), static_cast<ull>(st.reordered));
+  if (st.rejected() > 0) {
+    // By reason, so a forged or foreign-key stream (unauthenticated, bad_mac,
+    // stale, replayed) reads differently from a broken slave.
+    std::string reasons;
+    for (int i = 0; i < bridge::kRejectReasons; ++i) {
+      const auto reason = static_cast<bridge::RejectReason>(i);
+      if (st.rejected(reason) == 0) continue;
+      reasons += reasons.empty() ? "" : ", ";
+      reasons +=
+          std::string(bridge::reason_name(reason)) + " " + std::to_string(st.rejected(reason));
+    }
+    std::fprintf(stderr, "          rejected by reason: %s\n", reasons.c_str());
+  }
   std::fprintf(stderr,
                "          seq gaps %llu (%llu messages missing: the slave's seq jumped, i.e. "
                "messages lost on the way or rejected; 0 is normal on one host)\n",

@@ -484,6 +484,9 @@ TEST_F(ServerFaults, UnauthenticatedSlaveStateRendersNoTorque) {
   EXPECT_EQ(server->wait(5s), 5) << "exit 5: no SLAVE_STATE was ever used\n" << server->log();
   EXPECT_NE(server->log().find("no SLAVE_STATE on"), std::string::npos) << server->log();
   EXPECT_EQ(server->log().find("SLAVE_STATE arriving again"), std::string::npos) << server->log();
+  EXPECT_NE(server->log().find("rejected by reason: unauthenticated "), std::string::npos)
+      << server->log();
+  EXPECT_NE(server->log().find(", bad_mac "), std::string::npos) << server->log();
 }
 
 // Issue 18: while the real (authenticated) slave publishes 0.1 N m worth of
