@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "bridge/clock.hpp"
+#include "bridge/host_only.hpp"
 
 namespace tsmh::bridge {
 namespace {
@@ -72,6 +73,17 @@ void Receiver::start() {
   // descriptor here makes sure that messages sent after start() returns are heard.
   lcm_fd_ = lcm_->getFileno();
   if (lcm_fd_ < 0) throw BridgeError("Receiver: LCM has no file descriptor for " + config_.url);
+  // ttl=0 promises "this host": make it true for receiving too (LCM's socket
+  // listens on every interface). Fail closed: a ttl=0 link that would hear
+  // other hosts is an error, not a warning.
+  if (const auto port = host_only_udpm_port(config_.url)) {
+    host_only_sockets_ = restrict_udp_port_to_host(*port);
+    if (host_only_sockets_ == 0)
+      throw BridgeError("Receiver: cannot restrict LCM's socket for '" + config_.url +
+                        "' to this host (no UDP socket on port " + std::to_string(*port) +
+                        " found, or SO_ATTACH_FILTER refused); use a ttl other than 0 for a "
+                        "network link, with the link key");
+  }
   // LCM has been receiving since subscribe(): whatever queued up meanwhile
   // (up to each subscription's queue capacity; the rest LCM dropped) is as old
   // as the time between subscribe() and now. Drop it, counted, so the first

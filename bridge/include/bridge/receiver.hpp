@@ -57,6 +57,10 @@ class Receiver {
   bool running() const noexcept { return thread_.joinable(); }
 
   const BridgeConfig& config() const noexcept { return config_; }
+  /// For a udpm URL with ttl=0: how many of LCM's receive sockets start()
+  /// restricted to datagrams from this host (bridge/host_only.hpp); 0 for
+  /// other URLs.
+  int host_only_sockets() const noexcept { return host_only_sockets_; }
   /// lcm handle() failures seen by the receive thread (should stay 0).
   std::uint64_t transport_errors() const noexcept {
     return transport_errors_.load(std::memory_order_relaxed);
@@ -83,6 +87,7 @@ class Receiver {
   std::vector<std::unique_ptr<InboxBase>> inboxes_;
   std::vector<std::unique_ptr<Route>> routes_;
   int lcm_fd_ = -1;
+  int host_only_sockets_ = 0;
   int wake_fd_ = -1;  // eventfd: stop() wakes the thread out of poll()
   std::atomic<bool> stop_requested_{false};
   std::atomic<std::uint64_t> transport_errors_{0};
