@@ -3,6 +3,8 @@
 #include <cstdlib>
 #include <system_error>
 
+#include "bridge/host_only.hpp"
+
 namespace tsmh::bridge {
 
 std::vector<std::filesystem::path> default_key_locations(const char* xdg_config_home,
@@ -36,7 +38,8 @@ std::optional<std::filesystem::path> find_key_file(std::string_view flag, const 
 }
 
 bool is_host_local_url(std::string_view url) {
-  return url.rfind("memq://", 0) == 0 || url.rfind("file://", 0) == 0;
+  return url.rfind("memq://", 0) == 0 || url.rfind("file://", 0) == 0 ||
+         host_only_udpm_port(url).has_value();
 }
 
 LinkSecurity resolve_link_security(std::string_view url, const LinkSecurityOptions& options) {
@@ -52,7 +55,9 @@ LinkSecurity resolve_link_security(std::string_view url, const LinkSecurityOptio
   }
   if (is_host_local_url(url)) {
     s.notice = "LCM link NOT authenticated (no link key found): allowed only because '" +
-               std::string(url) + "' cannot carry traffic from another host";
+               std::string(url) +
+               "' is confined to this host (any local process can still command it; create a "
+               "key with `tsm keygen` to authenticate)";
     return s;
   }
   std::string looked = "--key, $" + std::string(kLinkKeyEnv);
@@ -66,9 +71,9 @@ LinkSecurity resolve_link_security(std::string_view url, const LinkSecurityOptio
   }
   throw LinkKeyError(
       "no LCM link key found (looked in: " + looked + ") and '" + std::string(url) +
-      "' accepts datagrams from other hosts (LCM's udpm socket listens on every interface, "
-      "whatever its ttl). Create a key once with `tsm keygen` and give every peer a copy "
-      "(mode 0600), or on an isolated network pass --insecure");
+      "' is reachable from other hosts (only udpm with ttl=0, memq:// and file:// stay on "
+      "this host). Create a key once with `tsm keygen` and give every peer a copy (mode 0600), "
+      "or on an isolated network pass --insecure");
 }
 
 }  // namespace tsmh::bridge

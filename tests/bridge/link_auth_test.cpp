@@ -336,9 +336,10 @@ TEST_F(KeyFiles, NoKeyRunsOnlyOnHostLocalUrlsOrWithInsecure) {
   if (fs::exists("/etc/tsmh/link.key")) GTEST_SKIP() << "this host has a system-wide key";
   const ScopedEnv no_env(kLinkKeyEnv, "");
   const ScopedEnv xdg("XDG_CONFIG_HOME", (dir_ / "empty").string());
+  const std::string network = "udpm://239.255.76.67:7667?ttl=1";
   try {
-    (void)resolve_link_security(kDefaultLcmUrl, {});
-    FAIL() << "ran unauthenticated on udpm";
+    (void)resolve_link_security(network, {});
+    FAIL() << "ran unauthenticated on a network URL";
   } catch (const LinkKeyError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("tsm keygen"), std::string::npos) << what;
@@ -346,17 +347,24 @@ TEST_F(KeyFiles, NoKeyRunsOnlyOnHostLocalUrlsOrWithInsecure) {
     EXPECT_NE(what.find((dir_ / "empty" / "tsmh" / "link.key").string()), std::string::npos)
         << "says where it looked: " << what;
   }
-  const auto memq = resolve_link_security("memq://", {});
-  EXPECT_EQ(memq.key, nullptr);
-  EXPECT_NE(memq.notice.find("NOT authenticated"), std::string::npos);
-  const auto insecure = resolve_link_security(kDefaultLcmUrl, {.key_file = "", .insecure = true});
+  EXPECT_THROW((void)resolve_link_security("udpm://239.255.76.67:7667", {}), LinkKeyError)
+      << "no explicit ttl=0: not confined";
+  for (const std::string& local : {std::string(kDefaultLcmUrl), std::string("memq://"),
+                                   std::string("file:///tmp/run.lcmlog")}) {
+    const auto s = resolve_link_security(local, {});
+    EXPECT_EQ(s.key, nullptr) << local;
+    EXPECT_NE(s.notice.find("NOT authenticated"), std::string::npos) << s.notice;
+    EXPECT_NE(s.notice.find("confined to this host"), std::string::npos) << s.notice;
+  }
+  const auto insecure = resolve_link_security(network, {.key_file = "", .insecure = true});
   EXPECT_EQ(insecure.key, nullptr);
   EXPECT_NE(insecure.notice.find("WARNING"), std::string::npos);
 
   LinkKey::generate().save(dir_ / "empty" / "tsmh" / "link.key");
-  const auto keyed = resolve_link_security(kDefaultLcmUrl, {.key_file = "", .insecure = true});
+  const auto keyed = resolve_link_security(network, {.key_file = "", .insecure = true});
   ASSERT_NE(keyed.key, nullptr) << "a key found is always used";
   EXPECT_NE(keyed.notice.find(keyed.key->fingerprint()), std::string::npos) << keyed.notice;
+  EXPECT_NE(resolve_link_security(kDefaultLcmUrl, {}).key, nullptr) << "on this host too";
 }
 
 // ---- over real udpm -----------------------------------------------------------

@@ -32,8 +32,10 @@ std::optional<std::filesystem::path> find_key_file(std::string_view flag, const 
                                                    const char* xdg_config_home, const char* home);
 
 /// True for URLs whose traffic cannot come from another host: memq:// (one
-/// process) and file:// (a log). LCM 1.3's udpm socket is bound to every
-/// interface whatever its ttl, so udpm never is.
+/// process), file:// (a log), and udpm with ttl=0, whose receive socket the
+/// bridge restricts to this host (bridge/host_only.hpp; a Receiver that
+/// cannot do so refuses to start). Any other udpm URL is reachable from the
+/// network.
 bool is_host_local_url(std::string_view url);
 
 struct LinkSecurityOptions {
