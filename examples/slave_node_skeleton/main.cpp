@@ -31,6 +31,7 @@
 #include <tsmh/version.hpp>
 #include <vector>
 
+#include "bridge/host_only.hpp"
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
@@ -228,6 +229,16 @@ int main(int argc, char** argv) {
   inbox.joints = n;
   inbox.verifier = verifier.get();
   lcm.subscribe(prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
+  // ttl=0 means this host: LCM's socket listens on every interface, so
+  // confine it (bridge/host_only.hpp), or refuse to run.
+  if (const auto port = tsmh::bridge::host_only_udpm_port(tsmh::bridge::resolve_lcm_url(url))) {
+    lcm.getFileno();  // LCM creates its receive socket here at the latest
+    if (tsmh::bridge::restrict_udp_port_to_host(*port) == 0) {
+      std::fprintf(stderr,
+                   "slave-node-skeleton: error: cannot confine LCM's socket to this host\n");
+      return 1;
+    }
+  }
   const std::string state_channel = prefix + "SLAVE_STATE";
   std::vector<std::uint8_t> bytes;
 

@@ -22,6 +22,7 @@
 #include <stdexcept>
 
 #include "bridge/clock.hpp"
+#include "bridge/host_only.hpp"
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/stop_signals.hpp"
@@ -254,6 +255,26 @@ int list_devices() {
   return 0;
 }
 
+/// The `lcm` master driver's own LCM link (its `url` setting, else the
+/// default): the same rules as the bridge's. No key on a network URL is
+/// refused without --insecure; on udpm ttl=0 its receive socket is confined
+/// to this host like the Receiver's (bridge/host_only.hpp).
+void confine_lcm_device(const haptics::ServerConfig& cfg, const bridge::LinkSecurityOptions& link,
+                        const bridge::LinkSecurity& security) {
+  const YAML::Node url_node = cfg.device_settings["url"];
+  const std::string url =
+      bridge::resolve_lcm_url(url_node && url_node.IsScalar() ? url_node.as<std::string>() : "");
+  if (!security.key && !link.insecure && !bridge::is_host_local_url(url))
+    throw bridge::LinkKeyError("the lcm master device's URL '" + url +
+                               "' is reachable from other hosts and there is no link key (create "
+                               "one with `tsm keygen`, or pass --insecure on an isolated network)");
+  if (const auto port = bridge::host_only_udpm_port(url)) {
+    if (bridge::restrict_udp_port_to_host(*port) == 0)
+      throw DeviceError("lcm: cannot confine the master device's LCM socket for '" + url +
+                        "' to this host");
+  }
+}
+
 /// The exit summary, printed once. Every figure says what it counts and what
 /// is normal, so an operator can read it without the source.
 /// Issue 21: what the oscillation detector and the passivity controller did.
@@ -456,6 +477,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     throw DeviceError(std::string("cannot open the master device (") + cfg.device_driver + ", " +
                       device->spec().model + "): " + e.what());
   }
+  if (cfg.device_driver == "lcm") confine_lcm_device(cfg, o.link, security);
   haptics::HapticLoop loop(cfg.loop, *device, link, std::move(estimators), trace.get());
   try {
     if (cfg.realtime.lock_memory) {
