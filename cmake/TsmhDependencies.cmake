@@ -10,6 +10,8 @@ find_package(NLopt REQUIRED)
 pkg_check_modules(LCM REQUIRED IMPORTED_TARGET lcm)
 pkg_check_modules(HIDAPI REQUIRED IMPORTED_TARGET hidapi-hidraw)
 pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
+# Message authentication on the LCM link (bridge/link_auth.hpp): HMAC-SHA-512-256.
+pkg_check_modules(SODIUM REQUIRED IMPORTED_TARGET libsodium)
 find_program(LCM_GEN lcm-gen REQUIRED)
 if(TSMH_BUILD_TESTS)
   find_package(GTest REQUIRED)

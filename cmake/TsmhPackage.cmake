@@ -48,5 +48,5 @@ set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
 # The runtime package (tsmhConfig.cmake points at its profiles) and what
 # tsmhConfig.cmake's find_dependency/pkg-config calls need.
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
-  "tsm-haptics (= ${PROJECT_VERSION}-${CPACK_DEBIAN_PACKAGE_RELEASE}), cmake, pkg-config, liblcm-dev, libyaml-cpp-dev, nlohmann-json3-dev, libnlopt-cxx-dev, libhidapi-dev, libusb-1.0-0-dev")
+  "tsm-haptics (= ${PROJECT_VERSION}-${CPACK_DEBIAN_PACKAGE_RELEASE}), cmake, pkg-config, liblcm-dev, libyaml-cpp-dev, nlohmann-json3-dev, libnlopt-cxx-dev, libhidapi-dev, libusb-1.0-0-dev, libsodium-dev")
 include(CPack)

@@ -5,7 +5,7 @@
 TSMH_PACKAGES=(
   build-essential cmake pkg-config dpkg-dev
   libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libnlopt-cxx-dev
-  liblcm-dev liblcm-bin libglib2.0-dev iproute2
+  liblcm-dev liblcm-bin libglib2.0-dev iproute2 libsodium-dev
   libhidapi-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox python3 help2man

@@ -6,6 +6,7 @@
 #include <limits>
 #include <new>
 
+#include "bridge/link_auth.hpp"
 #include "bridge/validation.hpp"
 
 namespace tsmh::bridge {
@@ -263,16 +264,25 @@ void encode_sample(const Sample& s, std::vector<std::uint8_t>& bytes) {
 }
 
 template <class Sample>
-int publish_sample(lcm::LCM& lcm, const std::string& channel, const Sample& s) {
-  typename SampleTraits<Sample>::Message m;
-  to_message(s, m);
-  return lcm.publish(channel, &m);
+int publish_sample(lcm::LCM& lcm, const std::string& channel, const Sample& s,
+                   MessageSigner* signer) {
+  if (signer == nullptr) {
+    typename SampleTraits<Sample>::Message m;
+    to_message(s, m);
+    return lcm.publish(channel, &m);
+  }
+  std::vector<std::uint8_t> bytes;
+  encode_sample(s, bytes);
+  const std::size_t size = bytes.size();
+  bytes.resize(size + kAuthTrailerBytes);
+  signer->sign(channel, bytes.data(), size, bytes.data() + size);
+  return lcm.publish(channel, bytes.data(), static_cast<unsigned int>(bytes.size()));
 }
 
 #define TSMH_BRIDGE_INSTANTIATE(S)                                      \
   template class Decoder<S>;                                            \
   template void encode_sample<S>(const S&, std::vector<std::uint8_t>&); \
-  template int publish_sample<S>(lcm::LCM&, const std::string&, const S&);
+  template int publish_sample<S>(lcm::LCM&, const std::string&, const S&, MessageSigner*);
 TSMH_BRIDGE_INSTANTIATE(SlaveStateSample)
 TSMH_BRIDGE_INSTANTIATE(SlaveTruthSample)
 TSMH_BRIDGE_INSTANTIATE(MasterCommandSample)

@@ -1,6 +1,7 @@
 #include "bridge/inbox.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 #include "bridge/validation.hpp"
 
@@ -33,6 +34,35 @@ std::optional<Rejection> InboxBase::last_rejection() const noexcept {
 void InboxBase::count_rejected(const Rejection& r) noexcept {
   rejected_by_[static_cast<std::size_t>(r.reason)].fetch_add(1, std::memory_order_relaxed);
   last_rejection_.store(r);
+}
+
+void InboxBase::reject_unauthentic(const AuthResult& auth, std::int64_t receive_ns) noexcept {
+  count_received();
+  RejectReason reason = RejectReason::Unauthenticated;
+  switch (auth.verdict) {
+    case AuthVerdict::Ok:
+    case AuthVerdict::Missing:
+      break;
+    case AuthVerdict::BadMac:
+      reason = RejectReason::BadMac;
+      break;
+    case AuthVerdict::Stale:
+      reason = RejectReason::Stale;
+      break;
+    case AuthVerdict::Replayed:
+      reason = RejectReason::Replayed;
+      break;
+  }
+  char what[64];
+  if (auth.verdict == AuthVerdict::Missing)
+    std::snprintf(what, sizeof what, "no trailer");
+  else
+    std::snprintf(what, sizeof what, "sender %016llx seq %llu",
+                  static_cast<unsigned long long>(auth.trailer.sender_id),
+                  static_cast<unsigned long long>(auth.trailer.seq));
+  Rejection r = make_rejection(reason, what, static_cast<double>(auth.age_us));
+  r.receive_ns = receive_ns;
+  count_rejected(r);
 }
 
 bool InboxBase::count_order(const OrderVerdict& v, std::int64_t seq, std::int64_t utime,

@@ -93,12 +93,57 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
   int max_joints_seen = 0;
   std::size_t lacking_joint = 0;
 
+  // With a key, a log in which no event carries a MAC predates authentication
+  // (or unkeyed senders recorded it): read as unsigned, and say so. One with
+  // any MAC is verified event by event: an unsigned event among signed ones
+  // is left out (injected, or a sender without the key).
+  const LinkKey* verify_key = options.verify_key;
+  if (verify_key != nullptr && !options.skip_mac) {
+    bool any_mac = false;
+    LogEventReader scan(bytes);
+    LogEvent e;
+    while (!any_mac && scan.next(e))
+      any_mac = (e.channel == state_channel || e.channel == truth_channel) &&
+                has_auth_trailer(e.data.data(), e.data.size());
+    if (!any_mac) {
+      verify_key = nullptr;
+      out.no_macs = true;
+    }
+  }
+  std::size_t signed_unverified = 0;
+  // The payload size of an event to use, or nullopt to leave it out (MAC).
+  const auto authentic_size = [&](const LogEvent& ev) -> std::optional<std::size_t> {
+    const std::size_t size = ev.data.size();
+    const bool has_mac = has_auth_trailer(ev.data.data(), size);
+    if (options.skip_mac) return has_mac ? size - kAuthTrailerBytes : size;
+    if (verify_key != nullptr) {
+      switch (verify_stored(*verify_key, ev.channel, ev.data.data(), size)) {
+        case AuthVerdict::Ok:
+          return size - kAuthTrailerBytes;
+        case AuthVerdict::Missing:
+          ++out.skipped_no_mac;
+          return std::nullopt;
+        default:
+          ++out.skipped_bad_mac;
+          return std::nullopt;
+      }
+    }
+    if (has_mac) {
+      ++signed_unverified;
+      return std::nullopt;
+    }
+    return size;
+  };
+
   LogEvent event;
   for (const LogEvent* ev = &event; log.next(event);) {
     ++seen[std::string(ev->channel)];
-    const std::size_t size = ev->data.size();
+    if (ev->channel != state_channel && ev->channel != truth_channel) continue;
+    ++(ev->channel == state_channel ? out.state_messages : out.truth_messages);
+    const auto authentic = authentic_size(*ev);
+    if (!authentic) continue;
+    const std::size_t size = *authentic;
     if (ev->channel == state_channel) {
-      ++out.state_messages;
       if (state_decoder.decode(ev->data.data(), size, state)) {
         ++out.skipped_invalid;
         continue;
@@ -118,7 +163,6 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
       }
       states.push_back(r);
     } else if (ev->channel == truth_channel) {
-      ++out.truth_messages;
       if (truth_decoder.decode(ev->data.data(), size, truth) || joint >= truth.num_joints ||
           !std::isfinite(truth.tau_out[j])) {
         continue;  // unusable truth: its state row is dropped below for lack of a match
@@ -135,7 +179,20 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
                              ". The log is damaged (cut off while recording, or corrupt); to "
                              "use the intact events anyway, pass --accept-truncated");
 
+  if (signed_unverified > 0)
+    throw LogError(file, std::to_string(signed_unverified) + " " + state_channel + "/" +
+                             truth_channel +
+                             " events carry a MAC (recorded from authenticated senders) and no "
+                             "key was given to verify them: pass --key FILE (the installation's "
+                             "link key) to use only authentic events, or --skip-mac to use them "
+                             "unverified");
   if (states.empty()) {
+    if (out.skipped_no_mac + out.skipped_bad_mac > 0)
+      throw LogError(file, "no " + state_channel +
+                               " event is authentic: " + std::to_string(out.skipped_no_mac) +
+                               " without a MAC, " + std::to_string(out.skipped_bad_mac) +
+                               " whose MAC does not verify with the key given (another "
+                               "installation's key?); --skip-mac uses them unverified");
     if (lacking_joint > 0)
       throw LogError(file, "joint " + std::to_string(joint) + " does not exist: " + state_channel +
                                " has " + std::to_string(max_joints_seen) + " joint(s)");

@@ -15,16 +15,24 @@ OutboxStats OutboxBase::stats() const noexcept {
 }
 
 template <class Sample>
-std::size_t Outbox<Sample>::flush(lcm::LCM& lcm) noexcept {
+std::size_t Outbox<Sample>::flush(lcm::LCM& lcm, MessageSigner* signer) noexcept {
   std::size_t n = 0;
   while (queue_.pop(pending_)) {
     ++n;
     try {
       to_message(pending_, msg_);
       const int size = msg_.getEncodedSize();
-      bytes_.resize(static_cast<std::size_t>(size));  // allocates only when a message grows
-      if (msg_.encode(bytes_.data(), 0, size) != size ||
-          lcm.publish(channel_, bytes_.data(), static_cast<unsigned int>(size)) != 0) {
+      const int trailer = signer != nullptr ? static_cast<int>(kAuthTrailerBytes) : 0;
+      // allocates only when a message grows
+      bytes_.resize(static_cast<std::size_t>(size) + static_cast<std::size_t>(trailer));
+      if (msg_.encode(bytes_.data(), 0, size) != size) {
+        publish_errors_.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+      // Signed here, in the publish thread: the loop's publish() stays a copy.
+      if (signer != nullptr)
+        signer->sign(channel_, bytes_.data(), static_cast<std::size_t>(size), bytes_.data() + size);
+      if (lcm.publish(channel_, bytes_.data(), static_cast<unsigned int>(size + trailer)) != 0) {
         publish_errors_.fetch_add(1, std::memory_order_relaxed);
         continue;
       }

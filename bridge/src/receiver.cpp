@@ -10,21 +10,40 @@
 #include <stdexcept>
 
 #include "bridge/clock.hpp"
+#include "bridge/host_only.hpp"
 
 namespace tsmh::bridge {
 namespace {
 
-// LCM's raw-subscription callback: hand the bytes to the inbox with the time
-// they were taken off LCM's queue.
-void on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/,
-                    InboxBase* inbox) {
-  if (inbox->discarding()) return inbox->count_discarded();
-  inbox->ingest(rbuf->data, rbuf->data_size, monotonic_now_ns());
+bool is_log_url(const std::string& url) {
+  return url.rfind("file://", 0) == 0;
 }
 
 }  // namespace
 
+// LCM's raw-subscription callback: authenticate (keyed), then hand the payload
+// to the inbox with the time it was taken off LCM's queue.
+void Receiver::on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                              Route* route) {
+  InboxBase* inbox = route->inbox;
+  if (inbox->discarding()) return inbox->count_discarded();
+  const std::int64_t receive_ns = monotonic_now_ns();
+  const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+  std::size_t size = rbuf->data_size;
+  if (route->verifier != nullptr) {
+    const AuthResult auth = route->verifier->verify(channel, data, size, realtime_now_us());
+    if (auth.verdict != AuthVerdict::Ok) return inbox->reject_unauthentic(auth, receive_ns);
+    size = auth.payload_size;
+  } else if (has_auth_trailer(data, size)) {
+    size -= kAuthTrailerBytes;  // an unkeyed reader (a test, a tool) still decodes signed traffic
+  }
+  inbox->ingest(data, size, receive_ns);
+}
+
 Receiver::Receiver(BridgeConfig config) : config_(std::move(config)), lcm_(open_lcm(config_.url)) {
+  if (config_.key)
+    verifier_ = std::make_unique<MessageVerifier>(
+        config_.key, VerifierOptions{.check_freshness = !is_log_url(config_.url)});
   wake_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
   if (wake_fd_ < 0)
     throw BridgeError(std::string("Receiver: eventfd failed: ") + std::strerror(errno));
@@ -38,8 +57,9 @@ Receiver::~Receiver() {
 void Receiver::add(std::unique_ptr<InboxBase> inbox) {
   if (running()) throw std::logic_error("Receiver::subscribe after start(): " + inbox->channel());
   check_channel_name(inbox->channel());
-  lcm::Subscription* sub = lcm_->subscribeFunction<InboxBase*>(regex_escape(inbox->channel()),
-                                                               &on_raw_message, inbox.get());
+  routes_.push_back(std::make_unique<Route>(Route{inbox.get(), verifier_.get()}));
+  lcm::Subscription* sub = lcm_->subscribeFunction<Route*>(regex_escape(inbox->channel()),
+                                                           &on_raw_message, routes_.back().get());
   if (sub == nullptr) throw BridgeError("Receiver: cannot subscribe to " + inbox->channel());
   // We drain continuously, so the queue only has to absorb a scheduling
   // hiccup of the receive thread; it is not what keeps the newest sample.
@@ -53,6 +73,17 @@ void Receiver::start() {
   // descriptor here makes sure that messages sent after start() returns are heard.
   lcm_fd_ = lcm_->getFileno();
   if (lcm_fd_ < 0) throw BridgeError("Receiver: LCM has no file descriptor for " + config_.url);
+  // ttl=0 promises "this host": make it true for receiving too (LCM's socket
+  // listens on every interface). Fail closed: a ttl=0 link that would hear
+  // other hosts is an error, not a warning.
+  if (const auto port = host_only_udpm_port(config_.url)) {
+    host_only_sockets_ = restrict_udp_port_to_host(*port);
+    if (host_only_sockets_ == 0)
+      throw BridgeError("Receiver: cannot restrict LCM's socket for '" + config_.url +
+                        "' to this host (no UDP socket on port " + std::to_string(*port) +
+                        " found, or SO_ATTACH_FILTER refused); use a ttl other than 0 for a "
+                        "network link, with the link key");
+  }
   // LCM has been receiving since subscribe(): whatever queued up meanwhile
   // (up to each subscription's queue capacity; the rest LCM dropped) is as old
   // as the time between subscribe() and now. Drop it, counted, so the first

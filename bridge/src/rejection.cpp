@@ -20,6 +20,14 @@ std::string_view reason_name(RejectReason reason) noexcept {
       return "time_backwards";
     case RejectReason::Implausible:
       return "implausible_step";
+    case RejectReason::Unauthenticated:
+      return "unauthenticated";
+    case RejectReason::BadMac:
+      return "bad_mac";
+    case RejectReason::Stale:
+      return "stale";
+    case RejectReason::Replayed:
+      return "replayed";
   }
   return "unknown";
 }
@@ -89,6 +97,27 @@ std::string describe(const Rejection& r, std::string_view channel) {
       out += " stepped by ";
       out += value;
       out += " since the last accepted sample: faster than its configured limit";
+      break;
+    case RejectReason::Unauthenticated:
+      out += "no authentication trailer (sender has no link key): ";
+      out += field;
+      break;
+    case RejectReason::BadMac:
+      out += "MAC does not match (wrong link key, or altered on the way): ";
+      out += field;
+      break;
+    case RejectReason::Stale:
+      out += "sent ";
+      out += value;
+      out +=
+          " us from this host's clock, outside the freshness window (a recording, or clocks "
+          "not synchronised): ";
+      out += field;
+      break;
+    case RejectReason::Replayed:
+      out += "replayed: ";
+      out += field;
+      out += " already seen or older than the replay window";
       break;
   }
   return out;

@@ -12,6 +12,7 @@ Sender::Sender(BridgeConfig config, SenderOptions options)
     : config_(std::move(config)),
       options_(options),
       lcm_(open_lcm(config_.url)),
+      signer_(config_.key ? std::make_unique<MessageSigner>(config_.key) : nullptr),
       signal_(/*wake_on_publish=*/options.poll_period.count() <= 0) {}
 
 Sender::~Sender() {
@@ -43,10 +44,10 @@ void Sender::run() noexcept {
   for (;;) {
     const std::uint32_t seen = signal_.current();
     for (auto& box : outboxes_)
-      box->flush(*lcm_);
+      box->flush(*lcm_, signer_.get());
     if (stop_requested_.load(std::memory_order_acquire)) {
       for (auto& box : outboxes_)
-        box->flush(*lcm_);  // what was pushed before stop()
+        box->flush(*lcm_, signer_.get());  // what was pushed before stop()
       return;
     }
     if (period_ns <= 0) {

@@ -1,8 +1,10 @@
 #include "lcm_log_source.hpp"
 
 #include <charconv>
+#include <cstdlib>
 #include <iostream>
 
+#include "bridge/link_security.hpp"
 #include "bridge/log_reader.hpp"
 #include "estimator/table.hpp"
 
@@ -14,9 +16,21 @@ estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
                                             const estimator::RecordingRequirements& need,
                                             std::string* summary) {
   bridge::JointSeries js;
+  std::optional<bridge::LinkKey> key;
+  try {
+    if (!sel.skip_mac) {
+      const auto file = bridge::find_key_file(sel.key_file, std::getenv(bridge::kLinkKeyEnv),
+                                              std::getenv("XDG_CONFIG_HOME"), std::getenv("HOME"));
+      if (file) key.emplace(bridge::LinkKey::load(*file));
+    }
+  } catch (const bridge::LinkKeyError& e) {
+    throw estimator::DataError(path.string(), 0, "", e.what());
+  }
   try {
     js = bridge::read_joint_series(path, sel.joint, sel.prefix,
-                                   {.accept_damage = sel.accept_truncated});
+                                   {.accept_damage = sel.accept_truncated,
+                                    .verify_key = key ? &*key : nullptr,
+                                    .skip_mac = sel.skip_mac});
   } catch (const bridge::LogError& e) {
     throw estimator::DataError(e.file(), 0, "", e.detail());
   }
@@ -27,8 +41,17 @@ estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
                " invalid, " + std::to_string(js.skipped_not_increasing) +
                " with time not increasing, " + std::to_string(js.rows_without_truth) +
                " without matching SLAVE_TRUTH" +
-               (js.x_out.empty() ? "; no x_out (NaN in the log)" : "");
+               (js.x_out.empty() ? "; no x_out (NaN in the log)" : "") +
+               (sel.skip_mac ? "; MACs not checked (--skip-mac)"
+                : js.no_macs ? "; no MACs in the log (read unverified)"
+                : key        ? "; MACs verified, left out " + std::to_string(js.skipped_no_mac) +
+                            " without and " + std::to_string(js.skipped_bad_mac) + " with a bad MAC"
+                      : "");
   }
+  if (js.no_macs)
+    std::cerr << "tsm: warning: " << path.string()
+              << ": no event carries a MAC (recorded before authentication, or from senders "
+                 "without the link key): read unverified\n";
   // Accepted damage is never silent, whether or not a summary was asked for.
   if (js.damage.any())
     std::cerr << "tsm: warning: " << path.string() << ": " << js.damage.describe() << "; using the "
@@ -68,6 +91,13 @@ void add_lcm_log_options(CLI::App& cmd, LcmLogSelection& sel) {
   cmd.add_flag("--accept-truncated", sel.accept_truncated,
                "LCM log DATA: use the intact events of a log that is cut off or has corrupt "
                "regions (and say how many were lost) instead of refusing it");
+  cmd.add_option("--key", sel.key_file,
+                 "LCM log DATA: link key to verify the events' MACs with (default: $TSMH_LINK_KEY, "
+                 "~/.config/tsmh/link.key, /etc/tsmh/link.key; events that do not verify are left "
+                 "out)");
+  cmd.add_flag("--skip-mac", sel.skip_mac,
+               "LCM log DATA: use the events without checking their MACs (a log from another "
+               "installation, or recorded from unauthenticated senders)");
 }
 
 }  // namespace tsmh::tsm_cli

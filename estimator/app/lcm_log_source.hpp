@@ -20,6 +20,11 @@ struct LcmLogSelection {
   /// --accept-truncated: use the intact events of a log that was cut off (or
   /// has corrupt regions), saying how many were lost; otherwise an error.
   bool accept_truncated = false;
+  /// --key: verify the MAC of every event with this link key (default: the
+  /// key search of docs/bridge.md; none found: unsigned logs only).
+  std::string key_file;
+  /// --skip-mac: use events without checking their MAC.
+  bool skip_mac = false;
 };
 
 /// Reads joint `sel.joint` of `sel.prefix`SLAVE_STATE (+ SLAVE_TRUTH) from an
@@ -36,7 +41,8 @@ estimator::Recording recording_from_lcm_log(const std::filesystem::path& path,
 /// `sel` is read when a file is loaded, so options parsed later apply.
 DataSource lcm_log_source(const LcmLogSelection& sel);
 
-/// Adds --joint and --prefix (which part of an LCM log DATA is) to `cmd`.
+/// Adds --joint, --prefix (which part of an LCM log DATA is), --accept-truncated,
+/// --key and --skip-mac to `cmd`.
 void add_lcm_log_options(CLI::App& cmd, LcmLogSelection& sel);
 
 }  // namespace tsmh::tsm_cli

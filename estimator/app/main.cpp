@@ -1,4 +1,5 @@
-// tsm: the estimator's command line (docs/data-formats.md, docs/identification.md): simulate, fit, gap, convert.
+// tsm: the estimator's command line (docs/data-formats.md, docs/identification.md): simulate, fit,
+// gap, convert, keygen (the LCM link key, docs/bridge.md).
 
 #include <iostream>
 
@@ -9,7 +10,8 @@
 
 int main(int argc, char** argv) {
   using namespace tsmh::tsm_cli;
-  CLI::App app{"tsm: tendon-sheath friction models: simulate, identify, find model gaps"};
+  CLI::App app{
+      "tsm: tendon-sheath friction models: simulate, identify, find model gaps; LCM link key"};
   app.set_version_flag("--version", tsmh::version_line("tsm"));
   app.require_subcommand(1);
   Context ctx;
@@ -18,6 +20,7 @@ int main(int argc, char** argv) {
   add_convert_command(app, ctx);
   add_fit_command(app, ctx);
   add_gap_command(app, ctx);
+  add_keygen_command(app, ctx);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -11,7 +11,10 @@
 // (read angles, velocities, buttons; write torques) with the real ones.
 //
 //   external-master-adapter [--lcm-url URL] [--prefix LEFT_] [--rate-hz 1000]
-//                           [--watchdog-ms 50] [--duration S]
+//                           [--watchdog-ms 50] [--duration S] [--key FILE | --insecure]
+// With the installation's link key (docs/bridge.md, "Authentication") every
+// MASTER_STATE carries a MAC and only MASTER_FORCE that verifies drives the
+// motors; the bridge's link_auth.hpp is the only project code it uses.
 // Server side: device: {driver: lcm, settings: {channel_prefix: LEFT_}}
 
 #include <pthread.h>
@@ -29,6 +32,12 @@
 #include <tsmh/master_force_t.hpp>
 #include <tsmh/master_state_t.hpp>
 #include <tsmh/version.hpp>
+#include <vector>
+
+#include "bridge/host_only.hpp"
+#include "bridge/lcm_url.hpp"
+#include "bridge/link_auth.hpp"
+#include "bridge/link_security.hpp"
 
 namespace {
 
@@ -69,8 +78,31 @@ struct ForceInbox {
   bool enable = false;
   std::int64_t received_ns = 0;
   std::int64_t rejected = 0;
+  std::int64_t unauthentic = 0;
+  /// Null: unauthenticated (no key, host-local URL or --insecure).
+  tsmh::bridge::MessageVerifier* verifier = nullptr;
+  tsmh::master_force_t decoded;
 
-  void on_force(const lcm::ReceiveBuffer*, const std::string&, const tsmh::master_force_t* msg) {
+  void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+    std::size_t size = rbuf->data_size;
+    if (verifier != nullptr) {
+      // Before decoding: only the holder of the link key drives the motors.
+      const auto auth = verifier->verify(channel, data, size, tsmh::bridge::realtime_now_us());
+      if (auth.verdict != tsmh::bridge::AuthVerdict::Ok) {
+        ++unauthentic;  // no MAC, wrong key, stale or replayed
+        return;
+      }
+      size = auth.payload_size;
+    }
+    if (decoded.decode(data, 0, static_cast<int>(size)) < 0) {
+      ++rejected;
+      return;
+    }
+    on_force(&decoded);
+  }
+
+  void on_force(const tsmh::master_force_t* msg) {
     if (msg->num_joints != FakeVendorMaster::kDof) {
       ++rejected;
       return;
@@ -102,7 +134,7 @@ bool stop_requested(const sigset_t& set) {
 // only Ctrl-C / SIGTERM: SIGHUP when the terminal closes, SIGQUIT, SIGUSR1,
 // ...): all of them stop through the zero-torque path. SIGPIPE is ignored.
 // (haptic-server uses the same list, bridge/stop_signals.hpp; this adapter
-// stays independent of the project's libraries on purpose.)
+// uses only the project's message authentication, on purpose.)
 sigset_t block_stop_signals() {
   signal(SIGPIPE, SIG_IGN);
   sigset_t set;
@@ -135,8 +167,30 @@ int main(int argc, char** argv) {
   app.add_option("--watchdog-ms", watchdog_ms, "zero torque when MASTER_FORCE is older")
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
+  tsmh::bridge::LinkSecurityOptions link;
+  app.add_option("--key", link.key_file,
+                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
+                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_flag("--insecure", link.insecure,
+               "run without a link key on a network LCM URL: anyone who reaches it can drive "
+               "the master's motors (isolated networks only)");
   CLI11_PARSE(app, argc, argv);
   const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
+
+  tsmh::bridge::LinkSecurity security;
+  try {
+    security = tsmh::bridge::resolve_link_security(tsmh::bridge::resolve_lcm_url(url), link);
+  } catch (const tsmh::bridge::LinkKeyError& e) {
+    std::fprintf(stderr, "external-master-adapter: error: %s\n", e.what());
+    return 2;
+  }
+  std::fprintf(stderr, "external-master-adapter: %s\n", security.notice.c_str());
+  std::unique_ptr<tsmh::bridge::MessageSigner> signer;
+  std::unique_ptr<tsmh::bridge::MessageVerifier> verifier;
+  if (security.key) {
+    signer = std::make_unique<tsmh::bridge::MessageSigner>(security.key);
+    verifier = std::make_unique<tsmh::bridge::MessageVerifier>(security.key);
+  }
 
   lcm::LCM lcm(url);  // an empty URL honours LCM_DEFAULT_URL, as LCM's tools do
   if (!lcm.good()) {
@@ -148,7 +202,20 @@ int main(int argc, char** argv) {
     return 1;
   }
   ForceInbox inbox;
-  lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_force, &inbox);
+  inbox.verifier = verifier.get();
+  lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_raw, &inbox);
+  // ttl=0 means this host: LCM's socket listens on every interface, so
+  // confine it (bridge/host_only.hpp), or refuse to run.
+  if (const auto port = tsmh::bridge::host_only_udpm_port(tsmh::bridge::resolve_lcm_url(url))) {
+    lcm.getFileno();  // LCM creates its receive socket here at the latest
+    if (tsmh::bridge::restrict_udp_port_to_host(*port) == 0) {
+      std::fprintf(stderr,
+                   "external-master-adapter: error: cannot confine LCM's socket to this host\n");
+      return 1;
+    }
+  }
+  const std::string state_channel = prefix + "MASTER_STATE";
+  std::vector<std::uint8_t> bytes;
 
   FakeVendorMaster device;
   tsmh::master_state_t state;
@@ -187,13 +254,20 @@ int main(int argc, char** argv) {
     }
     state.buttons = device.buttons();
     state.status = 0;
-    lcm.publish(prefix + "MASTER_STATE", &state);
+    const int size = state.getEncodedSize();
+    const std::size_t trailer = signer ? tsmh::bridge::kAuthTrailerBytes : 0;
+    bytes.resize(static_cast<std::size_t>(size) + trailer);  // allocates only the first time
+    state.encode(bytes.data(), 0, size);
+    if (signer)
+      signer->sign(state_channel, bytes.data(), static_cast<std::size_t>(size),
+                   bytes.data() + size);
+    lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   }
   device.set_joint_torques({});
   std::printf(
       "external-master-adapter: sent %lld MASTER_STATE, watchdog trips %lld, rejected forces "
-      "%lld\n",
+      "%lld, unauthenticated forces %lld\n",
       static_cast<long long>(seq), static_cast<long long>(watchdog_trips),
-      static_cast<long long>(inbox.rejected));
+      static_cast<long long>(inbox.rejected), static_cast<long long>(inbox.unauthentic));
   return 0;
 }

@@ -1,6 +1,8 @@
 // slave-node-skeleton: the minimal slave node of a real tendon-sheath robot
 // for haptic-server (docs/real-robot.md). It is what a robot integrator
-// writes; it depends on nothing of ours but the generated LCM types.
+// writes; it depends on nothing of ours but the generated LCM types and the
+// bridge's message authentication (bridge/link_auth.hpp: a MAC trailer on
+// every message, docs/bridge.md "Authentication").
 //
 //   every period (1 kHz):  drain MASTER_COMMAND (newest wins)
 //                          fresh and enabled -> position reference to the robot
@@ -12,7 +14,7 @@
 // "REAL DRIVER". Nothing else needs to change for a two-joint arm.
 //
 //   slave-node-skeleton [--lcm-url URL] [--prefix ARM1_] [--rate-hz 1000]
-//                       [--command-timeout-ms 100] [--duration S]
+//                       [--command-timeout-ms 100] [--duration S] [--key FILE | --insecure]
 
 #include <pthread.h>
 #include <signal.h>
@@ -28,6 +30,11 @@
 #include <tsmh/slave_state_t.hpp>
 #include <tsmh/version.hpp>
 #include <vector>
+
+#include "bridge/host_only.hpp"
+#include "bridge/lcm_url.hpp"
+#include "bridge/link_auth.hpp"
+#include "bridge/link_security.hpp"
 
 namespace {
 
@@ -102,12 +109,34 @@ std::int64_t monotonic_ns() {
 /// server's utime is on another host's clock when the nodes are apart).
 struct CommandInbox {
   int joints = 0;
+  /// Null: unauthenticated (no key, host-local URL or --insecure).
+  tsmh::bridge::MessageVerifier* verifier = nullptr;
   tsmh::master_command_t newest;
+  tsmh::master_command_t decoded;
   std::int64_t received_ns = 0;
   std::int64_t last_seq = -1;
   std::int64_t rejected = 0;
-  void on_command(const lcm::ReceiveBuffer*, const std::string&,
-                  const tsmh::master_command_t* msg) {
+  std::int64_t unauthentic = 0;
+  void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+    std::size_t size = rbuf->data_size;
+    if (verifier != nullptr) {
+      // Before decoding: only the holder of the link key moves the robot.
+      const auto auth = verifier->verify(channel, data, size, tsmh::bridge::realtime_now_us());
+      if (auth.verdict != tsmh::bridge::AuthVerdict::Ok) {
+        ++unauthentic;  // no MAC, wrong key, stale or replayed
+        return;
+      }
+      size = auth.payload_size;
+    }
+    if (decoded.decode(data, 0, static_cast<int>(size)) < 0) {
+      ++rejected;
+      return;
+    }
+    on_command(decoded);
+  }
+  void on_command(const tsmh::master_command_t& m) {
+    const auto* msg = &m;
     bool ok = msg->num_joints == joints && msg->seq > last_seq;
     for (int j = 0; ok && j < msg->num_joints; ++j)
       ok = std::isfinite(msg->position_ref[static_cast<std::size_t>(j)]);
@@ -159,8 +188,32 @@ int main(int argc, char** argv) {
                  "hold when the newest MASTER_COMMAND is older")
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
+  tsmh::bridge::LinkSecurityOptions link;
+  app.add_option("--key", link.key_file,
+                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
+                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_flag("--insecure", link.insecure,
+               "run without a link key on a network LCM URL: anyone who reaches it can move "
+               "the robot (isolated networks only)");
   CLI11_PARSE(app, argc, argv);
   const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
+
+  // Only authenticated peers move the robot: MASTER_COMMAND must carry a
+  // valid MAC, and SLAVE_STATE carries ours, when a link key exists.
+  tsmh::bridge::LinkSecurity security;
+  try {
+    security = tsmh::bridge::resolve_link_security(tsmh::bridge::resolve_lcm_url(url), link);
+  } catch (const tsmh::bridge::LinkKeyError& e) {
+    std::fprintf(stderr, "slave-node-skeleton: error: %s\n", e.what());
+    return 2;
+  }
+  std::fprintf(stderr, "slave-node-skeleton: %s\n", security.notice.c_str());
+  std::unique_ptr<tsmh::bridge::MessageSigner> signer;
+  std::unique_ptr<tsmh::bridge::MessageVerifier> verifier;
+  if (security.key) {
+    signer = std::make_unique<tsmh::bridge::MessageSigner>(security.key);
+    verifier = std::make_unique<tsmh::bridge::MessageVerifier>(security.key);
+  }
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {
@@ -174,7 +227,20 @@ int main(int argc, char** argv) {
   const int n = robot.joints();
   CommandInbox inbox;
   inbox.joints = n;
-  lcm.subscribe(prefix + "MASTER_COMMAND", &CommandInbox::on_command, &inbox);
+  inbox.verifier = verifier.get();
+  lcm.subscribe(prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
+  // ttl=0 means this host: LCM's socket listens on every interface, so
+  // confine it (bridge/host_only.hpp), or refuse to run.
+  if (const auto port = tsmh::bridge::host_only_udpm_port(tsmh::bridge::resolve_lcm_url(url))) {
+    lcm.getFileno();  // LCM creates its receive socket here at the latest
+    if (tsmh::bridge::restrict_udp_port_to_host(*port) == 0) {
+      std::fprintf(stderr,
+                   "slave-node-skeleton: error: cannot confine LCM's socket to this host\n");
+      return 1;
+    }
+  }
+  const std::string state_channel = prefix + "SLAVE_STATE";
+  std::vector<std::uint8_t> bytes;
 
   tsmh::slave_state_t state;
   state.num_joints = n;
@@ -225,11 +291,20 @@ int main(int argc, char** argv) {
       state.T3[j] = samples[j].T3;
     }
     state.status = (driving ? 1 : 0) | (driving ? 0 : 2) | (sensors_ok ? 0 : 4);
-    lcm.publish(prefix + "SLAVE_STATE", &state);
+    const int size = state.getEncodedSize();
+    const std::size_t trailer = signer ? tsmh::bridge::kAuthTrailerBytes : 0;
+    bytes.resize(static_cast<std::size_t>(size) + trailer);  // allocates only the first time
+    state.encode(bytes.data(), 0, size);
+    if (signer)
+      signer->sign(state_channel, bytes.data(), static_cast<std::size_t>(size),
+                   bytes.data() + size);
+    lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   }
   robot.hold();
-  std::printf("slave-node-skeleton: sent %lld SLAVE_STATE, holds %lld, rejected commands %lld\n",
-              static_cast<long long>(seq), static_cast<long long>(holds),
-              static_cast<long long>(inbox.rejected));
+  std::printf(
+      "slave-node-skeleton: sent %lld SLAVE_STATE, holds %lld, rejected commands %lld, "
+      "unauthenticated commands %lld\n",
+      static_cast<long long>(seq), static_cast<long long>(holds),
+      static_cast<long long>(inbox.rejected), static_cast<long long>(inbox.unauthentic));
   return 0;
 }

@@ -1,6 +1,6 @@
 // haptic-server: the 1 kHz haptic loop (docs/haptic-server.md).
 //
-//   haptic-server --config server.yaml [--lcm-url URL] [--duration S]
+//   haptic-server --config server.yaml [--lcm-url URL] [--key FILE | --insecure] [--duration S]
 //                 [--feedback estimated|naive|none] [--trace F] [--report F]
 //   haptic-server --list-devices
 //
@@ -22,13 +22,16 @@
 #include <stdexcept>
 
 #include "bridge/clock.hpp"
+#include "bridge/host_only.hpp"
 #include "bridge/lcm_url.hpp"
+#include "bridge/link_security.hpp"
 #include "bridge/stop_signals.hpp"
 #include "estimator/model_io.hpp"
 #include "haptics/evaluation.hpp"
 #include "haptics/lcm_slave_link.hpp"
 #include "haptics/loop_runner.hpp"
 #include "haptics/server_config.hpp"
+#include "lcm_device_auth.hpp"
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
@@ -49,6 +52,7 @@ struct Options {
   std::string report;
   bool list_devices = false;
   bool quiet = false;
+  bridge::LinkSecurityOptions link;  ///< --key, --insecure
 };
 
 // Exit status (docs/haptic-server.md, "Exit status"): 0 only for a clean
@@ -234,10 +238,14 @@ int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventL
   return 0;
 }
 
-master_devices::DriverRegistry make_registry() {
+/// `lcm_auth`: the link key's authentication for the lcm driver's
+/// MASTER_STATE / MASTER_FORCE (null: unauthenticated).
+master_devices::DriverRegistry make_registry(
+    std::shared_ptr<master_devices::LcmMessageAuth> lcm_auth = nullptr) {
   master_devices::DriverRegistry registry;
   master_devices::register_builtin_drivers(registry);
-  master_devices::register_lcm_driver(registry);
+  master_devices::register_lcm_driver(registry, master_devices::monotonic_clock(),
+                                      std::move(lcm_auth));
   return registry;
 }
 
@@ -245,6 +253,26 @@ int list_devices() {
   const auto registry = make_registry();
   std::cout << master_devices::format_connected(registry.list_connected());
   return 0;
+}
+
+/// The `lcm` master driver's own LCM link (its `url` setting, else the
+/// default): the same rules as the bridge's. No key on a network URL is
+/// refused without --insecure; on udpm ttl=0 its receive socket is confined
+/// to this host like the Receiver's (bridge/host_only.hpp).
+void confine_lcm_device(const haptics::ServerConfig& cfg, const bridge::LinkSecurityOptions& link,
+                        const bridge::LinkSecurity& security) {
+  const YAML::Node url_node = cfg.device_settings["url"];
+  const std::string url =
+      bridge::resolve_lcm_url(url_node && url_node.IsScalar() ? url_node.as<std::string>() : "");
+  if (!security.key && !link.insecure && !bridge::is_host_local_url(url))
+    throw bridge::LinkKeyError("the lcm master device's URL '" + url +
+                               "' is reachable from other hosts and there is no link key (create "
+                               "one with `tsm keygen`, or pass --insecure on an isolated network)");
+  if (const auto port = bridge::host_only_udpm_port(url)) {
+    if (bridge::restrict_udp_port_to_host(*port) == 0)
+      throw DeviceError("lcm: cannot confine the master device's LCM socket for '" + url +
+                        "' to this host");
+  }
 }
 
 /// The exit summary, printed once. Every figure says what it counts and what
@@ -291,6 +319,19 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
                slave_channel.c_str(), static_cast<ull>(st.accepted), rate,
                static_cast<ull>(c.slave_samples), static_cast<ull>(st.rejected()),
                static_cast<ull>(st.duplicates), static_cast<ull>(st.reordered));
+  if (st.rejected() > 0) {
+    // By reason, so a forged or foreign-key stream (unauthenticated, bad_mac,
+    // stale, replayed) reads differently from a broken slave.
+    std::string reasons;
+    for (int i = 0; i < bridge::kRejectReasons; ++i) {
+      const auto reason = static_cast<bridge::RejectReason>(i);
+      if (st.rejected(reason) == 0) continue;
+      reasons += reasons.empty() ? "" : ", ";
+      reasons +=
+          std::string(bridge::reason_name(reason)) + " " + std::to_string(st.rejected(reason));
+    }
+    std::fprintf(stderr, "          rejected by reason: %s\n", reasons.c_str());
+  }
   std::fprintf(stderr,
                "          seq gaps %llu (%llu messages missing: the slave's seq jumped, i.e. "
                "messages lost on the way or rejected; 0 is normal on one host)\n",
@@ -373,12 +414,17 @@ int run(const Options& o, const sigset_t& stop_signals) {
   haptics::LcmSlaveLinkConfig link_cfg;
   link_cfg.bridge.url = bridge::resolve_lcm_url(o.lcm_url.empty() ? cfg.lcm_url : o.lcm_url);
   link_cfg.bridge.prefix = cfg.lcm_prefix;
+  // Only authenticated peers move the master (docs/bridge.md, "Authentication").
+  const auto security = bridge::resolve_link_security(link_cfg.bridge.url, o.link);
+  link_cfg.bridge.key = security.key;
+  if (!security.key || !o.quiet)
+    std::fprintf(stderr, "haptic-server: %s\n", security.notice.c_str());
   link_cfg.joints = cfg.loop.joints;
   link_cfg.state_limits = cfg.slave_limits;
   link_cfg.subscribe_truth = cfg.evaluation.truth;
   haptics::LcmSlaveLink link(link_cfg);
 
-  const auto registry = make_registry();
+  const auto registry = make_registry(haptics::make_lcm_device_auth(security.key));
   master_devices::DriverContext ctx{cfg.source, "device.settings",
                                     std::filesystem::path(cfg.source).parent_path()};
   std::unique_ptr<master_devices::Device> device;
@@ -431,6 +477,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     throw DeviceError(std::string("cannot open the master device (") + cfg.device_driver + ", " +
                       device->spec().model + "): " + e.what());
   }
+  if (cfg.device_driver == "lcm") confine_lcm_device(cfg, o.link, security);
   haptics::HapticLoop loop(cfg.loop, *device, link, std::move(estimators), trace.get());
   try {
     if (cfg.realtime.lock_memory) {
@@ -543,6 +590,12 @@ int main(int argc, char** argv) {
   app.add_flag("--list-devices", o.list_devices,
                "List connected master devices matching known profiles");
   app.add_flag("--quiet", o.quiet, "Only warnings and the exit summary");
+  app.add_option("--key", o.link.key_file,
+                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
+                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_flag("--insecure", o.link.insecure,
+               "Run without a link key on a network LCM URL: anyone who reaches it can "
+               "command the robot and the master (isolated networks only)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -557,6 +610,9 @@ int main(int argc, char** argv) {
     }
     return run(o, stop_signals);
   } catch (const haptics::ConfigError& e) {
+    std::cerr << "haptic-server: error: " << e.what() << "\n";
+    return kExitConfig;
+  } catch (const bridge::LinkKeyError& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
     return kExitConfig;
   } catch (const DeviceError& e) {

@@ -6,6 +6,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <tsmh/master_force_t.hpp>
 #include <tsmh/master_state_t.hpp>
+#include <vector>
 
 namespace tsmh::master_devices {
 
@@ -48,7 +49,10 @@ LcmSettings parse_lcm_settings(FieldReader& r) {
 struct LcmDevice::Impl {
   LcmDevice& device;
   lcm::Subscription* subscription = nullptr;
+  tsmh::master_state_t state;  // decoded in place: its vectors keep their capacity
   tsmh::master_force_t force;  // preallocated: its vector keeps its capacity
+  std::vector<std::uint8_t> force_bytes;
+  std::string auth_error;  // why the last message failed authentication
   std::uint64_t count = 0;
   std::int64_t force_seq = 0;
 
@@ -62,7 +66,37 @@ struct LcmDevice::Impl {
     device.set_error(device.settings_.state_channel() + ": " + why);
   }
 
-  void on_state(const lcm::ReceiveBuffer*, const std::string&, const tsmh::master_state_t* msg) {
+  // Raw: authenticate before decoding (a message that fails never reaches
+  // the decoder); without auth, trailing bytes (another peer's MAC) are
+  // ignored by the decoder as by every LCM tool.
+  void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+    std::size_t size = rbuf->data_size;
+    if (const auto& auth = device.settings_.auth) {
+      const auto payload = auth->verify(channel, data, size, auth_error);
+      if (!payload) return reject("not authenticated: " + auth_error);
+      size = *payload;
+    }
+    if (state.decode(data, 0, static_cast<int>(size)) < 0) return reject("cannot decode");
+    on_state(&state);
+  }
+
+  void publish_force() {
+    const auto& auth = device.settings_.auth;
+    if (!auth) {
+      device.lcm_->publish(device.settings_.force_channel(), &force);
+      return;
+    }
+    const int size = force.getEncodedSize();
+    force_bytes.resize(static_cast<std::size_t>(size) + auth->trailer_size());
+    if (force.encode(force_bytes.data(), 0, size) != size) return;
+    auth->sign(device.settings_.force_channel(), force_bytes.data(), static_cast<std::size_t>(size),
+               force_bytes.data() + size);
+    device.lcm_->publish(device.settings_.force_channel(), force_bytes.data(),
+                         static_cast<unsigned>(force_bytes.size()));
+  }
+
+  void on_state(const tsmh::master_state_t* msg) {
     const std::int64_t now = device.clock_->now_ns();
     const std::size_t dof = device.settings_.dof;
     if (msg->num_joints != static_cast<int32_t>(dof)) {
@@ -114,7 +148,7 @@ struct LcmDevice::Impl {
     force.utime = now / 1000;
     force.seq = force_seq++;
     force.enable = drive;
-    device.lcm_->publish(device.settings_.force_channel(), &force);
+    publish_force();
   }
 };
 
@@ -160,7 +194,7 @@ void LcmDevice::open() {
         "ip route add 224.0.0.0/4 dev lo)");
   }
   impl_ = std::make_unique<Impl>(*this);
-  impl_->subscription = lcm_->subscribe(settings_.state_channel(), &Impl::on_state, impl_.get());
+  impl_->subscription = lcm_->subscribe(settings_.state_channel(), &Impl::on_raw, impl_.get());
   enable_requested_ = false;
   stopping_ = false;
   opened_ = true;
@@ -225,12 +259,14 @@ DeviceStatus LcmDevice::status() const noexcept {
   return DeviceStatus::kOk;
 }
 
-void register_lcm_driver(DriverRegistry& registry, std::shared_ptr<const Clock> clock) {
+void register_lcm_driver(DriverRegistry& registry, std::shared_ptr<const Clock> clock,
+                         std::shared_ptr<LcmMessageAuth> auth) {
   registry.add("lcm", "external master driver over LCM (MASTER_STATE in, MASTER_FORCE out)",
-               [clock](const YAML::Node& settings, const DriverContext& ctx) {
+               [clock, auth](const YAML::Node& settings, const DriverContext& ctx) {
                  FieldReader r(settings, ctx.source, ctx.path);
                  LcmSettings s = parse_lcm_settings(r);
                  r.reject_unknown();
+                 s.auth = auth;
                  return std::unique_ptr<Device>(std::make_unique<LcmDevice>(std::move(s), clock));
                });
 }

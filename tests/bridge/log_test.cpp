@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "bridge/clock.hpp"
+#include "bridge/link_auth.hpp"
 #include "bridge/log_reader.hpp"
 #include "bridge/receiver.hpp"
 #include "process.hpp"
@@ -276,6 +277,114 @@ TEST(LcmLog, LogplayerReplaysIntoOurReceiver) {
   SlaveStateSample s;
   ASSERT_EQ(inbox.latest(s), 100U);
   EXPECT_EQ(s.seq, 99);
+  remove_unless_failed(dir);
+}
+
+// An authenticated recording: SLAVE_STATE seq 0..49 signed with `key`, and
+// (when `injected`) 10 unsigned events with seq 100..109 between them, as a
+// sender without the key would leave in the log.
+void write_signed_log(const fs::path& log, const std::string& channel,
+                      std::shared_ptr<const LinkKey> key, bool injected) {
+  lcm::LogFile out(log.string(), "w");
+  ASSERT_TRUE(out.good());
+  const auto signer = key ? std::make_unique<MessageSigner>(key) : nullptr;
+  std::vector<std::uint8_t> bytes;
+  std::int64_t event = 0;
+  auto write = [&](std::int64_t seq, bool sign) {
+    encode_sample(test::make_state(seq, 1000 + 1000 * event), bytes);
+    if (sign) {
+      const std::size_t n = bytes.size();
+      bytes.resize(n + kAuthTrailerBytes);
+      signer->sign(channel, bytes.data(), n, bytes.data() + n);
+    }
+    lcm::LogEvent ev{};
+    ev.timestamp = 1'700'000'000'000'000 + event++ * 1000;
+    ev.channel = channel;
+    ev.datalen = static_cast<std::int32_t>(bytes.size());
+    ev.data = bytes.data();
+    ASSERT_EQ(out.writeEvent(&ev), 0);
+  };
+  for (int i = 0; i < 50; ++i) {
+    write(i, signer != nullptr);
+    if (injected && i % 5 == 0) write(100 + i / 5, false);
+  }
+}
+
+std::string error_of(const fs::path& log, const std::string& prefix, const LogReadOptions& o) {
+  try {
+    (void)read_joint_series(log, 0, prefix, o);
+  } catch (const LogError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(LcmLog, SignedLogIsVerifiedOrExplicitlySkipped) {
+  const fs::path dir = temp_dir();
+  const std::string prefix = test::unique_prefix();
+  const std::string channel = channel_name(prefix, Channel::SlaveState);
+  const auto key = std::make_shared<const LinkKey>(LinkKey::generate());
+  const fs::path log = dir / "signed.lcmlog";
+  write_signed_log(log, channel, key, /*injected=*/true);
+
+  // With the key: the 50 signed events, the 10 unsigned ones left out and counted.
+  const JointSeries js = read_joint_series(log, 0, prefix, {.verify_key = key.get()});
+  EXPECT_EQ(js.rows(), 50U);
+  EXPECT_EQ(js.state_messages, 60U);
+  EXPECT_EQ(js.skipped_no_mac, 10U);
+  EXPECT_EQ(js.skipped_bad_mac, 0U);
+  EXPECT_FALSE(js.no_macs);
+  EXPECT_DOUBLE_EQ(js.x_in.back(), test::make_state(49, 0).x_in[0]) << "an authentic row";
+  // Another key: nothing authentic, and the error says what to do.
+  const LinkKey other = LinkKey::generate();
+  const std::string wrong = error_of(log, prefix, {.verify_key = &other});
+  EXPECT_NE(wrong.find("50 whose MAC does not verify"), std::string::npos) << wrong;
+  EXPECT_NE(wrong.find("--skip-mac"), std::string::npos) << wrong;
+  // No key: MACs present, so using them unverified needs --skip-mac.
+  const std::string none = error_of(log, prefix, {});
+  EXPECT_NE(none.find("carry a MAC"), std::string::npos) << none;
+  EXPECT_NE(none.find("--key"), std::string::npos) << none;
+  // --skip-mac: every event, trailers stripped, none verified.
+  const JointSeries all = read_joint_series(log, 0, prefix, {.skip_mac = true});
+  EXPECT_EQ(all.state_messages, 60U);
+  EXPECT_EQ(all.skipped_invalid, 0U) << "the trailer is stripped before decoding";
+  EXPECT_GE(all.rows(), 50U);
+
+  // A log from before authentication, read with a key: used, and flagged.
+  const fs::path old_log = dir / "unsigned.lcmlog";
+  write_signed_log(old_log, channel, nullptr, false);
+  const JointSeries old = read_joint_series(old_log, 0, prefix, {.verify_key = key.get()});
+  EXPECT_EQ(old.rows(), 50U);
+  EXPECT_TRUE(old.no_macs);
+
+#ifdef TSMH_TSM_BIN
+  const fs::path key_file = dir / "link.key";
+  key->save(key_file);
+  const fs::path csv = dir / "out.csv";
+  // The environment's key search must not find a key of the machine's user.
+  const std::vector<std::string> env = {"env", test::cat("XDG_CONFIG_HOME=", dir.string()),
+                                        "TSMH_LINK_KEY="};
+  auto tsm = [&](std::vector<std::string> more) {
+    std::vector<std::string> argv = env;
+    argv.insert(argv.end(), {TSMH_TSM_BIN, "convert", log.string(), "--output", csv.string(),
+                             "--prefix", prefix});
+    argv.insert(argv.end(), more.begin(), more.end());
+    return test::run(argv);
+  };
+  const auto verified = tsm({"--key", key_file.string()});
+  EXPECT_EQ(verified.exit_code, 0) << verified.output;
+  EXPECT_NE(verified.output.find("50 rows"), std::string::npos) << verified.output;
+  EXPECT_NE(verified.output.find("MACs verified, left out 10 without and 0 with a bad MAC"),
+            std::string::npos)
+      << verified.output;
+  const auto refused = tsm({});
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("--skip-mac"), std::string::npos) << refused.output;
+  const auto skipped = tsm({"--skip-mac"});
+  EXPECT_EQ(skipped.exit_code, 0) << skipped.output;
+  EXPECT_NE(skipped.output.find("MACs not checked (--skip-mac)"), std::string::npos)
+      << skipped.output;
+#endif
   remove_unless_failed(dir);
 }
 

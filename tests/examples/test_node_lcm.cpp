@@ -17,8 +17,40 @@
 #include <tsmh/master_command_t.hpp>
 #include <tsmh/slave_state_t.hpp>
 #include <tsmh/slave_truth_t.hpp>
+#include <vector>
+
+#include "bridge/link_auth.hpp"
+#include "bridge/link_security.hpp"
 
 namespace {
+
+using tsmh::bridge::LinkKey;
+using tsmh::bridge::MessageSigner;
+
+// The node finds the link key through TSMH_LINK_KEY (set by ctest); the
+// test's commands are signed with it, as haptic-server's are.
+std::shared_ptr<const LinkKey> test_key() {
+  const char* file = std::getenv(tsmh::bridge::kLinkKeyEnv);
+  if (file == nullptr || file[0] == '\0') return nullptr;
+  return std::make_shared<const LinkKey>(LinkKey::load(file));
+}
+
+// The encoded message followed by its trailer (no trailer without a signer).
+std::vector<std::uint8_t> encode(const tsmh::master_command_t& m, const std::string& channel,
+                                 MessageSigner* signer) {
+  const int size = m.getEncodedSize();
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  m.encode(bytes.data(), 0, size);
+  if (signer != nullptr) {
+    bytes.resize(bytes.size() + tsmh::bridge::kAuthTrailerBytes);
+    signer->sign(channel, bytes.data(), static_cast<std::size_t>(size), bytes.data() + size);
+  }
+  return bytes;
+}
+
+void publish(lcm::LCM& lcm, const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+  lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+}
 
 double monotonic_s() {
   timespec ts{};
@@ -89,10 +121,14 @@ TEST(Node, FollowsCommandsPublishesStateAndTruthAndHoldsWhenCommandsStop) {
   cmd.num_joints = 2;
   cmd.position_ref = {0.3, -0.2};
   cmd.enable = true;
+  const auto key = test_key();
+  ASSERT_NE(key, nullptr) << "ctest sets TSMH_LINK_KEY";
+  MessageSigner signer(key);
+  const std::string channel = prefix + "MASTER_COMMAND";
   pump(lcm, 1.5, [&] {
     cmd.utime = static_cast<std::int64_t>(monotonic_s() * 1e6);
     ++cmd.seq;
-    lcm.publish(prefix + "MASTER_COMMAND", &cmd);
+    publish(lcm, channel, encode(cmd, channel, &signer));
   });
   EXPECT_EQ(listener.last.status & 1, 1) << "following";
   EXPECT_NEAR(listener.last.x_out[0], 0.3, 0.01);
@@ -112,6 +148,84 @@ TEST(Node, FollowsCommandsPublishesStateAndTruthAndHoldsWhenCommandsStop) {
   // SLAVE_TRUTH carries the same seq as SLAVE_STATE of the same tick.
   EXPECT_TRUE(listener.truth_x_out.count(listener.last.seq) == 1 ||
               listener.truth_x_out.count(listener.last.seq - 1) == 1);
+
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
+// Issue 18: commands without the link key, with another key, or replayed
+// (an authentic recording sent again) never move the node; the
+// authenticated commander does.
+TEST(Node, OnlyAuthenticatedCommandsMoveIt) {
+  lcm::LCM lcm;
+  if (!lcm.good())
+    GTEST_SKIP() << "LCM cannot start here (no multicast route?): ip link set lo multicast on; "
+                    "ip route add 224.0.0.0/4 dev lo";
+  const auto key = test_key();
+  ASSERT_NE(key, nullptr) << "ctest sets TSMH_LINK_KEY";
+  const std::string prefix = "VSAUTH" + std::to_string(::getpid()) + "_";
+  const std::string channel = prefix + "MASTER_COMMAND";
+
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    execl(VIRTUAL_SLAVE_BIN, VIRTUAL_SLAVE_BIN, "--duration", "6", "--prefix", prefix.c_str(),
+          "--tissue", "none", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  Listener listener;
+  lcm.subscribe(prefix + "SLAVE_STATE", &Listener::on_state, &listener);
+  pump(lcm, 0.5, [] {});
+  ASSERT_GT(listener.states, 100) << "no SLAVE_STATE from the node";
+
+  tsmh::master_command_t cmd{};
+  cmd.num_joints = 2;
+  cmd.enable = true;
+  auto next = [&](double q) {
+    cmd.utime = static_cast<std::int64_t>(monotonic_s() * 1e6);
+    ++cmd.seq;
+    cmd.position_ref = {q, -q};
+    return cmd;
+  };
+  // Rogues: 1 s of commands to 0.3 rad, alternately unsigned and signed with another key.
+  MessageSigner rogue(std::make_shared<const LinkKey>(LinkKey::generate()));
+  bool with_wrong_key = false;
+  double lo = 0, hi = 0;
+  auto track = [&] {
+    lo = std::min(lo, listener.last.x_out[0]);
+    hi = std::max(hi, listener.last.x_out[0]);
+  };
+  pump(lcm, 1.0, [&] {
+    with_wrong_key = !with_wrong_key;
+    publish(lcm, channel, encode(next(0.3), channel, with_wrong_key ? &rogue : nullptr));
+    track();
+  });
+  EXPECT_EQ(listener.last.status & 2, 2) << "still holding: no command was accepted";
+  EXPECT_LT(std::max(std::abs(lo), std::abs(hi)), 0.003) << "the node moved for a rogue";
+
+  // The authenticated commander: 0.8 s to 0.2 rad (recorded), then 0.8 s to -0.1 rad.
+  MessageSigner signer(key);
+  std::vector<std::vector<std::uint8_t>> recorded;
+  pump(lcm, 0.8, [&] {
+    recorded.push_back(encode(next(0.2), channel, &signer));
+    publish(lcm, channel, recorded.back());
+  });
+  EXPECT_NEAR(listener.last.x_out[0], 0.2, 0.01) << "follows the authenticated commander";
+  pump(lcm, 0.8, [&] { publish(lcm, channel, encode(next(-0.1), channel, &signer)); });
+  EXPECT_NEAR(listener.last.x_out[0], -0.1, 0.01);
+
+  // Replay the recording (hundreds of messages: enough for the bridge's
+  // ordering check to re-base on them, were they not rejected first).
+  ASSERT_GT(recorded.size(), 200U);
+  lo = hi = listener.last.x_out[0];
+  std::size_t i = 0;
+  pump(lcm, 0.8, [&] {
+    publish(lcm, channel, recorded[i++ % recorded.size()]);
+    track();
+  });
+  EXPECT_NEAR(lo, -0.1, 0.01) << "a replayed command moved the node";
+  EXPECT_NEAR(hi, -0.1, 0.01) << "a replayed command moved the node";
 
   int status = 0;
   ASSERT_EQ(waitpid(child, &status, 0), child);

@@ -29,6 +29,7 @@
 #include "bridge/receiver.hpp"
 #include "bridge/stop_signals.hpp"
 #include "scratch_dir_test.hpp"
+#include "test_link_key.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -152,6 +153,7 @@ class Peer {
         force_(rx_.subscribe<bridge::MasterForceSample>({.clocks_shared = true})),
         command_(rx_.subscribe<bridge::MasterCommandSample>({})),
         status_(rx_.subscribe<bridge::HapticStatusSample>({})) {
+    sign_slave_with(test::test_signer());
     rx_.start();
   }
   ~Peer() { stop(); }
@@ -172,6 +174,11 @@ class Peer {
   }
   /// Publishes `count` extra SLAVE_STATE per millisecond (a flood).
   void flood(int per_ms) { flood_per_ms_ = per_ms; }
+  /// Signs later SLAVE_STATE with `signer` (null: unsigned, a slave without the key).
+  void sign_slave_with(std::unique_ptr<bridge::MessageSigner> signer) {
+    slave_signer_ = signer.get();
+    signers_.push_back(std::move(signer));
+  }
 
   bridge::MasterForceSample force() const {
     bridge::MasterForceSample f;
@@ -213,7 +220,7 @@ class Peer {
       const std::int64_t t = now_us();
       m.utime = t;
       m.seq = mseq++;
-      bridge::publish_sample(lcm_, master_channel, m);
+      bridge::publish_sample(lcm_, master_channel, m, master_signer_.get());
       if (restart_seq_.exchange(false)) seq = 0;
       const int n = 1 + flood_per_ms_.load();
       for (int k = 0; k < n; ++k) {
@@ -221,7 +228,7 @@ class Peer {
         s.seq = seq++;
         for (std::size_t j = 0; j < 2; ++j)
           s.x_in[j] = 0.3 * std::sin(1e-6 * static_cast<double>(t));
-        bridge::publish_sample(lcm_, slave_channel, s);
+        bridge::publish_sample(lcm_, slave_channel, s, slave_signer_.load());
         ++slave_sent_;
       }
       bridge::HapticStatusSample st;
@@ -239,6 +246,13 @@ class Peer {
 
   std::string prefix_;
   lcm::LCM lcm_;
+  // SLAVE_STATE is signed with the key the server uses (as a real slave
+  // would), unless sign_slave_with() says otherwise. Signers are kept until
+  // the Peer ends: the publishing thread may still hold the previous one.
+  std::vector<std::unique_ptr<bridge::MessageSigner>> signers_;
+  // The console's MASTER_STATE, always with the key (the lcm device verifies it).
+  std::unique_ptr<bridge::MessageSigner> master_signer_ = test::test_signer();
+  std::atomic<bridge::MessageSigner*> slave_signer_{nullptr};
   bridge::Receiver rx_;
   bridge::Inbox<bridge::MasterForceSample>& force_;
   bridge::Inbox<bridge::MasterCommandSample>& command_;
@@ -431,6 +445,100 @@ TEST_F(ServerFaults, SlaveStateFloodDoesNotStallTheLoop) {
   if (overruns > 0) {
     EXPECT_GE(max_lateness_us, 1000.0) << "overruns without lateness";
   }
+}
+
+// Largest |torque| sent to the console over `how_long`, polled every ms.
+double max_torque_over(const Peer& peer, std::chrono::milliseconds how_long) {
+  double max_torque = 0;
+  const auto end = Clock::now() + how_long;
+  while (Clock::now() < end) {
+    const auto f = peer.force();
+    max_torque = std::max({max_torque, std::abs(f.torque[0]), std::abs(f.torque[1])});
+    std::this_thread::sleep_for(1ms);
+  }
+  return max_torque;
+}
+
+// Issue 18: SLAVE_STATE from a slave without the link key, or with another
+// key, renders no torque (every message rejected and counted in HAPTIC_STATUS
+// slave_rejected): to the server there is no slave, so it exits 5 ("no
+// SLAVE_STATE was ever used") as with no slave at all.
+TEST_F(ServerFaults, UnauthenticatedSlaveStateRendersNoTorque) {
+  ASSERT_NE(test::test_link_key(), nullptr) << "ctest sets TSMH_LINK_KEY for this test";
+  const std::string prefix = unique_prefix();
+  Peer peer(prefix);
+  peer.sign_slave_with(nullptr);
+  auto server = start_server(write_config(prefix));
+  peer.start();
+  EXPECT_EQ(max_torque_over(peer, 800ms), 0.0) << "torque rendered from an unsigned SLAVE_STATE:\n"
+                                               << server->log();
+  ASSERT_FALSE(peer.statuses().empty());
+  const auto rejected_unsigned = peer.statuses().back().slave_rejected;
+  EXPECT_GT(rejected_unsigned, 300) << "unsigned SLAVE_STATE rejected and counted";
+  peer.sign_slave_with(std::make_unique<bridge::MessageSigner>(
+      std::make_shared<const bridge::LinkKey>(bridge::LinkKey::generate())));
+  EXPECT_EQ(max_torque_over(peer, 800ms), 0.0)
+      << "torque rendered from a SLAVE_STATE signed with another key";
+  EXPECT_GT(peer.statuses().back().slave_rejected, rejected_unsigned + 300);
+  server->signal(SIGTERM);
+  EXPECT_EQ(server->wait(5s), 5) << "exit 5: no SLAVE_STATE was ever used\n" << server->log();
+  EXPECT_NE(server->log().find("no SLAVE_STATE on"), std::string::npos) << server->log();
+  EXPECT_EQ(server->log().find("SLAVE_STATE arriving again"), std::string::npos) << server->log();
+  EXPECT_NE(server->log().find("rejected by reason: unauthenticated "), std::string::npos)
+      << server->log();
+  EXPECT_NE(server->log().find(", bad_mac "), std::string::npos) << server->log();
+}
+
+// Issue 18: while the real (authenticated) slave publishes 0.1 N m worth of
+// tension, a rogue on the same URL publishes 0.6 N m worth with newer seq and
+// utime, unsigned and then with another key: the console keeps getting the
+// real slave's 0.1 N m, never the rogue's (0.3 N m after the clamp).
+TEST_F(ServerFaults, RogueSlaveStateBesideTheRealSlaveChangesNothing) {
+  ASSERT_NE(test::test_link_key(), nullptr) << "ctest sets TSMH_LINK_KEY for this test";
+  const std::string prefix = unique_prefix();
+  Peer peer(prefix);
+  auto server = start_server(write_config(prefix));
+  peer.start();
+  ASSERT_TRUE(wait_until([&] { return rendering(peer); }, 8s)) << server->log();
+  std::this_thread::sleep_for(300ms);  // past the rate limit's ramp
+  const double authentic = max_torque_over(peer, 300ms);
+  EXPECT_NEAR(authentic, 0.1, 0.02);
+
+  std::atomic<bool> rogue_running{true};
+  std::atomic<long> rogue_sent{0};
+  std::thread rogue([&] {
+    lcm::LCM lcm(url());
+    const bridge::MessageSigner wrong_key(
+        std::make_shared<const bridge::LinkKey>(bridge::LinkKey::generate()));
+    bridge::SlaveStateSample s;
+    s.num_joints = 2;
+    s.status = 1;
+    for (std::size_t j = 0; j < 2; ++j) {
+      s.T1[j] = 80.0;
+      s.T3[j] = 20.0;
+      s.radius_m[j] = 0.01;
+    }
+    for (std::int64_t seq = 1'000'000; rogue_running; ++seq) {
+      s.utime = now_us() + 1000;
+      s.seq = seq;
+      // Half unsigned, half signed with a key that is not the installation's.
+      auto* signer = seq % 2 == 0 ? const_cast<bridge::MessageSigner*>(&wrong_key) : nullptr;
+      bridge::publish_sample(lcm, prefix + "SLAVE_STATE", s, signer);
+      ++rogue_sent;
+      std::this_thread::sleep_for(500us);
+    }
+  });
+  const auto rejected_before = peer.statuses().back().slave_rejected;
+  const double during = max_torque_over(peer, 1500ms);
+  rogue_running = false;
+  rogue.join();
+  std::this_thread::sleep_for(50ms);
+  EXPECT_GT(rogue_sent.load(), 1000);
+  EXPECT_NEAR(during, authentic, 0.02) << "the rogue's tensions reached the console";
+  EXPECT_GE(peer.statuses().back().slave_rejected - rejected_before, rogue_sent.load() * 9 / 10)
+      << "rogue messages rejected and counted in HAPTIC_STATUS";
+  server->signal(SIGTERM);
+  EXPECT_EQ(server->wait(5s), 0) << server->log();
 }
 
 }  // namespace

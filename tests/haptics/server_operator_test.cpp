@@ -24,6 +24,7 @@
 #include "bridge/clock.hpp"
 #include "bridge/codec.hpp"
 #include "scratch_dir_test.hpp"
+#include "test_link_key.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -111,6 +112,7 @@ class FakeSlave {
   FakeSlave(std::string prefix, double seconds, std::int64_t age_us = 0, int skip_every = 0) {
     thread_ = std::thread([this, prefix, seconds, age_us, skip_every] {
       lcm::LCM lcm(url());
+      const auto signer = test::test_signer();  // a legitimate slave holds the link key
       bridge::SlaveStateSample s;
       s.num_joints = 2;
       s.status = 1;
@@ -128,7 +130,7 @@ class FakeSlave {
         }
         s.utime = bridge::monotonic_utime() - age_us;
         s.seq = seq;
-        bridge::publish_sample(lcm, prefix + "SLAVE_STATE", s);
+        bridge::publish_sample(lcm, prefix + "SLAVE_STATE", s, signer.get());
         std::this_thread::sleep_for(1ms);
       }
     });

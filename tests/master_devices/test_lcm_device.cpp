@@ -190,5 +190,78 @@ TEST(LcmDevice, ChannelPrefixAndRegistration) {
   }
 }
 
+// A stand-in for the link key's MAC (haptic-server plugs in the bridge's;
+// tests/haptics checks the real one end to end): the trailer is the channel
+// name's length and a tag byte, which is enough to see the plumbing refuse
+// what does not verify and sign what goes out.
+class TagAuth final : public LcmMessageAuth {
+ public:
+  std::optional<std::size_t> verify(const std::string& channel, const std::uint8_t* data,
+                                    std::size_t size, std::string& why) noexcept override {
+    if (size >= 2 && data[size - 2] == static_cast<std::uint8_t>(channel.size()) &&
+        data[size - 1] == kTag)
+      return size - 2;
+    why = "no tag";
+    return std::nullopt;
+  }
+  std::size_t trailer_size() const noexcept override { return 2; }
+  void sign(const std::string& channel, const std::uint8_t*, std::size_t,
+            std::uint8_t* trailer) noexcept override {
+    trailer[0] = static_cast<std::uint8_t>(channel.size());
+    trailer[1] = kTag;
+  }
+  static constexpr std::uint8_t kTag = 0xA5;
+};
+
+TEST(LcmDevice, WithAuthOnlyVerifiedStateIsUsedAndForceIsSigned) {
+  LcmSettings s;
+  s.auth = std::make_shared<TagAuth>();
+  Rig rig(s);
+  struct RawLog {  // filled by the device's LCM thread
+    std::mutex mutex;
+    std::vector<std::vector<std::uint8_t>> messages;
+  } raw;
+  auto* sub = rig.lcm->subscribeFunction<RawLog*>(
+      "MASTER_FORCE",
+      [](const lcm::ReceiveBuffer* rb, const std::string&, RawLog* out) {
+        const auto* p = static_cast<const std::uint8_t*>(rb->data);
+        const std::lock_guard lock(out->mutex);
+        out->messages.emplace_back(p, p + rb->data_size);
+      },
+      &raw);
+  // Unsigned MASTER_STATE: dropped and counted, never read.
+  rig.send_state(0.25, -0.5);
+  EXPECT_EQ(rig.device->rejected_messages(), 1u);
+  EXPECT_NE(rig.device->last_error().find("MASTER_STATE: not authenticated: no tag"),
+            std::string::npos)
+      << rig.device->last_error();
+  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected);
+  EXPECT_EQ(rig.log.count(), 0u) << "no MASTER_FORCE answers a rejected MASTER_STATE";
+
+  // Signed: used, and the answer carries the trailer after a decodable payload.
+  tsmh::master_state_t m{};
+  m.utime = monotonic_ns() / 1000;
+  m.seq = 1;
+  m.num_joints = 2;
+  m.q = {0.25, -0.5};
+  m.qd = {0.0, 0.0};
+  m.buttons = 1;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()) + 2);
+  m.encode(bytes.data(), 0, m.getEncodedSize());
+  TagAuth().sign("MASTER_STATE", nullptr, 0, bytes.data() + bytes.size() - 2);
+  rig.lcm->publish("MASTER_STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
+  for (int i = 0; i < 500 && rig.log.count() == 0; ++i)
+    std::this_thread::sleep_for(1ms);
+  EXPECT_DOUBLE_EQ(rig.device->read(monotonic_ns()).q[0], 0.25);
+  ASSERT_EQ(rig.log.count(), 1u) << "typed decoders ignore the trailer";
+  rig.device->close();  // its thread handles the shared LCM: stop it before unsubscribing
+  rig.lcm->unsubscribe(sub);
+  ASSERT_EQ(raw.messages.size(), 1u);
+  const auto& f = raw.messages.front();
+  ASSERT_GE(f.size(), 2u);
+  EXPECT_EQ(f[f.size() - 2], std::string("MASTER_FORCE").size());
+  EXPECT_EQ(f[f.size() - 1], TagAuth::kTag);
+}
+
 }  // namespace
 }  // namespace tsmh::master_devices

@@ -32,6 +32,8 @@ class LCM;
 
 namespace tsmh::bridge {
 
+class MessageSigner;  // bridge/link_auth.hpp
+
 /// Which message, channel and limits belong to a sample type.
 template <class Sample>
 struct SampleTraits;
@@ -125,9 +127,12 @@ class Decoder {
 template <class Sample>
 void encode_sample(const Sample& s, std::vector<std::uint8_t>& bytes);
 
-/// Encodes and publishes synchronously on `lcm`. Returns LCM's result (0 on
-/// success). Blocking system call: for tools, tests and non-real-time code.
+/// Encodes and publishes synchronously on `lcm`, followed by an
+/// authentication trailer when `signer` is set (Sender::signer()). Returns
+/// LCM's result (0 on success). Blocking system call: for tools, tests and
+/// non-real-time code.
 template <class Sample>
-int publish_sample(lcm::LCM& lcm, const std::string& channel, const Sample& s);
+int publish_sample(lcm::LCM& lcm, const std::string& channel, const Sample& s,
+                   MessageSigner* signer = nullptr);
 
 }  // namespace tsmh::bridge

@@ -18,6 +18,7 @@
 #include "bridge/codec.hpp"
 #include "bridge/latency_histogram.hpp"
 #include "bridge/latest_value.hpp"
+#include "bridge/link_auth.hpp"
 #include "bridge/rejection.hpp"
 #include "bridge/sequence_tracker.hpp"
 
@@ -49,6 +50,11 @@ class InboxBase {
   /// Receive thread only (single writer): handles one raw message that
   /// arrived at `receive_ns` (CLOCK_MONOTONIC). Never throws.
   virtual void ingest(const void* data, std::size_t size, std::int64_t receive_ns) noexcept = 0;
+
+  /// Receive thread only: a message that failed authentication (verdict not
+  /// Ok) is counted as received and rejected by its reason; it never reaches
+  /// the decoder.
+  void reject_unauthentic(const AuthResult& auth, std::int64_t receive_ns) noexcept;
 
   const std::string& channel() const noexcept { return channel_; }
   /// Any thread.

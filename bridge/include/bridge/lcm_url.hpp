@@ -10,6 +10,8 @@
 
 namespace tsmh::bridge {
 
+class LinkKey;  // bridge/link_auth.hpp
+
 /// The project's default: multicast with TTL 0, so packets never leave this
 /// host (the kernel still loops them back to local subscribers).
 inline constexpr std::string_view kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0";
@@ -37,6 +39,11 @@ std::unique_ptr<lcm::LCM> open_lcm(const std::string& url);
 struct BridgeConfig {
   std::string url = std::string(kDefaultLcmUrl);
   std::string prefix{};  ///< e.g. "ARM1_"; empty for a single arm
+  /// Shared link key (bridge/link_auth.hpp): a Sender signs every message, a
+  /// Receiver accepts only messages signed with it (fresh, not replayed).
+  /// Null: unauthenticated; a Receiver then ignores trailers it finds.
+  /// Programs get it from resolve_link_security() (bridge/link_security.hpp).
+  std::shared_ptr<const LinkKey> key{};
 };
 
 }  // namespace tsmh::bridge

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "bridge/link_auth.hpp"
 #include "bridge/log_events.hpp"
 
 namespace tsmh::bridge {
@@ -54,6 +55,14 @@ struct JointSeries {
   std::size_t rows_without_truth =
       0;             ///< dropped because SLAVE_TRUTH was present but not for this seq
   LogDamage damage;  ///< truncation / corrupt regions (only with accept_damage)
+  /// Events of the two channels left out because LogReadOptions::verify_key
+  /// was given and they had no MAC trailer, or one that does not verify.
+  std::size_t skipped_no_mac = 0;
+  std::size_t skipped_bad_mac = 0;
+  /// verify_key was given but no event of the two channels carries a MAC (a
+  /// log recorded before authentication, or from unkeyed senders): read
+  /// unverified, as without a key. The caller says so.
+  bool no_macs = false;
 
   std::size_t rows() const noexcept { return t.size(); }
 };
@@ -62,6 +71,14 @@ struct LogReadOptions {
   /// Use the intact events of a log that is cut off or has corrupt regions
   /// (JointSeries::damage says what was lost) instead of refusing it.
   bool accept_damage = false;
+  /// Authenticated logs (docs/bridge.md, "Authentication"): with a key, only
+  /// events whose MAC verifies with it are used (the others are counted in
+  /// skipped_no_mac / skipped_bad_mac) unless no event has a MAC at all
+  /// (JointSeries::no_macs); with skip_mac, trailers are stripped
+  /// unverified. With neither, a log whose events carry MACs is an error
+  /// (they would be used without anyone having checked them).
+  const LinkKey* verify_key = nullptr;
+  bool skip_mac = false;
 };
 
 /// Reads the channel `prefix`SLAVE_STATE (and `prefix`SLAVE_TRUTH) of `path`

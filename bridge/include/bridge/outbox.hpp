@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bridge/codec.hpp"
+#include "bridge/link_auth.hpp"
 #include "bridge/spsc_queue.hpp"
 
 namespace lcm {
@@ -66,8 +67,9 @@ class OutboxBase {
   OutboxBase(const OutboxBase&) = delete;
   OutboxBase& operator=(const OutboxBase&) = delete;
 
-  /// Publish thread only: sends everything queued; returns how many.
-  virtual std::size_t flush(lcm::LCM& lcm) noexcept = 0;
+  /// Publish thread only: sends everything queued, each followed by its
+  /// authentication trailer when `signer` is set; returns how many.
+  virtual std::size_t flush(lcm::LCM& lcm, MessageSigner* signer) noexcept = 0;
 
   const std::string& channel() const noexcept { return channel_; }
   OutboxStats stats() const noexcept;
@@ -103,7 +105,7 @@ class Outbox final : public OutboxBase {
     return true;
   }
 
-  std::size_t flush(lcm::LCM& lcm) noexcept override;
+  std::size_t flush(lcm::LCM& lcm, MessageSigner* signer) noexcept override;
 
  private:
   SpscQueue<Sample, kCapacity> queue_;

@@ -16,11 +16,16 @@ enum class RejectReason : std::uint8_t {
   OutOfRange,     ///< outside the configured Range
   TimeBackwards,  ///< utime not after the last accepted one although seq advanced
   Implausible,    ///< a step from the last accepted sample faster than the hardware can move
+  // Authentication (keyed Receiver only; bridge/link_auth.hpp), checked first:
+  Unauthenticated,  ///< no MAC trailer: a sender without the link key
+  BadMac,           ///< MAC does not match: wrong key, or bytes altered
+  Stale,            ///< send time too far from the receiver's clock (an old recording)
+  Replayed,         ///< (sender id, sequence) already seen or older than the replay window
 };
-inline constexpr int kRejectReasons = 6;
+inline constexpr int kRejectReasons = 10;
 
 /// "decode", "joint_count", "non_finite", "out_of_range", "time_backwards",
-/// "implausible_step".
+/// "implausible_step", "unauthenticated", "bad_mac", "stale", "replayed".
 std::string_view reason_name(RejectReason reason) noexcept;
 
 struct Rejection {

@@ -32,6 +32,7 @@ struct SenderOptions {
 class Sender {
  public:
   /// Opens LCM at config.url (throws BridgeError with a fix when it cannot).
+  /// With config.key every message carries an authentication trailer.
   explicit Sender(BridgeConfig config, SenderOptions options = {});
   ~Sender();
   Sender(const Sender&) = delete;
@@ -57,8 +58,11 @@ class Sender {
 
   const BridgeConfig& config() const noexcept { return config_; }
   /// The underlying LCM instance, for synchronous publish_sample() from
-  /// non-real-time code (LCM's publish is thread-safe).
+  /// non-real-time code (LCM's publish is thread-safe); pass signer() along
+  /// so those messages are authenticated too.
   lcm::LCM& lcm() noexcept { return *lcm_; }
+  /// Signs this Sender's messages (config.key); null when unauthenticated.
+  MessageSigner* signer() noexcept { return signer_.get(); }
 
  private:
   void add(std::unique_ptr<OutboxBase> box);
@@ -67,6 +71,7 @@ class Sender {
   BridgeConfig config_;
   SenderOptions options_;
   std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<MessageSigner> signer_;
   std::vector<std::unique_ptr<OutboxBase>> outboxes_;
   PublishSignal signal_;
   std::atomic<bool> stop_requested_{false};

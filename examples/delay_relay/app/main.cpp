@@ -20,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <bridge/clock.hpp>
+#include <bridge/host_only.hpp>
 #include <bridge/lcm_url.hpp>
 #include <bridge/stop_signals.hpp>
 #include <cstdint>
@@ -146,6 +147,18 @@ int main(int argc, char** argv) {
           d->on_message(rb, ch);
         },
         &up);
+    // Both sides with ttl=0 stay on this host for receiving too (bridge/
+    // host_only.hpp): the relay must not carry another host's datagrams to
+    // programs that confine their own sockets. Forwarded bytes are not
+    // re-encoded, so authenticated messages keep their MAC trailer.
+    for (const auto& [url, lcm] :
+         {std::pair{slave_url, slave_lcm.get()}, std::pair{server_url, server_lcm.get()}}) {
+      if (const auto port = tsmh::bridge::host_only_udpm_port(url)) {
+        lcm->getFileno();  // LCM creates its receive socket here at the latest
+        if (tsmh::bridge::restrict_udp_port_to_host(*port) == 0)
+          throw std::runtime_error("cannot confine LCM's socket for '" + url + "' to this host");
+      }
+    }
     std::fprintf(stderr,
                  "lcm-delay-relay: %s <-> %s; to slave ('%s') %.1f +- %.1f ms, drop %.3f; to "
                  "server ('%s') %.1f +- %.1f ms, drop %.3f; seed %llu\n",

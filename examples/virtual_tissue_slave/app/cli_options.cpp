@@ -17,7 +17,8 @@ void add_options(CLI::App& app, CliOptions& o) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--scenario", o.scenario,
                  "offline scenario: sine, multisine, palpate, chirp, excite");
-  app.add_option("--output", o.output, "offline: CSV file to write (data contract: docs/data-formats.md)");
+  app.add_option("--output", o.output,
+                 "offline: CSV file to write (data contract: docs/data-formats.md)");
   app.add_option(
          "--joint", o.joint,
          "joint index written to --output, and whose sheaths --wrap/--pretension/--reroute-wrap "
@@ -63,6 +64,12 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--lcm-url", o.lcm_url,
                  "LCM URL (default: $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0)");
   app.add_option("--prefix", o.prefix, "channel prefix, e.g. ARM1_");
+  app.add_option("--key", o.key_file,
+                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
+                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_flag("--insecure", o.insecure,
+               "run without a link key on a network LCM URL: anyone who reaches it can move "
+               "the slave (isolated networks only)");
   app.add_option("--command-timeout", o.command_timeout_s,
                  "hold position when no MASTER_COMMAND arrived for this long, s")
       ->check(CLI::PositiveNumber);

@@ -42,6 +42,8 @@ struct CliOptions {
   // real time
   std::string lcm_url;
   std::string prefix;
+  std::string key_file;   ///< --key: LCM link key (docs/bridge.md, "Authentication")
+  bool insecure = false;  ///< --insecure: no key on a network URL
   double command_timeout_s = 0.1;
   int rt_priority = 0;
   int cpu = -1;  ///< pin the 1 kHz loop thread to this CPU (-1: no pinning)

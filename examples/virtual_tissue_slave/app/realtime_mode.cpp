@@ -7,6 +7,7 @@
 #include <atomic>
 #include <bridge/clock.hpp>
 #include <bridge/latency_histogram.hpp>
+#include <bridge/link_security.hpp>
 #include <bridge/receiver.hpp>
 #include <bridge/sender.hpp>
 #include <bridge/stop_signals.hpp>
@@ -108,6 +109,11 @@ int run_realtime_mode(const CliOptions& o) {
   bridge::BridgeConfig config;
   config.url = bridge::resolve_lcm_url(o.lcm_url);
   config.prefix = o.prefix;
+  // Only authenticated peers move the slave (docs/bridge.md, "Authentication").
+  const auto security =
+      bridge::resolve_link_security(config.url, {.key_file = o.key_file, .insecure = o.insecure});
+  config.key = security.key;
+  std::fprintf(stderr, "virtual-slave: %s\n", security.notice.c_str());
   bridge::Receiver rx(config);
   bridge::InboxOptions<bridge::MasterCommandSample> inbox_options;
   inbox_options.expected_joints = kJoints;

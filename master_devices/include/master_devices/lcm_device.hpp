@@ -20,6 +20,7 @@
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/latest_value.hpp"
+#include "master_devices/lcm_message_auth.hpp"
 #include "master_devices/registry.hpp"
 #include "master_devices/settings.hpp"
 
@@ -41,6 +42,9 @@ struct LcmSettings {
   JointArray max_stiffness_nm_per_rad{};
   std::int64_t stale_timeout_ms = 50;    ///< kDisconnected when MASTER_STATE stops this long
   std::int64_t command_timeout_ms = 20;  ///< zero torque when write_torque() calls stop this long
+  /// Not a YAML setting: given by the program (register_lcm_driver). Set:
+  /// only MASTER_STATE that verifies is used, and MASTER_FORCE is signed.
+  std::shared_ptr<LcmMessageAuth> auth;
 
   std::string state_channel() const { return channel_prefix + "MASTER_STATE"; }
   std::string force_channel() const { return channel_prefix + "MASTER_FORCE"; }
@@ -102,8 +106,10 @@ class LcmDevice final : public Device {
   std::string error_;
 };
 
-/// Registers the `lcm` driver; its devices read `clock`.
+/// Registers the `lcm` driver; its devices read `clock`, and authenticate
+/// their messages with `auth` when given (haptic-server passes the link key's).
 void register_lcm_driver(DriverRegistry& registry,
-                         std::shared_ptr<const Clock> clock = monotonic_clock());
+                         std::shared_ptr<const Clock> clock = monotonic_clock(),
+                         std::shared_ptr<LcmMessageAuth> auth = nullptr);
 
 }  // namespace tsmh::master_devices
