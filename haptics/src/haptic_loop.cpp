@@ -51,11 +51,30 @@ double HapticLoop::measured_rate_hz() const noexcept {
          (static_cast<double>(last_ns_ - first_ns_) * 1e-9);
 }
 
+// One tick, as the numbered pipeline of docs/architecture.md ("A tick").
+// Each step records what it decided in facts_; status and trace publish
+// from there.
 void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   if (shut_down_) return;
+  TickFacts& f = facts_;
+  begin_tick(now_ns, lateness_ns, f);  // 0. time and lateness
+  reading_ = device_.read(now_ns);     // 1. the master
+  take_slave_state(f);                 // 2. newest SLAVE_STATE -> estimators
+  track_estimate_loss(f);              // 3. invalid estimates held and timed
+  request_feedback(f);                 // 4. force mapping per joint
+  decide_state(f);                     // 5. device freshness, state machine, enable
+  render(f);                           // 6. shaping, safety, the device
+  command_slave(f);                    // 7. MASTER_COMMAND (position mapping, clutch)
+  if (counters_.ticks % static_cast<std::uint64_t>(config_.status_every) == 0)
+    publish_status(f);          // 8. HAPTIC_STATUS at 100 Hz
+  if (trace_) append_trace(f);  // 9. trace (evaluation, plots)
+}
+
+void HapticLoop::begin_tick(std::int64_t now_ns, std::int64_t lateness_ns, TickFacts& f) noexcept {
   const double nominal_dt = 1.0 / config_.rate_hz;
-  const double dt =
-      counters_.ticks == 0 ? nominal_dt : static_cast<double>(now_ns - last_ns_) * 1e-9;
+  f.now_ns = now_ns;
+  f.lateness_ns = lateness_ns;
+  f.dt = counters_.ticks == 0 ? nominal_dt : static_cast<double>(now_ns - last_ns_) * 1e-9;
   if (counters_.ticks == 0) first_ns_ = now_ns;
   last_ns_ = now_ns;
   ++counters_.ticks;
@@ -63,13 +82,11 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   window_lateness_.record(lateness_ns);
   if (lateness_ns > events_.worst_lateness_ns.load(std::memory_order_relaxed))
     events_.worst_lateness_ns.store(lateness_ns, std::memory_order_relaxed);
-  const auto n = static_cast<std::size_t>(config_.joints);
+}
 
-  // 1. The master.
-  reading_ = device_.read(now_ns);
-
-  // 2. The newest slave state; the estimator runs once per new sample, on the
-  //    slave's own clock (utime), so its differentiator sees true intervals.
+// The estimator runs once per new sample, on the slave's own clock (utime),
+// so its differentiator sees true intervals.
+void HapticLoop::take_slave_state(TickFacts& f) noexcept {
   const std::uint64_t version = link_.latest_state(state_);
   if (version != 0 && version != state_version_) {
     state_version_ = version;
@@ -77,63 +94,95 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
     events_.slave_samples.store(counters_.slave_samples, std::memory_order_relaxed);
     estimate();
   }
-  const double age_s = have_state_ ? static_cast<double>(now_ns - state_.receive_ns) * 1e-9
-                                   : std::numeric_limits<double>::infinity();
+  f.slave_age_s = have_state_ ? static_cast<double>(f.now_ns - state_.receive_ns) * 1e-9
+                              : std::numeric_limits<double>::infinity();
+}
 
-  // Loss of the estimate (issue 15): the last valid estimate is held and
-  // faded exactly like a stale slave (the fade counts from the loss), and the
-  // loop faults if it lasts estimate_fault_s. The flag goes out in
-  // HAPTIC_STATUS and the server logs it from its main thread.
+// Loss of the estimate: the last valid estimate is held and faded exactly
+// like a stale slave (the fade counts from the loss), and the loop faults if
+// it lasts estimate_fault_s. The flag goes out in HAPTIC_STATUS and the
+// server logs it from its main thread.
+void HapticLoop::track_estimate_loss(TickFacts& f) noexcept {
   std::uint32_t lost = 0;
   if (have_state_ && config_.source != FeedbackSource::kNone)
-    for (std::size_t j = 0; j < n; ++j)
+    for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j)
       if (!estimates_[j].valid) lost |= 1U << j;
   if (lost != 0) {
-    if (estimate_lost_since_ns_ < 0) estimate_lost_since_ns_ = now_ns;
+    if (estimate_lost_since_ns_ < 0) estimate_lost_since_ns_ = f.now_ns;
     ++counters_.estimate_lost_ticks;
   } else {
     estimate_lost_since_ns_ = -1;
   }
-  const double lost_s =
-      lost != 0 ? static_cast<double>(now_ns - estimate_lost_since_ns_) * 1e-9 : 0.0;
+  f.lost_joints = lost;
+  f.lost_s = lost != 0 ? static_cast<double>(f.now_ns - estimate_lost_since_ns_) * 1e-9 : 0.0;
   events_.estimate_lost_joints.store(lost, std::memory_order_relaxed);
+}
 
-  // 3. Feedback request per joint (NaN passes through: the safety filter zeroes it).
-  JointArray request{};
-  for (std::size_t j = 0; j < n; ++j)
-    request[j] = config_.force[j](slave_torque(j));
+// NaN passes through: the safety filter zeroes it.
+void HapticLoop::request_feedback(TickFacts& f) noexcept {
+  f.request = {};
+  for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j)
+    f.request[j] = config_.force[j](slave_torque(j));
+}
 
-  // 4. State machine. A late master reading zeroes torque this tick (below)
-  // without latching a fault unless it persists.
-  const bool device_fresh = reading_.status == master_devices::DeviceStatus::kOk;
+// The driver decides whether its reading is fresh; a late one (stale, link
+// up) zeroes torque this tick (render) and becomes a fault only if it lasts
+// device_stale_fault_s.
+void HapticLoop::decide_state(TickFacts& f) noexcept {
+  f.device_fresh = reading_.status == master_devices::DeviceStatus::kOk;
   const bool device_late =
       reading_.status == master_devices::DeviceStatus::kDisconnected && reading_.stale;
   if (device_late) {
-    if (device_stale_since_ns_ < 0) device_stale_since_ns_ = now_ns;
+    if (device_stale_since_ns_ < 0) device_stale_since_ns_ = f.now_ns;
     ++counters_.device_stale_ticks;
   } else {
     device_stale_since_ns_ = -1;
   }
   const bool device_ok =
-      device_fresh || (device_late && static_cast<double>(now_ns - device_stale_since_ns_) * 1e-9 <
-                                          config_.device_stale_fault_s);
-  const LoopState before = machine_.state();
-  const LoopState now_state =
-      machine_.update({.dead_man = reading_.buttons.dead_man,
-                       .e_stop = reading_.buttons.e_stop,
-                       .device_ok = device_ok,
-                       .slave_lost = !(age_s <= config_.slave_timeout_s) &&
-                                     counters_.ticks * nominal_dt > config_.slave_timeout_s,
-                       .estimate_lost = lost_s > config_.estimate_fault_s});
-  if (now_state == LoopState::kFault && before != LoopState::kFault) {
+      f.device_fresh ||
+      (device_late && static_cast<double>(f.now_ns - device_stale_since_ns_) * 1e-9 <
+                          config_.device_stale_fault_s);
+  const double nominal_dt = 1.0 / config_.rate_hz;
+  f.before = machine_.state();
+  f.state = machine_.update({.dead_man = reading_.buttons.dead_man,
+                             .e_stop = reading_.buttons.e_stop,
+                             .device_ok = device_ok,
+                             .slave_lost = !(f.slave_age_s <= config_.slave_timeout_s) &&
+                                           counters_.ticks * nominal_dt > config_.slave_timeout_s,
+                             .estimate_lost = f.lost_s > config_.estimate_fault_s});
+  if (f.state == LoopState::kFault && f.before != LoopState::kFault) {
     ++counters_.faults;
     events_.faults.store(counters_.faults, std::memory_order_relaxed);
   }
-  events_.state.store(static_cast<std::int32_t>(now_state), std::memory_order_relaxed);
+  events_.state.store(static_cast<std::int32_t>(f.state), std::memory_order_relaxed);
   events_.fault.store(static_cast<std::int32_t>(machine_.fault()), std::memory_order_relaxed);
-  const bool enabled = now_state == LoopState::kEnabled;
-  if (enabled && before != LoopState::kEnabled) {
-    // Start from where the slave is, so enabling never makes it jump.
+  f.enabled = f.state == LoopState::kEnabled;
+  if (f.enabled != device_enabled_) {
+    device_.set_enabled(f.enabled);
+    device_enabled_ = f.enabled;
+  }
+}
+
+void HapticLoop::render(TickFacts& f) noexcept {
+  const bool drive = f.enabled && f.device_fresh;
+  shape_request(f.request, f.dt, drive);
+  f.out = safety_.apply(f.request, f.dt, std::max(f.slave_age_s, f.lost_s), drive);
+  observe_rendered(f.out);
+  if (f.out.flags & safety_flags::kNonFinite) ++counters_.nonfinite_requests;
+  if (f.out.flags & safety_flags::kSaturated) ++counters_.saturated_ticks;
+  if (f.out.flags & safety_flags::kRateLimited) ++counters_.rate_limited_ticks;
+  if (f.out.flags & safety_flags::kStaleFade) ++counters_.stale_ticks;
+  const auto n = static_cast<std::size_t>(config_.joints);
+  for (std::size_t j = 0; j < master_devices::kMaxDof; ++j)
+    device_torque_[j] = j < n ? f.out.torque[j] : 0.0;
+  device_.write_torque(device_torque_);
+}
+
+// The position mapping's only user: aligned on each enabling, so enabling
+// never makes the slave jump, then followed.
+void HapticLoop::command_slave(const TickFacts& f) noexcept {
+  const auto n = static_cast<std::size_t>(config_.joints);
+  if (f.enabled && f.before != LoopState::kEnabled) {
     for (std::size_t j = 0; j < n; ++j) {
       const double slave_at = std::isfinite(state_.x_out[j]) && have_state_
                                   ? state_.x_out[j]
@@ -141,66 +190,43 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
       position_[j].align(reading_.q[j], slave_at);
     }
   }
-  if (enabled != device_enabled_) {
-    device_.set_enabled(enabled);
-    device_enabled_ = enabled;
-  }
-
-  // 5. Oscillation fade and passivity control, safety, then the device.
-  shape_request(request, dt, enabled && device_fresh);
-  const SafetyOutput& out =
-      safety_.apply(request, dt, std::max(age_s, lost_s), enabled && device_fresh);
-  observe_rendered(out);
-  if (out.flags & safety_flags::kNonFinite) ++counters_.nonfinite_requests;
-  if (out.flags & safety_flags::kSaturated) ++counters_.saturated_ticks;
-  if (out.flags & safety_flags::kRateLimited) ++counters_.rate_limited_ticks;
-  if (out.flags & safety_flags::kStaleFade) ++counters_.stale_ticks;
-  for (std::size_t j = 0; j < master_devices::kMaxDof; ++j)
-    device_torque_[j] = j < n ? out.torque[j] : 0.0;
-  device_.write_torque(device_torque_);
-
-  // 6. Position command to the slave.
-  command_.utime = now_ns / 1000;
+  command_.utime = f.now_ns / 1000;
   command_.seq = command_seq_++;
   command_.num_joints = config_.joints;
-  command_.enable = enabled;
+  command_.enable = f.enabled;
   command_.clutch = reading_.buttons.clutch;
   for (std::size_t j = 0; j < n; ++j)
-    command_.position_ref[j] = enabled ? position_[j].update(reading_.q[j], reading_.buttons.clutch)
-                                       : position_[j].reference();
+    command_.position_ref[j] = f.enabled
+                                   ? position_[j].update(reading_.q[j], reading_.buttons.clutch)
+                                   : position_[j].reference();
   link_.publish_command(command_);
+}
 
-  // 7. Status at 100 Hz.
-  if (counters_.ticks % static_cast<std::uint64_t>(config_.status_every) == 0)
-    publish_status(now_ns);
-
-  // 8. Trace (evaluation, plots).
-  if (trace_) {
-    const std::uint64_t tv = link_.latest_truth(truth_);
-    const bool truth_matches = tv != 0 && have_state_ && truth_.seq == state_.seq;
-    TraceRow row;
-    row.t = static_cast<double>(now_ns - first_ns_) * 1e-9;
-    row.state_seq = have_state_ ? state_.seq : -1;
-    row.state = static_cast<std::int32_t>(now_state);
-    row.flags = static_cast<std::int32_t>(out.flags);
-    row.lateness_us = static_cast<double>(lateness_ns) * 1e-3;
-    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-    for (std::size_t j = 0; j < n; ++j) {
-      auto& r = row.joints[j];
-      r.master_q = reading_.q[j];
-      r.slave_ref = command_.position_ref[j];
-      r.tau_in = estimates_[j].tau_in;
-      r.tau_out_est = estimates_[j].tau_out_est;
-      r.torque_cmd = out.torque[j];
-      r.x_in = have_state_ ? state_.x_in[j] : nan;
-      r.x_out = have_state_ ? state_.x_out[j] : nan;
-      r.true_tau_out = truth_matches ? truth_.tau_out[j] : nan;
-      r.true_x_out = truth_matches ? truth_.x_out[j] : nan;
-      r.indentation = truth_matches ? truth_.indentation[j] : nan;
-      r.contact_force = truth_matches ? truth_.contact_force[j] : nan;
-    }
-    trace_->append(row);
+void HapticLoop::append_trace(const TickFacts& f) noexcept {
+  const std::uint64_t tv = link_.latest_truth(truth_);
+  const bool truth_matches = tv != 0 && have_state_ && truth_.seq == state_.seq;
+  TraceRow row;
+  row.t = static_cast<double>(f.now_ns - first_ns_) * 1e-9;
+  row.state_seq = have_state_ ? state_.seq : -1;
+  row.state = static_cast<std::int32_t>(f.state);
+  row.flags = static_cast<std::int32_t>(f.out.flags);
+  row.lateness_us = static_cast<double>(f.lateness_ns) * 1e-3;
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j) {
+    auto& r = row.joints[j];
+    r.master_q = reading_.q[j];
+    r.slave_ref = command_.position_ref[j];
+    r.tau_in = estimates_[j].tau_in;
+    r.tau_out_est = estimates_[j].tau_out_est;
+    r.torque_cmd = f.out.torque[j];
+    r.x_in = have_state_ ? state_.x_in[j] : nan;
+    r.x_out = have_state_ ? state_.x_out[j] : nan;
+    r.true_tau_out = truth_matches ? truth_.tau_out[j] : nan;
+    r.true_x_out = truth_matches ? truth_.x_out[j] : nan;
+    r.indentation = truth_matches ? truth_.indentation[j] : nan;
+    r.contact_force = truth_matches ? truth_.contact_force[j] : nan;
   }
+  trace_->append(row);
 }
 
 void HapticLoop::record_compute(std::int64_t compute_ns, std::int64_t skipped) noexcept {
@@ -270,7 +296,28 @@ void HapticLoop::estimate() noexcept {
   observe_slave_ports();
 }
 
-void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
+// HAPTIC_STATUS flags from what this tick decided and what happened in
+// the status period (lcmtypes/haptic_status_t.lcm).
+std::int32_t HapticLoop::status_flags_of(const TickFacts& f) noexcept {
+  std::int32_t flags = 0;
+  if (f.out.flags & safety_flags::kStaleFade) flags |= status_flags::kStaleFade;
+  if (reading_.buttons.e_stop) flags |= status_flags::kEStop;
+  if (!reading_.buttons.dead_man) flags |= status_flags::kDeadManReleased;
+  if (f.out.flags & safety_flags::kSaturated) flags |= status_flags::kSaturated;
+  if (f.out.flags & safety_flags::kRateLimited) flags |= status_flags::kRateLimited;
+  if (f.lost_joints != 0) flags |= status_flags::kEstimateLost;
+  if (clock_reset_in_period_) flags |= status_flags::kClockReset;
+  if (overrun_in_period_) flags |= status_flags::kOverrun;
+  if (oscillation_.tripped()) flags |= status_flags::kOscillation;
+  if (passivity_in_period_) flags |= status_flags::kPassivityActive;
+  clock_reset_in_period_ = false;
+  overrun_in_period_ = false;
+  passivity_in_period_ = false;
+  return flags;
+}
+
+void HapticLoop::publish_status(const TickFacts& f) noexcept {
+  const std::int64_t now_ns = f.now_ns;
   const auto lat = window_lateness_.summary();
   const auto cmp = window_compute_.summary();
   // Percentiles in HAPTIC_STATUS cover the last second, not the whole run.
@@ -279,11 +326,10 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
     window_compute_.reset();
   }
   const auto link = link_.stats();
-  const auto& out = safety_.last();
   status_.utime = now_ns / 1000;
   status_.seq = status_seq_++;
   status_.num_joints = config_.joints;
-  status_.state = static_cast<std::int32_t>(machine_.state());
+  status_.state = static_cast<std::int32_t>(f.state);
   status_.feedback_source = static_cast<std::int32_t>(config_.source);
   // Over the last status period, as documented: a stall shows here at once
   // instead of being averaged away over the whole run.
@@ -298,32 +344,17 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
   status_.lateness_max_us = lat.max_us;
   status_.compute_p99_us = cmp.p99_us;
   status_.overruns = static_cast<std::int64_t>(counters_.overruns);
-  status_.slave_age_ms =
-      have_state_ ? static_cast<double>(now_ns - state_.receive_ns) * 1e-6 : -1.0;
+  status_.slave_age_ms = have_state_ ? f.slave_age_s * 1e3 : -1.0;
   status_.slave_rejected = link.rejected;
   status_.slave_seq_gaps = link.seq_gaps;
   status_.slave_latency_p99_us = link.latency_p99_us;
-  std::int32_t flags = 0;
-  if (out.flags & safety_flags::kStaleFade) flags |= status_flags::kStaleFade;
-  if (reading_.buttons.e_stop) flags |= status_flags::kEStop;
-  if (!reading_.buttons.dead_man) flags |= status_flags::kDeadManReleased;
-  if (out.flags & safety_flags::kSaturated) flags |= status_flags::kSaturated;
-  if (out.flags & safety_flags::kRateLimited) flags |= status_flags::kRateLimited;
-  if (estimate_lost_since_ns_ >= 0) flags |= status_flags::kEstimateLost;
-  if (clock_reset_in_period_) flags |= status_flags::kClockReset;
-  if (overrun_in_period_) flags |= status_flags::kOverrun;
-  if (oscillation_.tripped()) flags |= status_flags::kOscillation;
-  if (passivity_in_period_) flags |= status_flags::kPassivityActive;
-  clock_reset_in_period_ = false;
-  overrun_in_period_ = false;
-  passivity_in_period_ = false;
+  status_.flags = status_flags_of(f);
   status_.oscillation_trips = static_cast<std::int64_t>(oscillation_.trips());
-  status_.flags = flags;
   for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j) {
     status_.tau_in[j] = estimates_[j].tau_in;
     status_.tau_out_est[j] = estimates_[j].tau_out_est;
     status_.friction_est[j] = estimates_[j].friction;
-    status_.torque_cmd[j] = out.torque[j];
+    status_.torque_cmd[j] = f.out.torque[j];
     status_.master_q[j] = reading_.q[j];
     status_.passivity_energy[j] = passivity_[j].observed_energy();
     status_.passivity_dissipated[j] = passivity_[j].dissipated();
@@ -337,7 +368,7 @@ void HapticLoop::publish_status(std::int64_t now_ns) noexcept {
   events_.lateness_max_us.store(lat.max_us, std::memory_order_relaxed);
   events_.slave_age_ms.store(status_.slave_age_ms, std::memory_order_relaxed);
   for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j)
-    events_.torque_nm[j].store(out.torque[j], std::memory_order_relaxed);
+    events_.torque_nm[j].store(f.out.torque[j], std::memory_order_relaxed);
 }
 
 void HapticLoop::shutdown() noexcept {

@@ -155,7 +155,32 @@ class HapticLoop {
   LoopEvents& events() noexcept { return events_; }
 
  private:
-  void publish_status(std::int64_t now_ns) noexcept;
+  // What one tick decided, step by step (tick()); status and trace publish
+  // from it instead of re-deriving it.
+  struct TickFacts {
+    std::int64_t now_ns = 0;
+    std::int64_t lateness_ns = 0;
+    double dt = 0.0;                // s since the previous tick
+    double slave_age_s = 0.0;       // since the newest SLAVE_STATE arrived; inf: none yet
+    std::uint32_t lost_joints = 0;  // bit j: joint j has no valid estimate
+    double lost_s = 0.0;            // how long some joint's estimate has been lost
+    bool device_fresh = false;      // the master's reading is fresh (kOk)
+    LoopState before = LoopState::kDisabled;
+    LoopState state = LoopState::kDisabled;
+    bool enabled = false;  // state == kEnabled
+    JointArray request{};  // master torque asked for, before shaping and safety
+    SafetyOutput out{};    // what safety let through (written to the device)
+  };
+  void begin_tick(std::int64_t now_ns, std::int64_t lateness_ns, TickFacts& f) noexcept;
+  void take_slave_state(TickFacts& f) noexcept;
+  void track_estimate_loss(TickFacts& f) noexcept;
+  void request_feedback(TickFacts& f) noexcept;
+  void decide_state(TickFacts& f) noexcept;
+  void render(TickFacts& f) noexcept;
+  void command_slave(const TickFacts& f) noexcept;
+  void append_trace(const TickFacts& f) noexcept;
+  std::int32_t status_flags_of(const TickFacts& f) noexcept;
+  void publish_status(const TickFacts& f) noexcept;
   void estimate() noexcept;                               // a new SLAVE_STATE in state_
   double slave_torque(std::size_t joint) const noexcept;  // what the source renders, slave N m
   // Issue 21 (haptic_loop_passivity.cpp): the slave port's energy from each
@@ -166,6 +191,7 @@ class HapticLoop {
   void observe_rendered(const SafetyOutput& out) noexcept;
 
   LoopConfig config_;
+  TickFacts facts_;
   master_devices::Device& device_;
   SlaveLink& link_;
   std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators_;
