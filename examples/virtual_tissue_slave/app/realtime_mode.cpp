@@ -98,6 +98,60 @@ void fill_truth(bridge::SlaveTruthSample& out, const SlaveSample& s) {
   }
 }
 
+// Only the loop thread: the bridge threads, started before, stay free to run
+// elsewhere.
+void pin_to_cpu(int cpu) {
+  if (cpu < 0) return;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  const int rc = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+  if (rc != 0)
+    std::fprintf(stderr, "virtual-slave: note: cannot pin to CPU %d (%s); not pinned\n", cpu,
+                 std::strerror(rc));
+}
+
+// The newest MASTER_COMMAND into the gate's view. Version 0: none yet, or
+// (practically never) the read gave up against the receive thread: keep the
+// previous view, only its age grows.
+void take_command(bridge::Inbox<bridge::MasterCommandSample>& commands,
+                  bridge::MasterCommandSample& cmd, CommandView& view, std::int64_t now_ns) {
+  const std::uint64_t version = commands.latest(cmd);
+  if (version != 0) {
+    view.version = version;
+    view.enable = cmd.enable;
+    view.clutch = cmd.clutch;
+    for (std::size_t j = 0; j < kJoints; ++j)
+      view.position_ref[j] = cmd.position_ref[j];
+  }
+  if (view.version != 0) view.age_s = static_cast<double>(now_ns - cmd.receive_ns) * 1e-9;
+}
+
+struct LoopTiming {
+  bridge::LatencyHistogram lateness, compute;
+  std::int64_t overruns = 0;
+};
+
+void print_summary(std::int64_t ticks, const LoopTiming& timing,
+                   const bridge::OutboxStats& published,
+                   const bridge::Inbox<bridge::MasterCommandSample>& commands) {
+  const bridge::LatencySummary l = timing.lateness.summary();
+  const bridge::LatencySummary c = timing.compute.summary();
+  std::fprintf(stderr,
+               "virtual-slave: %lld ticks, %lld overruns; lateness p50 %.0f us, p99 %.0f us, max "
+               "%.0f us; tick compute p99 %.0f us; SLAVE_STATE published %llu, dropped %llu; "
+               "MASTER_COMMAND accepted %llu, rejected %llu\n",
+               static_cast<long long>(ticks), static_cast<long long>(timing.overruns), l.p50_us,
+               l.p99_us, l.max_us, c.p99_us, static_cast<unsigned long long>(published.published),
+               static_cast<unsigned long long>(published.dropped_full),
+               static_cast<unsigned long long>(commands.stats().accepted),
+               static_cast<unsigned long long>(commands.stats().rejected()));
+  // A rejected command is never silent: say which and why (the last one).
+  if (const auto r = commands.last_rejection())
+    std::fprintf(stderr, "virtual-slave: last rejected MASTER_COMMAND: %s\n",
+                 bridge::describe(*r, commands.channel()).c_str());
+}
+
 }  // namespace
 
 int run_realtime_mode(const CliOptions& o) {
@@ -137,17 +191,7 @@ int run_realtime_mode(const CliOptions& o) {
                "%sSLAVE_TRUTH; tissue %s at %.3f rad\n",
                config.url.c_str(), o.prefix.c_str(), o.prefix.c_str(), o.prefix.c_str(),
                setup.tissue.name.c_str(), setup.tissue.surface_rad);
-
-  if (o.cpu >= 0) {
-    // Only the loop thread: the bridge threads started above stay free to run elsewhere.
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    CPU_SET(o.cpu, &set);
-    const int rc = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
-    if (rc != 0)
-      std::fprintf(stderr, "virtual-slave: note: cannot pin to CPU %d (%s); not pinned\n", o.cpu,
-                   std::strerror(rc));
-  }
+  pin_to_cpu(o.cpu);
 
   // Everything the loop touches exists before it starts: no allocation,
   // locks, blocking I/O or printing inside.
@@ -156,12 +200,12 @@ int run_realtime_mode(const CliOptions& o) {
   const double dt = setup.params.control_period_s;
   const std::int64_t end_ticks =
       o.duration_s > 0 ? static_cast<std::int64_t>(o.duration_s / dt + 0.5) : -1;
-  bridge::LatencyHistogram lateness, compute;
+  LoopTiming timing;
   bridge::MasterCommandSample cmd;
   bridge::SlaveStateSample state;
   bridge::SlaveTruthSample truth;
   CommandView view;
-  std::int64_t overruns = 0, seq = 0;
+  std::int64_t seq = 0;
   const Reroute& rr = setup.reroute;
   bool rerouted = std::isnan(rr.at_s);
 
@@ -171,26 +215,15 @@ int run_realtime_mode(const CliOptions& o) {
     if (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) continue;
     const std::int64_t woke = bridge::monotonic_now_ns();
     const std::int64_t late = woke - next;
-    lateness.record(late);
+    timing.lateness.record(late);
     if (late >= period_ns) {
       // Missed whole periods: skip them and re-base on the deadline grid
       // rather than bursting to catch up.
       const std::int64_t missed = late / period_ns;
-      overruns += missed;
+      timing.overruns += missed;
       next += missed * period_ns;
     }
-
-    // 0: none yet, or (practically never) the read gave up against the
-    // receive thread: keep the previous view, only its age grows.
-    const std::uint64_t version = commands.latest(cmd);
-    if (version != 0) {
-      view.version = version;
-      view.enable = cmd.enable;
-      view.clutch = cmd.clutch;
-      for (std::size_t j = 0; j < kJoints; ++j)
-        view.position_ref[j] = cmd.position_ref[j];
-    }
-    if (view.version != 0) view.age_s = static_cast<double>(woke - cmd.receive_ns) * 1e-9;
+    take_command(commands, cmd, view, woke);
     const auto& refs = gate.update(view, dt);
     if (!rerouted && slave.time() >= rr.at_s) {
       apply_reroute(slave, setup.params, rr, setup.joint_index);
@@ -208,28 +241,13 @@ int run_realtime_mode(const CliOptions& o) {
     state_box.publish(state);
     truth_box.publish(truth);
     ++seq;
-    compute.record(bridge::monotonic_now_ns() - woke);
+    timing.compute.record(bridge::monotonic_now_ns() - woke);
     next += period_ns;
   }
 
   rx.stop();
   tx.stop();
-  const bridge::LatencySummary l = lateness.summary();
-  const bridge::LatencySummary c = compute.summary();
-  const bridge::OutboxStats os = state_box.stats();
-  std::fprintf(stderr,
-               "virtual-slave: %lld ticks, %lld overruns; lateness p50 %.0f us, p99 %.0f us, max "
-               "%.0f us; tick compute p99 %.0f us; SLAVE_STATE published %llu, dropped %llu; "
-               "MASTER_COMMAND accepted %llu, rejected %llu\n",
-               static_cast<long long>(seq), static_cast<long long>(overruns), l.p50_us, l.p99_us,
-               l.max_us, c.p99_us, static_cast<unsigned long long>(os.published),
-               static_cast<unsigned long long>(os.dropped_full),
-               static_cast<unsigned long long>(commands.stats().accepted),
-               static_cast<unsigned long long>(commands.stats().rejected()));
-  // A rejected command is never silent: say which and why (the last one).
-  if (const auto r = commands.last_rejection())
-    std::fprintf(stderr, "virtual-slave: last rejected MASTER_COMMAND: %s\n",
-                 bridge::describe(*r, commands.channel()).c_str());
+  print_summary(seq, timing, state_box.stats(), commands);
   return 0;
 }
 
