@@ -26,6 +26,7 @@
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/stop_signals.hpp"
+#include "calibration_log.hpp"
 #include "estimator/model_io.hpp"
 #include "haptics/evaluation.hpp"
 #include "haptics/lcm_slave_link.hpp"
@@ -228,12 +229,14 @@ class EventLog {
 
 /// Waits for a stop signal or the runner finishing, logging loop events every
 /// 50 ms. Returns the signal or 0.
-int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventLog& log) {
+int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventLog& log,
+                  haptic_server::CalibrationLog& calibration) {
   while (!runner.finished()) {
     timespec timeout{0, 50'000'000};
     const int sig = sigtimedwait(&set, nullptr, &timeout);
     if (sig > 0) return sig;
     log.poll();
+    calibration.poll(bridge::monotonic_now_ns());
   }
   return 0;
 }
@@ -512,8 +515,12 @@ int run(const Options& o, const sigset_t& stop_signals) {
                      .joints = cfg.loop.joints,
                      .live = !o.quiet && isatty(STDERR_FILENO) != 0},
                     static_cast<std::int64_t>(t0.tv_sec) * 1'000'000'000 + t0.tv_nsec);
-    const int sig = wait_for_stop(stop_signals, runner, events);
+    haptic_server::CalibrationLog calibration(
+        loop.calibration(), static_cast<std::int64_t>(t0.tv_sec) * 1'000'000'000 + t0.tv_nsec,
+        !o.quiet && isatty(STDERR_FILENO) != 0);
+    const int sig = wait_for_stop(stop_signals, runner, events, calibration);
     events.poll();  // anything the loop reported in its last ticks
+    calibration.poll(bridge::monotonic_now_ns());
     events.clear();
     runner.stop();
     runner.join();  // the loop thread wrote zero torque on its way out
@@ -549,7 +556,11 @@ int run(const Options& o, const sigset_t& stop_signals) {
                      recorded.size(), static_cast<double>(spooled) * 1e-6);
       if (!cfg.evaluation.trace.empty()) recorded.write_csv(cfg.evaluation.trace);
       if (!cfg.evaluation.report.empty()) {
-        const auto report = haptics::evaluate(loop, recorded, cfg);
+        auto report = haptics::evaluate(loop, recorded, cfg);
+        for (const auto& e : calibration.events())
+          report.calibration.push_back({e.t_s, e.kind, e.joint, e.scale, e.detail});
+        for (int j = 0; j < cfg.loop.joints; ++j)
+          report.friction_scale.push_back(loop.calibration().applied_scale(j));
         haptics::write_report(report, cfg.evaluation.report);
         if (!o.quiet) std::cerr << haptics::format_report(report);
       }
