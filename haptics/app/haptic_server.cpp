@@ -3,6 +3,7 @@
 //   haptic-server --config server.yaml [--lcm-url URL] [--key FILE | --insecure] [--duration S]
 //                 [--feedback estimated|naive|none] [--trace F] [--report F]
 //   haptic-server --list-devices
+//   haptic-server --config server.yaml --request-recalibration   (issue 17)
 //
 // Exit paths: any catchable terminating signal (bridge/stop_signals.hpp),
 // --duration, or any error after the device is open: each writes zero
@@ -36,6 +37,7 @@
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
+#include "request_recalibration.hpp"
 #include "tsmh/version.hpp"
 
 namespace {
@@ -52,6 +54,7 @@ struct Options {
   std::string trace;
   std::string report;
   bool list_devices = false;
+  bool request_recalibration = false;
   bool quiet = false;
   bridge::LinkSecurityOptions link;  ///< --key, --insecure
 };
@@ -607,6 +610,9 @@ int main(int argc, char** argv) {
   app.add_flag("--insecure", o.link.insecure,
                "Run without a link key on a network LCM URL: anyone who reaches it can "
                "command the robot and the master (isolated networks only)");
+  app.add_flag("--request-recalibration", o.request_recalibration,
+               "Send one CALIBRATION_REQUEST for every joint of --config to the server running "
+               "with it, and exit");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -619,6 +625,8 @@ int main(int argc, char** argv) {
           << "haptic-server: error: --config FILE is required (see examples/demo/server.yaml)\n";
       return kExitConfig;
     }
+    if (o.request_recalibration)
+      return haptic_server::request_recalibration(o.config, o.lcm_url, o.prefix, o.link);
     return run(o, stop_signals);
   } catch (const haptics::ConfigError& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
