@@ -56,7 +56,6 @@ struct LoopConfig {
   int status_every = 10;            ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
   OscillationConfig oscillation{};  ///< safety.oscillation (issue 21)
   PassivityConfig passivity{};      ///< passivity (issue 21), off by default
-  int status_every = 10;  ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
 
   // Issue 17 (haptic-server.md, "Drift alarm and recalibration").
   DriftConfig drift{};                  ///< drift alarm (recalibration.hpp)
