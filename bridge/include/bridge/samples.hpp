@@ -117,6 +117,8 @@ struct HapticStatusSample {
   JointArray oscillation_rms{};        ///< band RMS of the rendered torque, N m
   JointArray passivity_energy{};       ///< master-side observed energy W_M, J
   JointArray passivity_dissipated{};   ///< removed by the passivity controller, J
+
+  // Issue 17: drift alarm and recalibration.
   std::int32_t calibration_state = 0;   ///< haptics::CalibrationState
   std::int32_t calibration_reason = 0;  ///< haptics::CalibrationReason
   std::int32_t calibration_joint = -1;
