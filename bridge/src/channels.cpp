@@ -22,6 +22,8 @@ std::string_view base_name(Channel channel) noexcept {
       return "MASTER_STATE";
     case Channel::MasterForce:
       return "MASTER_FORCE";
+    case Channel::CalibrationRequest:
+      return "CALIBRATION_REQUEST";
   }
   return "UNKNOWN";
 }

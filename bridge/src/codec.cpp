@@ -101,6 +101,11 @@ void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m) {
   put(s.oscillation_rms, s.num_joints, m.oscillation_rms);
   put(s.passivity_energy, s.num_joints, m.passivity_energy);
   put(s.passivity_dissipated, s.num_joints, m.passivity_dissipated);
+  m.calibration_state = s.calibration_state;
+  m.calibration_reason = s.calibration_reason;
+  m.calibration_joint = s.calibration_joint;
+  put(s.friction_scale, s.num_joints, m.friction_scale);
+  put(s.drift_scale, s.num_joints, m.drift_scale);
 }
 
 void to_message(const MasterStateSample& s, tsmh::master_state_t& m) {
@@ -111,6 +116,23 @@ void to_message(const MasterStateSample& s, tsmh::master_state_t& m) {
   put(s.qd, s.num_joints, m.qd);
   m.buttons = s.buttons;
   m.status = s.status;
+}
+
+void to_message(const CalibrationRequestSample& s, tsmh::calibration_request_t& m) {
+  m.utime = s.utime;
+  m.seq = s.seq;
+  m.num_joints = s.num_joints;
+  const auto n = static_cast<std::size_t>(std::clamp(s.num_joints, 0, kMaxJoints));
+  m.recalibrate.assign(s.recalibrate.begin(), s.recalibrate.begin() + static_cast<long>(n));
+}
+
+void from_message(const tsmh::calibration_request_t& m, CalibrationRequestSample& s) noexcept {
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.num_joints = m.num_joints;
+  s.recalibrate = {};
+  for (std::size_t j = 0; j < m.recalibrate.size() && j < kMaxJoints; ++j)
+    s.recalibrate[j] = m.recalibrate[j] != 0;
 }
 
 void to_message(const MasterForceSample& s, tsmh::master_force_t& m) {
@@ -180,6 +202,11 @@ void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcep
   get(m.oscillation_rms, m.num_joints, s.oscillation_rms);
   get(m.passivity_energy, m.num_joints, s.passivity_energy);
   get(m.passivity_dissipated, m.num_joints, s.passivity_dissipated);
+  s.calibration_state = m.calibration_state;
+  s.calibration_reason = m.calibration_reason;
+  s.calibration_joint = m.calibration_joint;
+  get(m.friction_scale, m.num_joints, s.friction_scale);
+  get(m.drift_scale, m.num_joints, s.drift_scale);
 }
 
 void from_message(const tsmh::master_state_t& m, MasterStateSample& s) noexcept {
@@ -289,6 +316,7 @@ TSMH_BRIDGE_INSTANTIATE(MasterCommandSample)
 TSMH_BRIDGE_INSTANTIATE(HapticStatusSample)
 TSMH_BRIDGE_INSTANTIATE(MasterStateSample)
 TSMH_BRIDGE_INSTANTIATE(MasterForceSample)
+TSMH_BRIDGE_INSTANTIATE(CalibrationRequestSample)
 #undef TSMH_BRIDGE_INSTANTIATE
 
 }  // namespace tsmh::bridge

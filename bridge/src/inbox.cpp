@@ -186,5 +186,6 @@ template class Inbox<MasterCommandSample>;
 template class Inbox<HapticStatusSample>;
 template class Inbox<MasterStateSample>;
 template class Inbox<MasterForceSample>;
+template class Inbox<CalibrationRequestSample>;
 
 }  // namespace tsmh::bridge

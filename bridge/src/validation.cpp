@@ -96,4 +96,9 @@ std::optional<Rejection> validate(const HapticStatusSample& /*s*/,
   return std::nullopt;
 }
 
+std::optional<Rejection> validate(const CalibrationRequestSample& /*s*/,
+                                  const CalibrationRequestLimits& /*l*/) noexcept {
+  return std::nullopt;
+}
+
 }  // namespace tsmh::bridge

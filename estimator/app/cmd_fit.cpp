@@ -15,6 +15,7 @@
 #include "estimator/model_io.hpp"
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
+#include "free_motion_options.hpp"
 #include "output_checks.hpp"
 #include "progress_line.hpp"
 
@@ -33,6 +34,7 @@ struct FitCliOptions {
   double block_s = 2.0;
   std::string derivatives = "auto";
   std::string method = "lm";
+  FreeMotionCliOptions free_motion;
 };
 
 std::string progress_text(const estimator::FitProgress& p) {
@@ -49,8 +51,8 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
   check_outputs(
       {{"--output", o.output, OutputKind::kFile}, {"--report", o.report, OutputKind::kFolder}});
-  const auto rec =
-      ctx.sources.load(o.data, o.radius, {.tau_in = true, .tau_out = true, .radius = true});
+  const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
+  const auto& rec = loaded.recording;
   const auto initial = estimator::load_model(o.model);
 
   estimator::FitWorkflowOptions wo;
@@ -62,8 +64,9 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   wo.derivatives = estimator::derivatives_from_name(o.derivatives);
   ProgressLine line("tsm fit");
   wo.fit.progress = [&](const estimator::FitProgress& p) { line.update(progress_text(p)); };
-  const estimator::FitRun run = estimator::run_fit(rec, *initial, o.model, wo);
+  estimator::FitRun run = estimator::run_fit(rec, *initial, o.model, wo);
   line.finish();
+  run.notes.insert(run.notes.end(), loaded.notes.begin(), loaded.notes.end());
 
   std::optional<estimator::StagedDirectory> dir;
   if (!o.report.empty()) {
@@ -74,7 +77,8 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
     if (!plots.error.empty()) std::cerr << "tsm fit: warning: no plots: " << plots.error << "\n";
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const auto report = estimator::fit_report_json(run, wo, seconds, plots.files, plots.error);
+    auto report = estimator::fit_report_json(run, wo, seconds, plots.files, plots.error);
+    if (loaded.free_motion) report["free_motion"] = free_motion_json(*loaded.free_motion);
     estimator::write_text_atomically(dir->file("report.json"), report.dump(2) + "\n");
     dir->commit();
   }
@@ -137,6 +141,7 @@ void add_fit_command(CLI::App& app, Context& ctx) {
                   "Optimiser: lm (informed multi-start + Levenberg-Marquardt, default) or nlopt "
                   "(MLSL + BOBYQA)")
       ->check(CLI::IsMember({"lm", "nlopt"}));
+  add_free_motion_options(*cmd, opts->free_motion);
   add_lcm_log_options(*cmd, ctx.lcm_log);
   cmd->callback([opts, &ctx] { run_fit_command(*opts, ctx); });
 }

@@ -14,6 +14,7 @@
 #include "estimator/model_io.hpp"
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
+#include "free_motion_options.hpp"
 #include "output_checks.hpp"
 #include "progress_line.hpp"
 
@@ -31,13 +32,14 @@ struct GapCliOptions {
   std::vector<std::string> candidates;
   int threads = 0;
   std::string derivatives = "auto";
+  FreeMotionCliOptions free_motion;
 };
 
 void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
   check_outputs({{"--output", o.output, OutputKind::kFolder}});
-  const auto rec =
-      ctx.sources.load(o.data, o.radius, {.tau_in = true, .tau_out = true, .radius = true});
+  const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
+  const auto& rec = loaded.recording;
   const auto base = estimator::load_model(o.base);
   estimator::StagedDirectory dir(o.output);  // fails early on an unusable path
 
@@ -103,11 +105,13 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   estimator::write_text_atomically(dir.file("summary.txt"), summary);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  estimator::write_text_atomically(
-      dir.file("report.json"),
-      estimator::gap_report_json(g, go, plots, plot_error, seconds).dump(2) + "\n");
+  auto report = estimator::gap_report_json(g, go, plots, plot_error, seconds);
+  if (loaded.free_motion) report["free_motion"] = free_motion_json(*loaded.free_motion);
+  estimator::write_text_atomically(dir.file("report.json"), report.dump(2) + "\n");
   dir.commit();
 
+  for (const auto& n : loaded.notes)
+    std::cerr << "tsm gap: note: " << n << "\n";
   std::cerr << summary << "tsm gap: " << seconds << " s; report, summary, params.yaml and plots in "
             << o.output << "\n";
 }
@@ -147,6 +151,7 @@ void add_gap_command(CLI::App& app, Context& ctx) {
                   "Velocity/acceleration: auto (the file's xd_in/xdd_in, else offline), offline "
                   "(zero-phase smoother of x_in), deployed (the online differentiator)")
       ->check(CLI::IsMember({"auto", "offline", "deployed"}));
+  add_free_motion_options(*cmd, opts->free_motion);
   add_lcm_log_options(*cmd, ctx.lcm_log);
   cmd->callback([opts, &ctx] { run_gap_command(*opts, ctx); });
 }

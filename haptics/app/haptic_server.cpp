@@ -3,6 +3,7 @@
 //   haptic-server --config server.yaml [--lcm-url URL] [--key FILE | --insecure] [--duration S]
 //                 [--feedback estimated|naive|none] [--trace F] [--report F]
 //   haptic-server --list-devices
+//   haptic-server --config server.yaml --request-recalibration   (issue 17)
 //
 // Exit paths: any catchable terminating signal (bridge/stop_signals.hpp),
 // --duration, or any error after the device is open: each writes zero
@@ -26,6 +27,7 @@
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/stop_signals.hpp"
+#include "calibration_log.hpp"
 #include "estimator/model_io.hpp"
 #include "haptics/evaluation.hpp"
 #include "haptics/lcm_slave_link.hpp"
@@ -35,6 +37,7 @@
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
+#include "request_recalibration.hpp"
 #include "tsmh/version.hpp"
 
 namespace {
@@ -51,6 +54,7 @@ struct Options {
   std::string trace;
   std::string report;
   bool list_devices = false;
+  bool request_recalibration = false;
   bool quiet = false;
   bridge::LinkSecurityOptions link;  ///< --key, --insecure
 };
@@ -228,12 +232,14 @@ class EventLog {
 
 /// Waits for a stop signal or the runner finishing, logging loop events every
 /// 50 ms. Returns the signal or 0.
-int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventLog& log) {
+int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventLog& log,
+                  haptic_server::CalibrationLog& calibration) {
   while (!runner.finished()) {
     timespec timeout{0, 50'000'000};
     const int sig = sigtimedwait(&set, nullptr, &timeout);
     if (sig > 0) return sig;
     log.poll();
+    calibration.poll(bridge::monotonic_now_ns());
   }
   return 0;
 }
@@ -512,8 +518,12 @@ int run(const Options& o, const sigset_t& stop_signals) {
                      .joints = cfg.loop.joints,
                      .live = !o.quiet && isatty(STDERR_FILENO) != 0},
                     static_cast<std::int64_t>(t0.tv_sec) * 1'000'000'000 + t0.tv_nsec);
-    const int sig = wait_for_stop(stop_signals, runner, events);
+    haptic_server::CalibrationLog calibration(
+        loop.calibration(), static_cast<std::int64_t>(t0.tv_sec) * 1'000'000'000 + t0.tv_nsec,
+        !o.quiet && isatty(STDERR_FILENO) != 0);
+    const int sig = wait_for_stop(stop_signals, runner, events, calibration);
     events.poll();  // anything the loop reported in its last ticks
+    calibration.poll(bridge::monotonic_now_ns());
     events.clear();
     runner.stop();
     runner.join();  // the loop thread wrote zero torque on its way out
@@ -549,7 +559,11 @@ int run(const Options& o, const sigset_t& stop_signals) {
                      recorded.size(), static_cast<double>(spooled) * 1e-6);
       if (!cfg.evaluation.trace.empty()) recorded.write_csv(cfg.evaluation.trace);
       if (!cfg.evaluation.report.empty()) {
-        const auto report = haptics::evaluate(loop, recorded, cfg);
+        auto report = haptics::evaluate(loop, recorded, cfg);
+        for (const auto& e : calibration.events())
+          report.calibration.push_back({e.t_s, e.kind, e.joint, e.scale, e.detail});
+        for (int j = 0; j < cfg.loop.joints; ++j)
+          report.friction_scale.push_back(loop.calibration().applied_scale(j));
         haptics::write_report(report, cfg.evaluation.report);
         if (!o.quiet) std::cerr << haptics::format_report(report);
       }
@@ -596,6 +610,9 @@ int main(int argc, char** argv) {
   app.add_flag("--insecure", o.link.insecure,
                "Run without a link key on a network LCM URL: anyone who reaches it can "
                "command the robot and the master (isolated networks only)");
+  app.add_flag("--request-recalibration", o.request_recalibration,
+               "Send one CALIBRATION_REQUEST for every joint of --config to the server running "
+               "with it, and exit");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -608,6 +625,8 @@ int main(int argc, char** argv) {
           << "haptic-server: error: --config FILE is required (see examples/demo/server.yaml)\n";
       return kExitConfig;
     }
+    if (o.request_recalibration)
+      return haptic_server::request_recalibration(o.config, o.lcm_url, o.prefix, o.link);
     return run(o, stop_signals);
   } catch (const haptics::ConfigError& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";

@@ -226,6 +226,14 @@ std::string report_to_json(const EvaluationReport& r) {
                 {"force_sign", num(d.force_sign)},
                 {"position_scale", num(d.position_scale)},
                 {"units", "N m/rad, slave joint space"}}}};
+  json events = json::array();
+  for (const auto& e : r.calibration)
+    events.push_back({{"t_s", e.t_s},
+                      {"kind", e.kind},
+                      {"joint", e.joint},
+                      {"scale", num(e.scale)},
+                      {"reason", e.reason}});
+  doc["calibration"] = {{"events", events}, {"friction_scale", r.friction_scale}};
   return doc.dump(2) + "\n";
 }
 

@@ -27,6 +27,7 @@ HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device,
       link_(link),
       estimators_(std::move(estimators)),
       trace_(trace),
+      calibration_(config.joints, config.recalibration, config.drift),
       safety_(config.joints, config.limits, config.timing),
       oscillation_(config.joints, config.oscillation, config.rate_hz) {
   if (static_cast<int>(estimators_.size()) != config_.joints)
@@ -59,6 +60,7 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   TickFacts& f = facts_;
   begin_tick(now_ns, lateness_ns, f);  // 0. time and lateness
   reading_ = device_.read(now_ns);     // 1. the master
+  recalibrate(f);                      // 1b. recalibration requests, results, scale ramp
   take_slave_state(f);                 // 2. newest SLAVE_STATE -> estimators
   track_estimate_loss(f);              // 3. invalid estimates held and timed
   request_feedback(f);                 // 4. force mapping per joint
@@ -82,6 +84,22 @@ void HapticLoop::begin_tick(std::int64_t now_ns, std::int64_t lateness_ns, TickF
   window_lateness_.record(lateness_ns);
   if (lateness_ns > events_.worst_lateness_ns.load(std::memory_order_relaxed))
     events_.worst_lateness_ns.store(lateness_ns, std::memory_order_relaxed);
+}
+
+// Issue 17 (recalibration.hpp): a request from the master's button or an
+// external console's CALIBRATION_REQUEST, the end of a collection, the
+// worker's result, and the applied friction scale's ramp. Never waits.
+void HapticLoop::recalibrate(const TickFacts& f) noexcept {
+  const std::uint64_t v = link_.latest_calibration_request(calibration_request_);
+  if (v != 0 && v != calibration_request_version_) {
+    calibration_request_version_ = v;
+    std::uint32_t mask = 0;
+    for (int j = 0; j < config_.joints && j < calibration_request_.num_joints; ++j)
+      if (calibration_request_.recalibrate[static_cast<std::size_t>(j)]) mask |= 1U << j;
+    calibration_.request(mask);
+  }
+  calibration_.on_tick(static_cast<double>(f.now_ns - first_ns_) * 1e-9, f.dt,
+                       reading_.buttons.calibrate);
 }
 
 // The estimator runs once per new sample, on the slave's own clock (utime),
@@ -285,6 +303,9 @@ void HapticLoop::estimate() noexcept {
                                                     state_.x_in[j], state_.T1[j], state_.T3[j])
                   : estimator::Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
     if (e.valid) {
+      // The recalibrated friction scale, the drift monitor, the collection.
+      calibration_.on_estimate(static_cast<int>(j), static_cast<double>(state_.utime) * 1e-6,
+                               state_.x_in[j], e, estimators_[j]->radius());
       held_[j] = e;
     } else {
       // Whatever made it invalid, the next sample starts the estimator afresh
@@ -294,6 +315,23 @@ void HapticLoop::estimate() noexcept {
     }
   }
   observe_slave_ports();
+}
+
+// The calibration fields of HAPTIC_STATUS; returns its flags.
+std::int32_t HapticLoop::calibration_status(bridge::HapticStatusSample& st) const noexcept {
+  const CalibrationState cs = calibration_.state();
+  st.calibration_state = static_cast<std::int32_t>(cs);
+  st.calibration_reason = static_cast<std::int32_t>(calibration_.reason());
+  st.calibration_joint = calibration_.reason_joint();
+  for (int j = 0; j < config_.joints; ++j) {
+    st.friction_scale[static_cast<std::size_t>(j)] = calibration_.applied_scale(j);
+    st.drift_scale[static_cast<std::size_t>(j)] = calibration_.drift_scale(j);
+  }
+  std::int32_t flags = 0;
+  if (calibration_.drift_alarms() != 0) flags |= status_flags::kDriftSuspected;
+  if (cs == CalibrationState::kCollecting || cs == CalibrationState::kIdentifying)
+    flags |= status_flags::kRecalibrating;
+  return flags;
 }
 
 // HAPTIC_STATUS flags from what this tick decided and what happened in
@@ -348,7 +386,7 @@ void HapticLoop::publish_status(const TickFacts& f) noexcept {
   status_.slave_rejected = link.rejected;
   status_.slave_seq_gaps = link.seq_gaps;
   status_.slave_latency_p99_us = link.latency_p99_us;
-  status_.flags = status_flags_of(f);
+  status_.flags = status_flags_of(f) | calibration_status(status_);
   status_.oscillation_trips = static_cast<std::int64_t>(oscillation_.trips());
   for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j) {
     status_.tau_in[j] = estimates_[j].tau_in;

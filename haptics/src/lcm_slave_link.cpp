@@ -13,6 +13,9 @@ LcmSlaveLink::LcmSlaveLink(const LcmSlaveLinkConfig& config)
     truth_options.expected_joints = config.joints;
     truth_ = &rx_.subscribe(truth_options);
   }
+  bridge::InboxOptions<bridge::CalibrationRequestSample> calibration_options;
+  calibration_options.expected_joints = config.joints;
+  calibration_ = &rx_.subscribe(calibration_options);
   command_ = &tx_.outbox<bridge::MasterCommandSample>();
   status_ = &tx_.outbox<bridge::HapticStatusSample>();
 }
@@ -37,6 +40,11 @@ std::uint64_t LcmSlaveLink::latest_state(bridge::SlaveStateSample& out) noexcept
 
 std::uint64_t LcmSlaveLink::latest_truth(bridge::SlaveTruthSample& out) noexcept {
   return truth_ ? truth_->latest(out) : 0;
+}
+
+std::uint64_t LcmSlaveLink::latest_calibration_request(
+    bridge::CalibrationRequestSample& out) noexcept {
+  return calibration_->latest(out);
 }
 
 void LcmSlaveLink::publish_command(const bridge::MasterCommandSample& cmd) noexcept {

@@ -169,6 +169,24 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   }
   rt.reject_unknown();
 
+  // Drift alarm and one-button recalibration (issue 17, recalibration.hpp).
+  FieldReader drift(r.node("drift"), origin, "drift");
+  auto& d = c.loop.drift;
+  d.enabled = drift.get_bool("enabled", d.enabled);
+  d.threshold = in_range(drift, "threshold", d.threshold, 0.0, 10.0, true);
+  d.hold_s = in_range(drift, "hold_s", d.hold_s, 0.0, 600.0);
+  d.time_constant_s = in_range(drift, "time_constant_s", d.time_constant_s, 0.0, 600.0, true);
+  drift.reject_unknown();
+  FieldReader recal(r.node("recalibration"), origin, "recalibration");
+  auto& rc = c.loop.recalibration;
+  rc.collect_s = in_range(recal, "collect_s", rc.collect_s, 0.5, 60.0);
+  rc.min_span_rad = in_range(recal, "min_span_rad", rc.min_span_rad, 0.0, 10.0);
+  rc.min_improvement = in_range(recal, "min_improvement", rc.min_improvement, 0.0, 0.99);
+  rc.ramp_per_s = in_range(recal, "ramp_per_s", rc.ramp_per_s, 0.0, 100.0, true);
+  // Two slave samples per loop tick at most, for the whole collection.
+  rc.capacity = static_cast<std::size_t>(rc.collect_s * 2.0 * 4000.0) + 100;
+  recal.reject_unknown();
+
   FieldReader ev(r.node("evaluation"), origin, "evaluation");
   c.evaluation.truth = ev.get_bool("truth", false);
   c.evaluation.trace = resolve(base_dir, ev.get_string("trace", ""));

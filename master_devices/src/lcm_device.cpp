@@ -109,8 +109,8 @@ struct LcmDevice::Impl {
         return;
       }
     }
-    if (msg->buttons & ~0x7) {
-      reject("buttons " + std::to_string(msg->buttons) + " has undefined bits (0..2 defined)");
+    if (msg->buttons & ~0xF) {
+      reject("buttons " + std::to_string(msg->buttons) + " has undefined bits (0..3 defined)");
       return;
     }
     if (msg->status & 0x1) {
@@ -140,7 +140,8 @@ struct LcmDevice::Impl {
       r.tau_commanded[j] = tau;
       force.torque[j] = tau;
     }
-    r.buttons = Buttons{(msg->buttons & 1) != 0, (msg->buttons & 2) != 0, (msg->buttons & 4) != 0};
+    r.buttons = Buttons{(msg->buttons & 1) != 0, (msg->buttons & 2) != 0, (msg->buttons & 4) != 0,
+                        (msg->buttons & 8) != 0};
     r.enabled = drive;
     r.status = DeviceStatus::kOk;
     device.readings_.publish(r);

@@ -25,14 +25,61 @@ double press_period(const PalpateScenario& p) {
   return p.press_s + p.hold_s + p.release_s + p.rest_s;
 }
 
+bool has_sweep(const PalpateScenario& p) {
+  return p.sweep.after_press >= 0 && p.sweep.after_press <= p.soft_presses + p.hard_presses;
+}
+
+// Where press `index` begins, after the sweep when it comes later.
+double press_begin(const PalpateScenario& p, int index) {
+  const double shift = has_sweep(p) && index >= p.sweep.after_press ? p.sweep.duration_s : 0.0;
+  return p.start_s + index * press_period(p) + shift;
+}
+
+bool is_hard(const PalpateScenario& p, int index) {
+  if (p.alternate) {
+    // soft, hard, soft, ... while both kinds remain; then the rest of either
+    const int pairs = std::min(p.soft_presses, p.hard_presses);
+    if (index < 2 * pairs) return index % 2 == 1;
+    return p.hard_presses > p.soft_presses;
+  }
+  return index >= p.soft_presses;
+}
+
+// The free-motion sweep of every joint (a recalibration needs them all to
+// move): away from the tissue (against press_sign), faded in and out over
+// 1 s, the button pressed 0.2 s at button_at_s.
+bool sweep_intention(const PalpateScenario& p, double t, std::size_t dof, Intention& in) {
+  if (!has_sweep(p)) return false;
+  const double begin = p.start_s + p.sweep.after_press * press_period(p);
+  const double u = t - begin;
+  if (u < 0.0 || u >= p.sweep.duration_s) return false;
+  const double w = 2.0 * kPi * p.sweep.frequency_hz;
+  const double out_u = u - (p.sweep.duration_s - 1.0);
+  const double fade = ramp(u, 1.0) * (1.0 - ramp(out_u, 1.0));
+  const double fade_rate =
+      ramp_rate(u, 1.0) * (1.0 - ramp(out_u, 1.0)) - ramp(u, 1.0) * ramp_rate(out_u, 1.0);
+  const double a = p.sweep.amplitude_rad;
+  // -a (1 - cos): starts at 0 with zero velocity, swings to -2a and back.
+  for (std::size_t j = 0; j < dof && j < kMaxDof; ++j) {
+    in.q[j] = -p.press_sign * fade * a * (1.0 - std::cos(w * u));
+    in.qd[j] =
+        -p.press_sign * a * (fade_rate * (1.0 - std::cos(w * u)) + fade * w * std::sin(w * u));
+  }
+  in.calibrate =
+      p.sweep.button_at_s >= 0.0 && u >= p.sweep.button_at_s && u < p.sweep.button_at_s + 0.2;
+  return true;
+}
+
 Intention palpate(const PalpateScenario& p, double t, std::size_t dof) {
   Intention in;
   const int presses = p.soft_presses + p.hard_presses;
-  const double u = t - p.start_s;
-  if (u >= 0.0 && presses > 0) {
-    const int index = std::min(static_cast<int>(u / press_period(p)), presses - 1);
-    const double local = u - index * press_period(p);
-    const double depth = index < p.soft_presses ? p.soft_depth_rad : p.hard_depth_rad;
+  const bool sweeping = sweep_intention(p, t, dof, in);
+  int index = 0;
+  while (index + 1 < presses && t >= press_begin(p, index + 1))
+    ++index;
+  const double local = t - press_begin(p, index);
+  if (!sweeping && local >= 0.0 && presses > 0) {
+    const double depth = is_hard(p, index) ? p.hard_depth_rad : p.soft_depth_rad;
     double x = 0.0;
     double xd = 0.0;
     if (local < p.press_s) {
@@ -52,7 +99,7 @@ Intention palpate(const PalpateScenario& p, double t, std::size_t dof) {
   const double end = scenario_duration_s(p);
   // Fade the sweep in and out so the hand starts and ends at rest.
   const double fade = ramp(t, 1.0) * (1.0 - ramp(t - (end - 1.0), 1.0));
-  for (std::size_t j = 0; j < dof && j < kMaxDof; ++j) {
+  for (std::size_t j = 0; j < dof && j < kMaxDof && !sweeping; ++j) {
     if (j == p.press_joint) continue;
     in.q[j] = fade * p.other_amplitude_rad * std::sin(w * t);
     in.qd[j] = fade * p.other_amplitude_rad * w * std::cos(w * t);
@@ -89,8 +136,8 @@ int count(FieldReader& r, std::string_view key, int fallback) {
 }  // namespace
 
 PressWindow palpate_press(const PalpateScenario& p, int index) {
-  const double begin = p.start_s + index * press_period(p);
-  return PressWindow{begin, begin + p.press_s + p.hold_s + p.release_s, index >= p.soft_presses};
+  const double begin = press_begin(p, index);
+  return PressWindow{begin, begin + p.press_s + p.hold_s + p.release_s, is_hard(p, index)};
 }
 
 Intention intention_at(const Scenario& s, double t_s, std::size_t dof) {
@@ -110,7 +157,8 @@ double scenario_duration_s(const Scenario& s) {
       [](const auto& sc) -> double {
         using T = std::decay_t<decltype(sc)>;
         if constexpr (std::is_same_v<T, PalpateScenario>) {
-          return sc.start_s + (sc.soft_presses + sc.hard_presses) * press_period(sc) + sc.end_s;
+          return sc.start_s + (sc.soft_presses + sc.hard_presses) * press_period(sc) +
+                 (has_sweep(sc) ? sc.sweep.duration_s : 0.0) + sc.end_s;
         }
         if constexpr (std::is_same_v<T, SineScenario>) return sc.duration_s;
         if constexpr (std::is_same_v<T, StepScenario>) {
@@ -163,6 +211,20 @@ Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
     p.end_s = r.get_non_negative("end_s", p.end_s);
     p.other_amplitude_rad = r.get_non_negative("other_amplitude_rad", p.other_amplitude_rad);
     p.other_frequency_hz = r.get_non_negative("other_frequency_hz", p.other_frequency_hz);
+    p.alternate = r.get_bool("alternate", false);
+    const YAML::Node sweep_node = r.node("sweep");
+    if (sweep_node) {
+      FieldReader sw(sweep_node, settings.source(), r.field("sweep"));
+      p.sweep.after_press = count(sw, "after_press", 0);
+      if (p.sweep.after_press > p.soft_presses + p.hard_presses)
+        sw.fail("after_press", "must be at most the number of presses");
+      p.sweep.duration_s = sw.get_positive("duration_s", p.sweep.duration_s);
+      if (p.sweep.duration_s < 2.0) sw.fail("duration_s", "must be >= 2 (1 s fades)");
+      p.sweep.amplitude_rad = sw.get_positive("amplitude_rad", p.sweep.amplitude_rad);
+      p.sweep.frequency_hz = sw.get_positive("frequency_hz", p.sweep.frequency_hz);
+      p.sweep.button_at_s = sw.get_double("button_at_s", p.sweep.button_at_s);
+      sw.reject_unknown();
+    }
     r.reject_unknown();
     return p;
   }

@@ -160,6 +160,10 @@ void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
   }
   r.tau_commanded = tau;
   r.buttons = settings_.buttons;
+  // The scenario's own button presses (the recalibration button of the
+  // palpate scenario's sweep).
+  if (intention_at(settings_.scenario, operator_.time_s(), settings_.dof).calibrate)
+    r.buttons.calibrate = true;
   r.enabled = drive;
   r.status = DeviceStatus::kOk;
   readings_.publish(r);

@@ -68,7 +68,19 @@ TEST(Codec, EveryTypeRoundTrips) {
   h.oscillation_rms = {0.01, 0.02};
   h.passivity_energy = {-0.003, 0.5};
   h.passivity_dissipated = {0.04, 0.0};
+  h.flags |= (1 << 8) | (1 << 9);  // issue 17's fields
+  h.calibration_state = 4;
+  h.calibration_reason = 2;
+  h.calibration_joint = 1;
+  h.friction_scale = {1.0, 1.5};
+  h.drift_scale = {std::nan(""), 1.45};
   const auto h2 = round_trip(h);
+  EXPECT_EQ(h2.calibration_state, 4);
+  EXPECT_EQ(h2.calibration_reason, 2);
+  EXPECT_EQ(h2.calibration_joint, 1);
+  EXPECT_EQ(h2.friction_scale[1], 1.5);
+  EXPECT_TRUE(std::isnan(h2.drift_scale[0]));
+  EXPECT_EQ(h2.drift_scale[1], 1.45);
   EXPECT_EQ(h2.oscillation_trips, 2);
   EXPECT_EQ(h2.oscillation_rms[1], 0.02);
   EXPECT_EQ(h2.passivity_energy[0], -0.003);
@@ -77,7 +89,7 @@ TEST(Codec, EveryTypeRoundTrips) {
   EXPECT_EQ(h2.slave_seq_gaps, 4);
   EXPECT_EQ(h2.slave_latency_p99_us, 55.5);
   EXPECT_EQ(h2.torque_cmd[1], 0.4);
-  EXPECT_EQ(h2.flags, 0b10101 | (1 << 12) | (1 << 13));
+  EXPECT_EQ(h2.flags, 0b10101 | (1 << 8) | (1 << 9) | (1 << 12) | (1 << 13));
 
   MasterStateSample ms;
   ms.num_joints = 2;
@@ -95,6 +107,15 @@ TEST(Codec, EveryTypeRoundTrips) {
   const auto f2 = round_trip(f);
   EXPECT_EQ(f2.torque[0], 0.25);
   EXPECT_TRUE(f2.enable);
+
+  CalibrationRequestSample r;
+  r.num_joints = 3;
+  r.recalibrate = {true, false, true, true};  // the 4th is beyond num_joints
+  const auto r2 = round_trip(r);
+  EXPECT_TRUE(r2.recalibrate[0]);
+  EXPECT_FALSE(r2.recalibrate[1]);
+  EXPECT_TRUE(r2.recalibrate[2]);
+  EXPECT_FALSE(r2.recalibrate[3]);
 
   const SlaveTruthSample t = test::make_truth(9, 10, 2);
   const auto t2 = round_trip(t);
@@ -125,6 +146,7 @@ TEST(Codec, EveryMessageLeadsWithUtimeSeqNumJoints) {
   expect_header_invariant<HapticStatusSample>();
   expect_header_invariant<MasterStateSample>();
   expect_header_invariant<MasterForceSample>();
+  expect_header_invariant<CalibrationRequestSample>();
 }
 
 // Overwrites the big-endian num_joints of an encoded message.

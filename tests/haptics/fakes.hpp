@@ -64,6 +64,11 @@ class FakeLink final : public SlaveLink {
     statuses.push_back(s);
   }
   SlaveLinkStats stats() const noexcept override { return {}; }
+  std::uint64_t latest_calibration_request(
+      bridge::CalibrationRequestSample& out) noexcept override {
+    out = calibration_request;
+    return calibration_version;
+  }
 
   /// A new slave sample taken at t_ns and received at the same instant.
   void push(std::int64_t t_ns, double x_in, double t1, double t3, double x_out = 0.0) {
@@ -83,7 +88,8 @@ class FakeLink final : public SlaveLink {
 
   bridge::SlaveStateSample state{};
   bridge::SlaveTruthSample truth{};
-  std::uint64_t version = 0, truth_version = 0;
+  std::uint64_t version = 0, truth_version = 0, calibration_version = 0;
+  bridge::CalibrationRequestSample calibration_request{};
   std::vector<bridge::MasterCommandSample> commands;
   std::vector<bridge::HapticStatusSample> statuses;
 };

@@ -97,6 +97,30 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
             std::string::npos);
 }
 
+TEST(ServerConfig, DriftAndRecalibrationKeys) {
+  const auto c = parse_server_config(
+      kJoint +
+          "drift: {enabled: false, threshold: 0.3, hold_s: 2, time_constant_s: 3}\n"
+          "recalibration: {collect_s: 4, min_span_rad: 0.5, min_improvement: 0.2, "
+          "ramp_per_s: 0.25}\n",
+      "server.yaml", "/cfg");
+  EXPECT_FALSE(c.loop.drift.enabled);
+  EXPECT_DOUBLE_EQ(c.loop.drift.threshold, 0.3);
+  EXPECT_DOUBLE_EQ(c.loop.drift.hold_s, 2.0);
+  EXPECT_DOUBLE_EQ(c.loop.drift.time_constant_s, 3.0);
+  EXPECT_DOUBLE_EQ(c.loop.recalibration.collect_s, 4.0);
+  EXPECT_DOUBLE_EQ(c.loop.recalibration.min_span_rad, 0.5);
+  EXPECT_DOUBLE_EQ(c.loop.recalibration.min_improvement, 0.2);
+  EXPECT_DOUBLE_EQ(c.loop.recalibration.ramp_per_s, 0.25);
+  // Enough room for the whole collection even at 2 slave samples per tick at 4 kHz.
+  EXPECT_GE(c.loop.recalibration.capacity, 4u * 2u * 4000u);
+  EXPECT_NE(error_of(kJoint + "recalibration: {collect_s: 0.1}\n").find("recalibration.collect_s"),
+            std::string::npos);
+  EXPECT_NE(error_of(kJoint + "drift: {threshold: 0}\n").find("drift.threshold"),
+            std::string::npos);
+  EXPECT_NE(error_of(kJoint + "drift: {treshold: 0.2}\n").find("treshold"), std::string::npos);
+}
+
 TEST(Evaluation, SlopeOfALine) {
   EXPECT_NEAR(slope({0, 1, 2, 3}, {1, 3, 5, 7}), 2.0, 1e-12);
   EXPECT_TRUE(std::isnan(slope({1, 1, 1}, {1, 2, 3})));

@@ -83,6 +83,52 @@ std::string error_of(const std::string& yaml) {
   return "(no error)";
 }
 
+// The re-route demo's scenario (issue 17): presses alternate, and after the
+// fourth every joint sweeps in free space (away from the tissue) while the
+// recalibration button is pressed once for 0.2 s.
+TEST(Scenarios, PalpateSweepWithTheRecalibrationButton) {
+  PalpateScenario p;
+  p.soft_presses = 3;
+  p.hard_presses = 3;
+  p.alternate = true;
+  p.sweep.after_press = 4;
+  const Scenario s = p;
+  const double plain = 1.0 + 6 * (1.0 + 0.6 + 0.8 + 1.0) + 2.0;
+  EXPECT_NEAR(scenario_duration_s(s), plain + p.sweep.duration_s, 1e-9);
+  for (int i = 0; i < 6; ++i) {
+    const PressWindow w = palpate_press(p, i);
+    EXPECT_EQ(w.hard, i % 2 == 1) << i;
+    double deepest = 0;
+    for (double t = w.begin_s; t <= w.end_s; t += 0.001)
+      deepest = std::max(deepest, intention_at(s, t, 2).q[0]);
+    EXPECT_NEAR(deepest, w.hard ? p.hard_depth_rad : p.soft_depth_rad, 1e-6) << "press " << i;
+  }
+  const double begin = palpate_press(p, 3).end_s + p.rest_s;
+  EXPECT_NEAR(palpate_press(p, 4).begin_s, begin + p.sweep.duration_s, 1e-9);
+  double lowest0 = 0, lowest1 = 0, highest = -1, pressed_s = 0;
+  for (double t = begin; t < begin + p.sweep.duration_s; t += 0.001) {
+    const Intention in = intention_at(s, t, 2);
+    lowest0 = std::min(lowest0, in.q[0]);
+    lowest1 = std::min(lowest1, in.q[1]);
+    highest = std::max({highest, in.q[0], in.q[1]});
+    if (in.calibrate) pressed_s += 0.001;
+  }
+  EXPECT_LT(lowest0, -1.5 * p.sweep.amplitude_rad);  // a real stroke, every joint
+  EXPECT_LT(lowest1, -1.5 * p.sweep.amplitude_rad);
+  EXPECT_LE(highest, 1e-12);  // never towards the tissue
+  EXPECT_NEAR(pressed_s, 0.2, 0.002);
+  EXPECT_FALSE(intention_at(s, begin - 0.1, 2).calibrate);
+  // Smooth: velocity is the derivative of position through the sweep.
+  for (double t = begin + 0.013; t < begin + p.sweep.duration_s; t += 0.0371) {
+    const double h = 1e-5;
+    const double numeric =
+        (intention_at(s, t + h, 2).q[1] - intention_at(s, t - h, 2).q[1]) / (2 * h);
+    EXPECT_NEAR(intention_at(s, t, 2).qd[1], numeric, 2e-3) << "t " << t;
+  }
+  EXPECT_NE(error_of("palpate: {sweep: {after_press: 9}}\n").find("palpate.sweep.after_press"),
+            std::string::npos);
+}
+
 TEST(Scenarios, ParsesSettingsAndNamesBadFields) {
   const Scenario p = parse("scenario: palpate\npalpate: {soft_depth_rad: 0.1, hard_presses: 3}\n");
   ASSERT_TRUE(std::holds_alternative<PalpateScenario>(p));

@@ -1,5 +1,5 @@
 #pragma once
-// The six LCM channels and how their names are formed: an optional per-arm
+// The LCM channels and how their names are formed: an optional per-arm
 // prefix (e.g. "ARM1_") followed by the upper-case base name.
 
 #include <array>
@@ -16,11 +16,13 @@ enum class Channel {
   HapticStatus,   ///< haptic server -> monitors, 100 Hz
   MasterState,    ///< external master driver -> haptic server
   MasterForce,    ///< haptic server -> external master driver
+
+  CalibrationRequest,  ///< external console -> haptic server: recalibrate (issue 17)
 };
 
-inline constexpr std::array<Channel, 6> kAllChannels = {
-    Channel::SlaveState,   Channel::SlaveTruth,  Channel::MasterCommand,
-    Channel::HapticStatus, Channel::MasterState, Channel::MasterForce};
+inline constexpr std::array<Channel, 7> kAllChannels = {
+    Channel::SlaveState,  Channel::SlaveTruth,  Channel::MasterCommand,     Channel::HapticStatus,
+    Channel::MasterState, Channel::MasterForce, Channel::CalibrationRequest};
 
 /// "SLAVE_STATE", "SLAVE_TRUTH", ...
 std::string_view base_name(Channel channel) noexcept;

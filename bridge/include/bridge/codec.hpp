@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <tsmh/calibration_request_t.hpp>
 #include <tsmh/haptic_status_t.hpp>
 #include <tsmh/master_command_t.hpp>
 #include <tsmh/master_force_t.hpp>
@@ -74,6 +75,12 @@ struct SampleTraits<MasterForceSample> {
   using Limits = MasterForceLimits;
   static constexpr Channel channel = Channel::MasterForce;
 };
+template <>
+struct SampleTraits<CalibrationRequestSample> {
+  using Message = tsmh::calibration_request_t;
+  using Limits = CalibrationRequestLimits;
+  static constexpr Channel channel = Channel::CalibrationRequest;
+};
 
 // Sample -> message (copies num_joints entries of each array; receive_ns is not sent).
 void to_message(const SlaveStateSample& s, tsmh::slave_state_t& m);
@@ -82,6 +89,7 @@ void to_message(const MasterCommandSample& s, tsmh::master_command_t& m);
 void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m);
 void to_message(const MasterStateSample& s, tsmh::master_state_t& m);
 void to_message(const MasterForceSample& s, tsmh::master_force_t& m);
+void to_message(const CalibrationRequestSample& s, tsmh::calibration_request_t& m);
 
 // Message -> sample. Precondition: 0 <= m.num_joints <= kMaxJoints and the
 // arrays hold num_joints entries (Decoder guarantees it). receive_ns is left as is.
@@ -91,6 +99,7 @@ void from_message(const tsmh::master_command_t& m, MasterCommandSample& s) noexc
 void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcept;
 void from_message(const tsmh::master_state_t& m, MasterStateSample& s) noexcept;
 void from_message(const tsmh::master_force_t& m, MasterForceSample& s) noexcept;
+void from_message(const tsmh::calibration_request_t& m, CalibrationRequestSample& s) noexcept;
 
 /// The fields every message of ours starts with, read from raw bytes.
 struct RawHeader {

@@ -131,5 +131,6 @@ extern template class Inbox<MasterCommandSample>;
 extern template class Inbox<HapticStatusSample>;
 extern template class Inbox<MasterStateSample>;
 extern template class Inbox<MasterForceSample>;
+extern template class Inbox<CalibrationRequestSample>;
 
 }  // namespace tsmh::bridge

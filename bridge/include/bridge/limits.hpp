@@ -56,4 +56,7 @@ struct MasterForceLimits {
 /// only its structure (decode, joint count) and ordering are checked.
 struct HapticStatusLimits {};
 
+/// CALIBRATION_REQUEST carries only flags: structure and ordering are checked.
+struct CalibrationRequestLimits {};
+
 }  // namespace tsmh::bridge

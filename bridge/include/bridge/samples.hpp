@@ -77,6 +77,15 @@ struct MasterForceSample {
   JointArray torque{};  ///< joint torque command after safety, N m
 };
 
+/// CALIBRATION_REQUEST: recalibrate the joints marked (issue 17).
+struct CalibrationRequestSample {
+  std::int64_t utime = 0;
+  std::int64_t seq = 0;
+  std::int64_t receive_ns = 0;
+  std::int32_t num_joints = 0;
+  std::array<bool, kMaxJoints> recalibrate{};
+};
+
 struct HapticStatusSample {
   std::int64_t utime = 0;
   std::int64_t seq = 0;
@@ -87,6 +96,7 @@ struct HapticStatusSample {
   /// bit 0 stale fade, 1 e-stop, 2 dead-man released, 3 saturated, 4 rate
   /// limited, 5 estimate lost, 6 slave clock jumped, 7 deadline missed,
   /// 12 oscillation detected, 13 passivity controller active
+  /// 8 drift suspected, 9 recalibration running
   std::int32_t flags = 0;
   double rate_hz = 0;
   double lateness_p50_us = 0;
@@ -107,6 +117,13 @@ struct HapticStatusSample {
   JointArray oscillation_rms{};        ///< band RMS of the rendered torque, N m
   JointArray passivity_energy{};       ///< master-side observed energy W_M, J
   JointArray passivity_dissipated{};   ///< removed by the passivity controller, J
+
+  // Issue 17: drift alarm and recalibration.
+  std::int32_t calibration_state = 0;   ///< haptics::CalibrationState
+  std::int32_t calibration_reason = 0;  ///< haptics::CalibrationReason
+  std::int32_t calibration_joint = -1;
+  JointArray friction_scale{};
+  JointArray drift_scale{};
 };
 
 /// How long ago the sample was received, by the receiver's clock (always valid).

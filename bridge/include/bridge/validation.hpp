@@ -21,6 +21,8 @@ std::optional<Rejection> validate(const MasterStateSample& s, const MasterStateL
 std::optional<Rejection> validate(const MasterForceSample& s, const MasterForceLimits& l) noexcept;
 std::optional<Rejection> validate(const HapticStatusSample& s,
                                   const HapticStatusLimits& l) noexcept;
+std::optional<Rejection> validate(const CalibrationRequestSample& s,
+                                  const CalibrationRequestLimits& l) noexcept;
 
 /// Whether `next` can follow `prev` (the last accepted sample) physically:
 /// SLAVE_STATE angles and tensions must not step faster than the limits'

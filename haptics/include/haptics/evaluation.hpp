@@ -55,6 +55,15 @@ struct Discrimination {
   Stiffness soft, hard;
 };
 
+/// A drift alarm or recalibration event (issue 17), as the server logged it.
+struct CalibrationRecord {
+  double t_s = 0.0;    ///< since the server started
+  std::string kind;    ///< drift_alarm, drift_cleared, requested, applied, refused
+  int joint = -1;      ///< -1: every joint concerned
+  double scale = 1.0;  ///< drift: the scale the data ask for; applied: the new scale
+  std::string reason;  ///< refused: why
+};
+
 struct EvaluationReport {
   double rate_hz = 0.0;  ///< measured mean rate
   double nominal_rate_hz = 0.0;
@@ -65,6 +74,8 @@ struct EvaluationReport {
   std::string feedback;
   std::vector<JointEvaluation> joints;
   Discrimination discrimination;
+  std::vector<CalibrationRecord> calibration;  ///< filled by the server (report "calibration")
+  std::vector<double> friction_scale;          ///< per joint, at the end
 };
 
 EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config);

@@ -21,6 +21,7 @@
 #include "haptics/oscillation_detector.hpp"
 #include "haptics/passivity.hpp"
 #include "haptics/position_mapping.hpp"
+#include "haptics/recalibration.hpp"
 #include "haptics/safety_filter.hpp"
 #include "haptics/safety_state.hpp"
 #include "haptics/slave_link.hpp"
@@ -55,6 +56,10 @@ struct LoopConfig {
   int status_every = 10;            ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
   OscillationConfig oscillation{};  ///< safety.oscillation (issue 21)
   PassivityConfig passivity{};      ///< passivity (issue 21), off by default
+
+  // Issue 17 (haptic-server.md, "Drift alarm and recalibration").
+  DriftConfig drift{};                  ///< drift alarm (recalibration.hpp)
+  RecalibrationConfig recalibration{};  ///< one-button recalibration
 };
 
 struct LoopCounters {
@@ -89,6 +94,10 @@ inline constexpr std::int32_t kOverrun = 1 << 7;       ///< a deadline was misse
 inline constexpr std::int32_t kOscillation = 1 << 12;  ///< oscillation detected: force faded
 inline constexpr std::int32_t kPassivityActive =
     1 << 13;  ///< passivity controller damped in this period
+
+// Issue 17: drift alarm and recalibration.
+inline constexpr std::int32_t kDriftSuspected = 1 << 8;  ///< some joint's friction drifted
+inline constexpr std::int32_t kRecalibrating = 1 << 9;   ///< collecting or identifying
 }  // namespace status_flags
 
 /// What the loop thread reports to a non-real-time thread (which logs it):
@@ -153,6 +162,9 @@ class HapticLoop {
   }
   /// For a non-real-time thread: events to log (any thread may read).
   LoopEvents& events() noexcept { return events_; }
+  /// Drift alarm and recalibration: request() and identify_pending() are for
+  /// other threads (recalibration.hpp).
+  Recalibration& calibration() noexcept { return calibration_; }
 
  private:
   // What one tick decided, step by step (tick()); status and trace publish
@@ -189,6 +201,8 @@ class HapticLoop {
   void observe_slave_ports() noexcept;
   void shape_request(JointArray& request, double dt, bool enabled) noexcept;
   void observe_rendered(const SafetyOutput& out) noexcept;
+  std::int32_t calibration_status(bridge::HapticStatusSample& st) const noexcept;
+  void recalibrate(const TickFacts& f) noexcept;
 
   LoopConfig config_;
   TickFacts facts_;
@@ -197,6 +211,7 @@ class HapticLoop {
   std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators_;
   TraceSink* trace_;
 
+  Recalibration calibration_;
   SafetyStateMachine machine_;
   SafetyFilter safety_;
   OscillationDetector oscillation_;
@@ -217,6 +232,8 @@ class HapticLoop {
   bridge::SlaveStateSample state_{};
   bridge::SlaveTruthSample truth_{};
   std::uint64_t state_version_ = 0;
+  std::uint64_t calibration_request_version_ = 0;
+  bridge::CalibrationRequestSample calibration_request_{};
   bool have_state_ = false;
   master_devices::DeviceReading reading_{};
   bridge::MasterCommandSample command_{};

@@ -36,6 +36,7 @@ class LcmSlaveLink final : public SlaveLink {
   void publish_command(const bridge::MasterCommandSample& cmd) noexcept override;
   void publish_status(const bridge::HapticStatusSample& status) noexcept override;
   SlaveLinkStats stats() const noexcept override;
+  std::uint64_t latest_calibration_request(bridge::CalibrationRequestSample& out) noexcept override;
 
   bridge::ChannelStats state_stats() const noexcept { return state_->stats(); }
 
@@ -44,6 +45,7 @@ class LcmSlaveLink final : public SlaveLink {
   bridge::Sender tx_;
   bridge::Inbox<bridge::SlaveStateSample>* state_ = nullptr;
   bridge::Inbox<bridge::SlaveTruthSample>* truth_ = nullptr;
+  bridge::Inbox<bridge::CalibrationRequestSample>* calibration_ = nullptr;
   bridge::Outbox<bridge::MasterCommandSample>* command_ = nullptr;
   bridge::Outbox<bridge::HapticStatusSample>* status_ = nullptr;
 };

@@ -26,6 +26,12 @@ class SlaveLink {
   virtual void publish_command(const bridge::MasterCommandSample& cmd) noexcept = 0;
   virtual void publish_status(const bridge::HapticStatusSample& status) noexcept = 0;
   virtual SlaveLinkStats stats() const noexcept = 0;
+  /// Newest CALIBRATION_REQUEST (an external console asks for a
+  /// recalibration); its version, 0 when none. Links without one never ask.
+  virtual std::uint64_t latest_calibration_request(
+      bridge::CalibrationRequestSample& /*out*/) noexcept {
+    return 0;
+  }
 };
 
 }  // namespace tsmh::haptics

@@ -21,6 +21,16 @@
 
 namespace tsmh::master_devices {
 
+/// A free-motion sweep of every joint between two presses, with the
+/// recalibration button pressed during it (issue 17: the re-route demo).
+struct PalpateSweep {
+  int after_press = -1;        ///< the sweep follows this many presses; -1: none
+  double duration_s = 8.0;     ///< including a 1 s fade in and out
+  double amplitude_rad = 0.4;  ///< swept away from the tissue: 0 .. -2 amplitude
+  double frequency_hz = 0.6;
+  double button_at_s = 0.5;  ///< the calibrate button, 0.2 s, this long into the sweep; < 0 never
+};
+
 struct PalpateScenario {
   std::size_t press_joint = 0;  ///< the joint that presses into the tissue
   double press_sign = 1.0;      ///< +1: pressing is positive joint angle
@@ -36,6 +46,9 @@ struct PalpateScenario {
   double end_s = 2.0;                 ///< rest after the last press
   double other_amplitude_rad = 0.05;  ///< gentle sweep of the other joint(s)
   double other_frequency_hz = 0.2;
+  /// Soft and hard presses alternate (soft first) instead of all soft, then all hard.
+  bool alternate = false;
+  PalpateSweep sweep{};
 };
 
 struct SineScenario {
@@ -60,6 +73,7 @@ using Scenario = std::variant<PalpateScenario, SineScenario, StepScenario>;
 struct Intention {
   JointArray q{};
   JointArray qd{};
+  bool calibrate = false;  ///< the operator presses the recalibration button
 };
 
 /// The intention at scenario time t_s (>= 0) for joints 0 .. dof-1; after

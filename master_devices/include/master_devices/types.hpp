@@ -21,6 +21,9 @@ struct Buttons {
   bool dead_man = false;  ///< true while the operator holds the dead-man switch
   bool e_stop = false;    ///< true while the emergency stop is pressed
   bool clutch = false;    ///< true while the operator re-indexes (slave frozen)
+  /// true while the operator presses the recalibration button (haptic-server
+  /// starts a recalibration on the press; docs/haptic-server.md)
+  bool calibrate = false;
   friend bool operator==(const Buttons&, const Buttons&) = default;
 };
 

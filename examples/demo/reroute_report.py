@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""The re-route demo's figures (issue 17), from haptic-server's trace and report.
+
+  reroute_report.py TRACE.csv REPORT.json REROUTE_AT_S WRAP RAMP_PER_S
+
+Adds a "reroute" object to REPORT.json (every existing field kept) with the
+distal-torque error of joint 0 before the re-route, after it (before the
+recalibration) and after the recalibration, the drift alarm's delay and the
+recalibration; writes the phases for the plot beside the trace
+(reroute-phases.dat) and prints a summary. The slave's clock is its seq
+(one sample per 1 kHz tick from 0), so the re-route's tick in the trace is
+the first row whose state_seq reaches REROUTE_AT_S x 1000.
+"""
+import csv
+import json
+import math
+import os
+import sys
+
+trace_path, report_path = sys.argv[1], sys.argv[2]
+reroute_at, wrap, ramp = float(sys.argv[3]), sys.argv[4], float(sys.argv[5])
+rows = [line for line in open(trace_path) if not line.startswith("#")]
+trace = list(csv.DictReader(rows))
+report = json.load(open(report_path))
+
+t_reroute = next(float(r["t"]) for r in trace if int(r["state_seq"]) >= reroute_at * 1000)
+events = report.get("calibration", {}).get("events", [])
+alarms = [e for e in events if e["kind"] == "drift_alarm" and e["joint"] == 0 and e["t_s"] >= t_reroute]
+applied = [e for e in events if e["kind"] == "applied" and e["joint"] == 0]
+refused = [e for e in events if e["kind"] == "refused"]
+t_applied = applied[0]["t_s"] if applied else math.inf
+scale = applied[0]["scale"] if applied else 1.0
+# After the recalibration the scale ramps in at RAMP_PER_S: judge from its end.
+t_settled = t_applied + abs(scale - 1.0) / ramp
+
+
+def phase(lo, hi):
+    sq = sq_contact = 0.0
+    n = n_contact = 0
+    for r in trace:
+        t = float(r["t"])
+        if not (lo <= t < hi) or r["state"] != "1":
+            continue
+        true, est = float(r["true_tau_out_0"]), float(r["tau_est_0"])
+        if math.isnan(true) or math.isnan(est):
+            continue
+        e = (est - true) ** 2
+        sq += e
+        n += 1
+        if abs(true) > 0.005:
+            sq_contact += e
+            n_contact += 1
+    return {"from_s": lo, "to_s": hi if math.isfinite(hi) else None, "samples": n,
+            "rmse_nm": math.sqrt(sq / n) if n else None,
+            "contact_samples": n_contact,
+            "contact_rmse_nm": math.sqrt(sq_contact / n_contact) if n_contact else None}
+
+
+end = float(trace[-1]["t"])
+phases = {"before": phase(0.0, t_reroute), "after": phase(t_reroute, min(t_applied, end)),
+          "recalibrated": phase(t_settled, end) if applied else None}
+b, a, c = phases["before"], phases["after"], phases["recalibrated"]
+ratio = lambda x, y, k: (x[k] / y[k]) if x and y and x[k] and y[k] else None
+report["reroute"] = {
+    "joint": 0, "at_slave_s": reroute_at, "at_s": t_reroute, "wrap_rad": wrap,
+    "drift_alarm_s": alarms[0]["t_s"] if alarms else None,
+    "drift_alarm_delay_s": alarms[0]["t_s"] - t_reroute if alarms else None,
+    "recalibration_applied_s": applied[0]["t_s"] if applied else None,
+    "recalibration_scale": scale if applied else None,
+    "recalibration_refused": [e["reason"] for e in refused],
+    "scale_settled_s": t_settled if applied else None,
+    "phases": phases,
+    "after_over_before": ratio(a, b, "rmse_nm"),
+    "recalibrated_over_before": ratio(c, b, "rmse_nm"),
+    "contact_recalibrated_over_before": ratio(c, b, "contact_rmse_nm"),
+}
+tmp = report_path + ".tmp"
+with open(tmp, "w") as f:
+    json.dump(report, f, indent=2)
+    f.write("\n")
+os.replace(tmp, report_path)
+with open(os.path.join(os.path.dirname(trace_path), "reroute-phases.dat"), "w") as f:
+    # -1: did not happen (the plot's arrows then fall outside the time axis)
+    f.write(f"{t_reroute} {report['reroute']['drift_alarm_s'] or -1} "
+            f"{applied[0]['t_s'] if applied else -1} {t_settled if applied else -1}\n")
+
+def fmt(p):
+    if not p or p["rmse_nm"] is None:
+        return "no data"
+    contact = f"{p['contact_rmse_nm']:.4f} N m" if p["contact_rmse_nm"] is not None else "none"
+    return f"rmse {p['rmse_nm']:.4f} N m ({p['samples']} ticks), in contact {contact}"
+print(f"   re-route at {t_reroute:.1f} s (wrap {wrap} rad); drift alarm "
+      + (f"at {alarms[0]['t_s']:.1f} s ({alarms[0]['t_s'] - t_reroute:.1f} s after)" if alarms else "never")
+      + "; recalibration " + (f"applied at {t_applied:.1f} s, scale {scale:.3f}" if applied
+                              else "not applied " + str([e['reason'] for e in refused])))
+print(f"   joint 0 distal-torque error: before {fmt(b)}")
+print(f"                                after  {fmt(a)}")
+print(f"                        recalibrated  {fmt(c)}")
+if report["reroute"]["recalibrated_over_before"]:
+    print(f"   recalibrated / before: {report['reroute']['recalibrated_over_before']:.2f} "
+          f"(target <= 1.2); after / before {report['reroute']['after_over_before']:.2f}")

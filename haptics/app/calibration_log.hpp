@@ -1,0 +1,111 @@
+#pragma once
+// haptic-server's side of the drift alarm and the recalibration (issue 17),
+// on the main thread: it runs the identification the loop handed over
+// (Recalibration::identify_pending, which allocates: never on the loop
+// thread) and logs requests, results and drift alarms. Also keeps the
+// events for the report.
+
+#include <cstdarg>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "haptics/recalibration.hpp"
+
+namespace tsmh::haptic_server {
+
+struct CalibrationEvent {
+  double t_s;        ///< since the server started
+  std::string kind;  ///< drift_alarm, drift_cleared, requested, applied, refused
+  int joint;         ///< -1: every joint concerned
+  double scale;      ///< drift: the scale the data ask for; applied: the new scale
+  std::string detail;
+};
+
+class CalibrationLog {
+ public:
+  /// `live`: stderr carries the live status line, which each message clears.
+  CalibrationLog(haptics::Recalibration& calib, std::int64_t start_ns, bool live)
+      : calib_(calib), start_ns_(start_ns), live_(live) {}
+
+  void poll(std::int64_t now_ns) {
+    const double t = static_cast<double>(now_ns - start_ns_) * 1e-9;
+    calib_.identify_pending();  // off the loop: the loop never waits for it
+    const auto state = calib_.state();
+    if (state != state_ && state == haptics::CalibrationState::kCollecting) {
+      say("t = %.1f s: recalibration requested (joint mask 0x%x): move the instrument in free "
+          "space for %.1f s",
+          t, calib_.last_mask(), calib_.config().collect_s);
+      events_.push_back({t, "requested", -1, 1.0, ""});
+    }
+    state_ = state;
+    const auto results = calib_.results();
+    if (results != results_) {
+      results_ = results;
+      report_result(t);
+    }
+    const auto alarms = calib_.drift_alarms();
+    for (int j = 0; j < calib_.joints(); ++j) {
+      const bool now = (alarms >> j) & 1U, was = (alarms_ >> j) & 1U;
+      if (now && !was) {
+        say("t = %.1f s: warning: friction drift suspected on joint %d (the free motion asks for "
+            "%.2fx the identified friction): recalibrate (master button or CALIBRATION_REQUEST)",
+            t, j, calib_.drift_scale(j));
+        events_.push_back({t, "drift_alarm", j, calib_.drift_scale(j), ""});
+      } else if (!now && was) {
+        say("t = %.1f s: friction drift on joint %d cleared", t, j);
+        events_.push_back({t, "drift_cleared", j, calib_.drift_scale(j), ""});
+      }
+    }
+    alarms_ = alarms;
+  }
+
+  const std::vector<CalibrationEvent>& events() const { return events_; }
+
+ private:
+  void report_result(double t) {
+    const std::uint32_t mask = calib_.last_mask();
+    if (calib_.state() == haptics::CalibrationState::kApplied) {
+      for (int j = 0; j < calib_.joints(); ++j) {
+        if (((mask >> j) & 1U) == 0) continue;
+        const auto f = calib_.figures(j);
+        say("t = %.1f s: recalibration applied: joint %d friction scale -> %.3f (residual %.4f -> "
+            "%.4f N m rms over %zu samples, stroke %.2f rad); ramping in at %.2f/s",
+            t, j, f.scale, f.rms_old, f.rms_new, f.samples, f.span_rad, calib_.config().ramp_per_s);
+        events_.push_back({t, "applied", j, f.scale, ""});
+      }
+      return;
+    }
+    const int j = calib_.reason_joint();
+    const auto f = calib_.figures(j < 0 ? 0 : j);
+    char detail[256];
+    std::snprintf(detail, sizeof detail,
+                  "%s (joint %d: stroke %.2f rad, sliding %.2f s each way, %d angle bins judged, "
+                  "%zu samples, scale found %.3f, residual %.4f -> %.4f N m)",
+                  std::string(to_string(calib_.reason())).c_str(), j, f.span_rad, f.sliding_s,
+                  f.contact_bins, f.samples, f.scale, f.rms_old, f.rms_new);
+    say("t = %.1f s: recalibration refused: %s; the model is unchanged", t, detail);
+    events_.push_back({t, "refused", j, f.scale, std::string(to_string(calib_.reason()))});
+  }
+
+  __attribute__((format(printf, 2, 3))) void say(const char* fmt, ...) {
+    if (live_) std::fputs("\r\033[K", stderr);
+    std::fputs("haptic-server: ", stderr);
+    va_list ap;
+    va_start(ap, fmt);
+    std::vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    std::fputc('\n', stderr);
+  }
+
+  haptics::Recalibration& calib_;
+  std::int64_t start_ns_;
+  bool live_;
+  haptics::CalibrationState state_ = haptics::CalibrationState::kIdle;
+  std::uint64_t results_ = 0;
+  std::uint32_t alarms_ = 0;
+  std::vector<CalibrationEvent> events_;
+};
+
+}  // namespace tsmh::haptic_server

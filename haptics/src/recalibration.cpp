@@ -1,0 +1,246 @@
+#include "haptics/recalibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "estimator/contact_check.hpp"
+
+namespace tsmh::haptics {
+namespace {
+
+constexpr double kSlidingSpeed = 0.1;  // rad/s: below it the joint is reversing or at rest
+
+}  // namespace
+
+std::string_view to_string(CalibrationState s) noexcept {
+  switch (s) {
+    case CalibrationState::kIdle:
+      return "idle";
+    case CalibrationState::kCollecting:
+      return "collecting";
+    case CalibrationState::kIdentifying:
+      return "identifying";
+    case CalibrationState::kApplied:
+      return "applied";
+    case CalibrationState::kRefused:
+      return "refused";
+  }
+  return "?";
+}
+
+std::string_view to_string(CalibrationReason r) noexcept {
+  switch (r) {
+    case CalibrationReason::kNone:
+      return "none";
+    case CalibrationReason::kMotionTooSmall:
+      return "motion too small";
+    case CalibrationReason::kNotFree:
+      return "not free motion (contact)";
+    case CalibrationReason::kNotBetter:
+      return "new model not better";
+    case CalibrationReason::kImplausible:
+      return "implausible scale";
+    case CalibrationReason::kNoData:
+      return "no slave data";
+  }
+  return "?";
+}
+
+Recalibration::Recalibration(int joints, const RecalibrationConfig& config,
+                             const DriftConfig& drift)
+    : joints_(joints), config_(config) {
+  if (joints < 1 || joints > static_cast<int>(kMaxJoints))
+    throw std::invalid_argument("recalibration: joints must be 1..kMaxJoints");
+  if (!(config.collect_s > 0.0) || config.capacity < 100 || !(config.ramp_per_s > 0.0) ||
+      !(config.min_scale > 0.0) || !(config.max_scale > config.min_scale))
+    throw std::invalid_argument("recalibration: inconsistent configuration");
+  for (std::size_t j = 0; j < kMaxJoints; ++j) {
+    drift_[j] = DriftMonitor(drift);
+    applied_[j] = 1.0;
+    target_[j].store(1.0, std::memory_order_relaxed);
+    drift_scale_[j].store(std::nan(""), std::memory_order_relaxed);
+    if (static_cast<int>(j) < joints) buffer_[j].resize(config.capacity);
+  }
+}
+
+void Recalibration::request(std::uint32_t mask) noexcept {
+  const std::uint32_t valid = joints_ >= 32 ? ~0U : (1U << joints_) - 1U;
+  if ((mask & valid) != 0) requested_.fetch_or(mask & valid, std::memory_order_relaxed);
+}
+
+void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Estimate& e,
+                                double radius_m) noexcept {
+  const std::size_t j = idx(joint);
+  if (!e.valid) return;
+  const double raw = e.friction;
+  e.friction = applied_[j] * raw;
+  e.tau_out_est = e.tau_in - radius_m * e.friction;
+  drift_[j].update(t, e, radius_m);
+  drift_scale_[j].store(drift_[j].judged() ? drift_[j].scale() * applied_[j] : std::nan(""),
+                        std::memory_order_relaxed);
+  const std::uint32_t bit = 1U << j;
+  const std::uint32_t mask = drift_mask_.load(std::memory_order_relaxed);
+  const std::uint32_t now = drift_[j].alarm() ? (mask | bit) : (mask & ~bit);
+  if (now != mask) drift_mask_.store(now, std::memory_order_relaxed);
+
+  if (phase_.load(std::memory_order_relaxed) ==
+          static_cast<std::int32_t>(CalibrationState::kCollecting) &&
+      (mask_.load(std::memory_order_relaxed) & bit) != 0 && count_[j] < buffer_[j].size())
+    buffer_[j][count_[j]++] = Sample{t, x_in, e.xd, e.tau_in, radius_m * raw};
+}
+
+void Recalibration::on_tick(double now_s, double dt, bool button) noexcept {
+  const auto phase = static_cast<CalibrationState>(phase_.load(std::memory_order_acquire));
+  // A new result from the worker: ramp towards it, restart drift watching.
+  const std::uint64_t results = results_.load(std::memory_order_acquire);
+  if (results != results_seen_) {
+    results_seen_ = results;
+    if (phase == CalibrationState::kApplied)
+      for (int j = 0; j < joints_; ++j)
+        if ((mask_.load(std::memory_order_relaxed) >> j) & 1U) drift_[idx(j)].reset();
+  }
+  // Requests: the button's press (edge), or any thread's request().
+  std::uint32_t want = requested_.exchange(0, std::memory_order_relaxed);
+  if (button && !button_was_) want |= joints_ >= 32 ? ~0U : (1U << joints_) - 1U;
+  button_was_ = button;
+  const bool busy =
+      phase == CalibrationState::kCollecting || phase == CalibrationState::kIdentifying;
+  if (want != 0 && !busy) {
+    for (int j = 0; j < joints_; ++j)
+      count_[idx(j)] = 0;
+    mask_.store(want, std::memory_order_relaxed);
+    reason_.store(0, std::memory_order_relaxed);
+    reason_joint_.store(-1, std::memory_order_relaxed);
+    collect_start_s_ = now_s;
+    phase_.store(static_cast<std::int32_t>(CalibrationState::kCollecting),
+                 std::memory_order_relaxed);
+  } else if (phase == CalibrationState::kCollecting) {
+    bool full = false;
+    for (int j = 0; j < joints_; ++j)
+      full = full || count_[idx(j)] >= buffer_[idx(j)].size();
+    if (now_s - collect_start_s_ >= config_.collect_s || full) {
+      for (int j = 0; j < joints_; ++j)
+        scale_at_collect_[idx(j)] = applied_[idx(j)];
+      // Hand the buffers over: the worker reads them only after this.
+      phase_.store(static_cast<std::int32_t>(CalibrationState::kIdentifying),
+                   std::memory_order_release);
+    }
+  }
+  // Ramp the applied scale towards the target: a bounded rate, so the
+  // rendered torque changes smoothly (R F x ramp_per_s per second at most).
+  const double step = config_.ramp_per_s * std::max(dt, 0.0);
+  for (int j = 0; j < joints_; ++j) {
+    const double target = target_[idx(j)].load(std::memory_order_relaxed);
+    double& a = applied_[idx(j)];
+    a = a < target ? std::min(target, a + step) : std::max(target, a - step);
+  }
+}
+
+CalibrationFigures Recalibration::figures(int joint) const noexcept {
+  return figures_[idx(joint)];
+}
+
+void Recalibration::identify_joint(int joint, CalibrationReason& why,
+                                   CalibrationFigures& fig) const {
+  const std::size_t j = idx(joint);
+  const std::size_t n = count_[j];
+  fig = CalibrationFigures{};
+  fig.samples = n;
+  if (n < 100) {
+    why = CalibrationReason::kNoData;
+    return;
+  }
+  const auto& b = buffer_[j];
+  std::vector<double> t(n), x(n), xd(n), tau(n);
+  double x_lo = INFINITY, x_hi = -INFINITY, slide_pos = 0.0, slide_neg = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    t[i] = b[i].t, x[i] = b[i].x, xd[i] = b[i].xd, tau[i] = b[i].tau_in;
+    x_lo = std::min(x_lo, x[i]), x_hi = std::max(x_hi, x[i]);
+    const double dt = i == 0 ? 0.0 : t[i] - t[i - 1];
+    if (xd[i] > kSlidingSpeed) slide_pos += dt;
+    if (xd[i] < -kSlidingSpeed) slide_neg += dt;
+  }
+  fig.span_rad = x_hi - x_lo;
+  fig.sliding_s = std::min(slide_pos, slide_neg);
+  if (fig.span_rad < config_.min_span_rad || slide_pos < config_.min_sliding_s ||
+      slide_neg < config_.min_sliding_s) {
+    why = CalibrationReason::kMotionTooSmall;
+    return;
+  }
+  const estimator::ContactCheckConfig free_cfg;
+  const auto contact = estimator::check_contact(t, x, xd, tau, free_cfg);
+  fig.contact_bins = contact.bins_used;
+  if (contact.bins_used < 2) {
+    why = CalibrationReason::kMotionTooSmall;
+    return;
+  }
+  if (estimator::shows_contact(contact, free_cfg, nullptr)) {
+    why = CalibrationReason::kNotFree;
+    return;
+  }
+  // tau_in = k R F over the sliding samples (free motion: the distal torque
+  // is the joint's small inertia/damping torque, taken as zero).
+  double sff = 0.0, stf = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (std::fabs(xd[i]) <= kSlidingSpeed) continue;
+    sff += b[i].f_raw * b[i].f_raw;
+    stf += b[i].tau_in * b[i].f_raw;
+  }
+  if (!(sff > 0.0)) {
+    why = CalibrationReason::kMotionTooSmall;
+    return;
+  }
+  fig.scale = stf / sff;
+  double ss_old = 0.0, ss_new = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double e_old = b[i].tau_in - scale_at_collect_[j] * b[i].f_raw;
+    const double e_new = b[i].tau_in - fig.scale * b[i].f_raw;
+    ss_old += e_old * e_old, ss_new += e_new * e_new;
+  }
+  fig.rms_old = std::sqrt(ss_old / static_cast<double>(n));
+  fig.rms_new = std::sqrt(ss_new / static_cast<double>(n));
+  if (!(fig.scale >= config_.min_scale && fig.scale <= config_.max_scale)) {
+    why = CalibrationReason::kImplausible;
+    return;
+  }
+  if (!(fig.rms_new <= (1.0 - config_.min_improvement) * fig.rms_old)) {
+    why = CalibrationReason::kNotBetter;
+    return;
+  }
+  why = CalibrationReason::kNone;
+}
+
+bool Recalibration::identify_pending() {
+  if (phase_.load(std::memory_order_acquire) !=
+      static_cast<std::int32_t>(CalibrationState::kIdentifying))
+    return false;
+  const std::uint32_t mask = mask_.load(std::memory_order_relaxed);
+  std::array<CalibrationFigures, kMaxJoints> figs{};
+  CalibrationReason first = CalibrationReason::kNone;
+  int first_joint = -1;
+  for (int j = 0; j < joints_; ++j) {
+    if (((mask >> j) & 1U) == 0) continue;
+    CalibrationReason why = CalibrationReason::kNone;
+    identify_joint(j, why, figs[idx(j)]);
+    if (why != CalibrationReason::kNone && first == CalibrationReason::kNone) {
+      first = why;
+      first_joint = j;
+    }
+  }
+  figures_ = figs;
+  // All or nothing: a partly recalibrated instrument would feel inconsistent.
+  if (first == CalibrationReason::kNone)
+    for (int j = 0; j < joints_; ++j)
+      if ((mask >> j) & 1U) target_[idx(j)].store(figs[idx(j)].scale, std::memory_order_relaxed);
+  reason_.store(static_cast<std::int32_t>(first), std::memory_order_relaxed);
+  reason_joint_.store(first_joint, std::memory_order_relaxed);
+  phase_.store(
+      static_cast<std::int32_t>(first == CalibrationReason::kNone ? CalibrationState::kApplied
+                                                                  : CalibrationState::kRefused),
+      std::memory_order_release);
+  results_.fetch_add(1, std::memory_order_acq_rel);
+  return true;
+}
+
+}  // namespace tsmh::haptics

@@ -1,0 +1,227 @@
+// Drift alarm and one-button recalibration (issue 17): the DriftMonitor and
+// Recalibration on a joint swept in free space whose friction is the paper
+// model's times a routing factor k, and the loop end to end in simulated
+// time with an in-memory link.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "estimator/tsm_model.hpp"
+#include "fakes.hpp"
+#include "haptics/drift_monitor.hpp"
+#include "haptics/haptic_loop.hpp"
+#include "haptics/recalibration.hpp"
+
+namespace tsmh::haptics {
+namespace {
+
+constexpr double kR = 0.01;
+
+// A joint swept at `amp` rad, `hz`, exact motion; the model's friction F
+// (the paper's preset) and a proximal torque k R F + load + noise, as the
+// estimator would report it with scale 1.
+class Sweep {
+ public:
+  Sweep(double k, double amp = 0.6, double hz = 0.5, std::uint64_t seed = 1)
+      : k_(k), amp_(amp), w_(2.0 * std::numbers::pi * hz), rng_(seed) {}
+  // `load`: a distal torque added to tau_in (contact), N m.
+  estimator::Estimate next(double load = 0.0) {
+    t_ += 1e-3;
+    estimator::Motion m;
+    m.t = t_;
+    m.x = amp_ * std::sin(w_ * t_);
+    m.xd = amp_ * w_ * std::cos(w_ * t_);
+    m.xdd = -amp_ * w_ * w_ * std::sin(w_ * t_);
+    m.acc_sign = estimator::sign_of(m.xdd);
+    const double f = model_.step(m, 1e-3);
+    estimator::Estimate e;
+    e.valid = true;
+    e.xd = m.xd;
+    e.xdd = m.xdd;
+    e.friction = f;
+    e.tau_in = k_ * kR * f + load + noise_(rng_);
+    e.tau_out_est = e.tau_in - kR * f;
+    x_ = m.x;
+    return e;
+  }
+  double t() const { return t_; }
+  double x() const { return x_; }
+  void set_k(double k) { k_ = k; }
+
+ private:
+  double k_, amp_, w_;
+  double t_ = 0.0, x_ = 0.0;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> noise_{0.0, 0.003};
+  estimator::TsmFrictionModel model_{estimator::paper_spec()};
+};
+
+TEST(DriftMonitor, NoAlarmWhileTheModelFitsEvenWithOneSidedContact) {
+  DriftMonitor d;
+  Sweep s(1.0);
+  for (int i = 0; i < 300'000; ++i) {  // 5 minutes
+    // Tissue beyond 0.3 rad pushing back 0.4 N m/rad: a one-sided load.
+    const double load = s.x() > 0.3 ? 0.4 * (s.x() - 0.3) : 0.0;
+    d.update(s.t() + 1e-3, s.next(load), kR);
+    ASSERT_FALSE(d.alarm()) << "t = " << s.t() << " scale " << d.scale();
+  }
+  EXPECT_TRUE(d.judged());
+  EXPECT_NEAR(d.scale(), 1.0, 0.1);
+}
+
+TEST(DriftMonitor, AlarmsWithinSecondsOfARerouteAndClearsAfterTheFix) {
+  DriftMonitor d;
+  Sweep s(1.0);
+  for (int i = 0; i < 20'000; ++i)
+    d.update(s.t() + 1e-3, s.next(), kR);
+  ASSERT_FALSE(d.alarm());
+  s.set_k(1.5);  // the re-route: friction 1.5x
+  double raised = -1.0;
+  for (int i = 0; i < 10'000 && raised < 0.0; ++i) {
+    d.update(s.t() + 1e-3, s.next(), kR);
+    if (d.alarm()) raised = s.t() - 20.0;
+  }
+  ASSERT_GT(raised, 0.0) << "no alarm within 10 s";
+  EXPECT_LT(raised, 5.0);
+  EXPECT_NEAR(d.scale(), 1.5, 0.15);
+  s.set_k(1.0);  // the model fits again (as after a recalibration)
+  for (int i = 0; i < 15'000; ++i)
+    d.update(s.t() + 1e-3, s.next(), kR);
+  EXPECT_FALSE(d.alarm());
+}
+
+// Drives a Recalibration like the loop does: on_tick each ms, on_estimate
+// per sample; the identification runs synchronously where the server's main
+// thread would run it.
+struct CalibRig {
+  explicit CalibRig(double k, double amp = 0.6) : sweep(k, amp) {}
+  void run(double seconds, double load_per_rad_beyond = 0.0, bool button = false) {
+    const int n = static_cast<int>(seconds * 1000.0);
+    for (int i = 0; i < n; ++i) {
+      calib.on_tick(sweep.t(), 1e-3, button && i < 100);
+      const double x = sweep.x();
+      auto e = sweep.next(x > 0.3 ? load_per_rad_beyond * (x - 0.3) : 0.0);
+      const double raw_f = e.friction;
+      calib.on_estimate(0, sweep.t(), sweep.x(), e, kR);
+      // The scale reaches the estimate exactly: F x applied scale.
+      ASSERT_DOUBLE_EQ(e.friction, raw_f * calib.applied_scale(0));
+      applied.push_back(calib.applied_scale(0));
+      calib.identify_pending();
+    }
+  }
+  Sweep sweep;
+  Recalibration calib{1, RecalibrationConfig{}, DriftConfig{}};
+  std::vector<double> applied;
+};
+
+TEST(Recalibration, ButtonThenFreeMotionFindsTheNewScaleAndRampsItIn) {
+  CalibRig rig(1.5);
+  rig.run(2.0);
+  EXPECT_EQ(rig.calib.state(), CalibrationState::kIdle);
+  rig.run(0.2, 0.0, true);  // the button
+  EXPECT_EQ(rig.calib.state(), CalibrationState::kCollecting);
+  rig.run(5.0);
+  ASSERT_EQ(rig.calib.state(), CalibrationState::kApplied) << to_string(rig.calib.reason());
+  EXPECT_NEAR(rig.calib.target_scale(0), 1.5, 0.05);
+  const auto f = rig.calib.figures(0);
+  EXPECT_LT(f.rms_new, 0.5 * f.rms_old);
+  rig.run(2.0);
+  EXPECT_NEAR(rig.calib.applied_scale(0), rig.calib.target_scale(0), 1e-12);
+  // No jump: the scale moved at most ramp_per_s x 1 ms per tick.
+  for (std::size_t i = 1; i < rig.applied.size(); ++i)
+    ASSERT_LE(std::fabs(rig.applied[i] - rig.applied[i - 1]), 0.5e-3 + 1e-12) << i;
+}
+
+TEST(Recalibration, RefusesWithTheReason) {
+  {  // unchanged routing: the new scale is no better
+    CalibRig rig(1.0);
+    rig.calib.request(1);
+    rig.run(6.0);
+    EXPECT_EQ(rig.calib.state(), CalibrationState::kRefused);
+    EXPECT_EQ(rig.calib.reason(), CalibrationReason::kNotBetter);
+    EXPECT_EQ(rig.calib.reason_joint(), 0);
+    EXPECT_DOUBLE_EQ(rig.calib.applied_scale(0), 1.0);
+  }
+  {  // a tiny stroke
+    CalibRig rig(1.5, 0.05);
+    rig.calib.request(1);
+    rig.run(6.0);
+    EXPECT_EQ(rig.calib.reason(), CalibrationReason::kMotionTooSmall);
+    EXPECT_DOUBLE_EQ(rig.calib.applied_scale(0), 1.0);
+  }
+  {  // pressing tissue while "calibrating"
+    CalibRig rig(1.5);
+    rig.calib.request(1);
+    rig.run(6.0, 0.8);
+    EXPECT_EQ(rig.calib.reason(), CalibrationReason::kNotFree);
+    EXPECT_DOUBLE_EQ(rig.calib.applied_scale(0), 1.0);
+  }
+}
+
+// The loop end to end: an LCM-style request through the link, collection in
+// the loop, identification outside it, the new scale in HAPTIC_STATUS, and
+// the drift flag before it.
+TEST(Recalibration, LoopTakesARequestFromTheLinkAndReportsInStatus) {
+  testing::FakeDevice device;
+  testing::FakeLink link;
+  LoopConfig c;
+  c.joints = 2;
+  for (int j = 0; j < 2; ++j) {
+    c.force[j] = {1.0, 1.0, 0.0};
+    c.limits[j] = {0.8, 100.0};
+  }
+  std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> est;
+  for (int j = 0; j < 2; ++j)
+    est.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
+        std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), kR,
+        estimator::DifferentiatorConfig{}, estimator::StartState::zero));
+  HapticLoop loop(c, device, link, std::move(est));
+  // The "slave": friction of the same model at 1.5x, on the measured motion.
+  estimator::DistalTorqueEstimator twin(
+      std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), kR,
+      estimator::DifferentiatorConfig{}, estimator::StartState::zero);
+  std::int64_t now = 1'000'000'000;
+  double last_torque = 0.0, worst_step = 0.0;
+  bool drift_seen = false;
+  const auto run = [&](double seconds) {
+    for (int i = 0; i < static_cast<int>(seconds * 1000); ++i, now += 1'000'000) {
+      const double t = static_cast<double>(now) * 1e-9;
+      const double x = 0.6 * std::sin(std::numbers::pi * t);
+      const double f = twin.update(t, x, 0.0).friction;  // the model's F on this motion
+      const double tau_in = 1.5 * kR * f;
+      link.push(now, x, tau_in / kR, 0.0);
+      loop.tick(now);
+      worst_step = std::max(worst_step, std::fabs(device.torque[0] - last_torque));
+      last_torque = device.torque[0];
+      if (!link.statuses.empty() && (link.statuses.back().flags & status_flags::kDriftSuspected))
+        drift_seen = true;
+    }
+  };
+  run(10.0);
+  EXPECT_TRUE(drift_seen);
+  link.calibration_request.num_joints = 2;
+  link.calibration_request.recalibrate = {true, true};
+  link.calibration_version = 1;
+  run(0.5);
+  ASSERT_FALSE(link.statuses.empty());
+  EXPECT_EQ(link.statuses.back().calibration_state,
+            static_cast<std::int32_t>(CalibrationState::kCollecting));
+  EXPECT_TRUE(link.statuses.back().flags & status_flags::kRecalibrating);
+  run(5.0);
+  EXPECT_TRUE(loop.calibration().identify_pending());  // the server's main thread
+  const double before_swap = worst_step;
+  run(3.0);
+  const auto& st = link.statuses.back();
+  EXPECT_EQ(st.calibration_state, static_cast<std::int32_t>(CalibrationState::kApplied));
+  EXPECT_NEAR(st.friction_scale[0], 1.5, 0.1);
+  EXPECT_NEAR(st.friction_scale[1], 1.5, 0.1);
+  // The swap added no step beyond what the motion itself made.
+  EXPECT_LE(worst_step, std::max(before_swap, 1e-3) * 1.05);
+  run(10.0);
+  EXPECT_FALSE(link.statuses.back().flags & status_flags::kDriftSuspected);
+}
+
+}  // namespace
+}  // namespace tsmh::haptics
