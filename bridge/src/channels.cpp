@@ -10,19 +10,19 @@ namespace tsmh::bridge {
 
 std::string_view base_name(Channel channel) noexcept {
   switch (channel) {
-    case Channel::SlaveState:
+    case Channel::kSlaveState:
       return "SLAVE_STATE";
-    case Channel::SlaveTruth:
+    case Channel::kSlaveTruth:
       return "SLAVE_TRUTH";
-    case Channel::MasterCommand:
+    case Channel::kMasterCommand:
       return "MASTER_COMMAND";
-    case Channel::HapticStatus:
+    case Channel::kHapticStatus:
       return "HAPTIC_STATUS";
-    case Channel::MasterState:
+    case Channel::kMasterState:
       return "MASTER_STATE";
-    case Channel::MasterForce:
+    case Channel::kMasterForce:
       return "MASTER_FORCE";
-    case Channel::CalibrationRequest:
+    case Channel::kCalibrationRequest:
       return "CALIBRATION_REQUEST";
   }
   return "UNKNOWN";

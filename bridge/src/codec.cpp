@@ -245,11 +245,11 @@ std::optional<Rejection> Decoder<Sample>::decode(const void* data, std::size_t s
   if (!peek_header(data, size, h)) {
     std::snprintf(what, sizeof what, "truncated: %zu bytes, header needs %zu", size,
                   kRawHeaderBytes);
-    return make_rejection(RejectReason::Decode, what, static_cast<double>(size));
+    return make_rejection(RejectReason::kDecode, what, static_cast<double>(size));
   }
   if (h.hash != Message::getHash()) {
     std::snprintf(what, sizeof what, "not a %s (type hash differs)", Message::getTypeName());
-    auto r = make_rejection(RejectReason::Decode, what, static_cast<double>(size));
+    auto r = make_rejection(RejectReason::kDecode, what, static_cast<double>(size));
     return r;
   }
   if (auto r = check_joint_count(h.num_joints, 0)) {
@@ -263,19 +263,20 @@ std::optional<Rejection> Decoder<Sample>::decode(const void* data, std::size_t s
     std::snprintf(what, sizeof what, "%s: %zu bytes, expected %zu for %d joints",
                   size < expected ? "truncated" : "trailing bytes", size, expected,
                   static_cast<int>(h.num_joints));
-    auto r = make_rejection(RejectReason::Decode, what, static_cast<double>(size));
+    auto r = make_rejection(RejectReason::kDecode, what, static_cast<double>(size));
     r.seq = h.seq;
     return r;
   }
   try {
     if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
         msg_.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) {
-      auto r = make_rejection(RejectReason::Decode, "lcm decode failed", static_cast<double>(size));
+      auto r =
+          make_rejection(RejectReason::kDecode, "lcm decode failed", static_cast<double>(size));
       r.seq = h.seq;
       return r;
     }
   } catch (const std::bad_alloc&) {  // unreachable after the checks above; never let it escape
-    return make_rejection(RejectReason::Decode, "out of memory while decoding",
+    return make_rejection(RejectReason::kDecode, "out of memory while decoding",
                           static_cast<double>(size));
   }
   from_message(msg_, out);

@@ -38,23 +38,23 @@ void InboxBase::count_rejected(const Rejection& r) noexcept {
 
 void InboxBase::reject_unauthentic(const AuthResult& auth, std::int64_t receive_ns) noexcept {
   count_received();
-  RejectReason reason = RejectReason::Unauthenticated;
+  RejectReason reason = RejectReason::kUnauthenticated;
   switch (auth.verdict) {
-    case AuthVerdict::Ok:
-    case AuthVerdict::Missing:
+    case AuthVerdict::kOk:
+    case AuthVerdict::kMissing:
       break;
-    case AuthVerdict::BadMac:
-      reason = RejectReason::BadMac;
+    case AuthVerdict::kBadMac:
+      reason = RejectReason::kBadMac;
       break;
-    case AuthVerdict::Stale:
-      reason = RejectReason::Stale;
+    case AuthVerdict::kStale:
+      reason = RejectReason::kStale;
       break;
-    case AuthVerdict::Replayed:
-      reason = RejectReason::Replayed;
+    case AuthVerdict::kReplayed:
+      reason = RejectReason::kReplayed;
       break;
   }
   char what[64];
-  if (auth.verdict == AuthVerdict::Missing)
+  if (auth.verdict == AuthVerdict::kMissing)
     std::snprintf(what, sizeof what, "no trailer");
   else
     std::snprintf(what, sizeof what, "sender %016llx seq %llu",
@@ -68,10 +68,10 @@ void InboxBase::reject_unauthentic(const AuthResult& auth, std::int64_t receive_
 bool InboxBase::count_order(const OrderVerdict& v, std::int64_t seq, std::int64_t utime,
                             std::int64_t receive_ns) noexcept {
   switch (v.order) {
-    case Order::First:
-    case Order::Next:
+    case Order::kFirst:
+    case Order::kNext:
       break;
-    case Order::Gap:
+    case Order::kGap:
       // One event per gap, whatever its width: a single bogus seq of 2e12
       // must read as one gap, not two trillion (and never overflow).
       seq_gaps_.fetch_add(1, std::memory_order_relaxed);
@@ -82,21 +82,21 @@ bool InboxBase::count_order(const OrderVerdict& v, std::int64_t seq, std::int64_
                            std::memory_order_relaxed);
       }
       break;
-    case Order::Restart:
+    case Order::kRestart:
       restarts_.fetch_add(1, std::memory_order_relaxed);
       break;
-    case Order::Resync:
+    case Order::kResync:
       resyncs_.fetch_add(1, std::memory_order_relaxed);
       break;
-    case Order::Duplicate:
+    case Order::kDuplicate:
       duplicates_.fetch_add(1, std::memory_order_relaxed);
       break;
-    case Order::Late:
+    case Order::kLate:
       reordered_.fetch_add(1, std::memory_order_relaxed);
       break;
-    case Order::TimeBackwards: {
+    case Order::kTimeBackwards: {
       auto r =
-          make_rejection(RejectReason::TimeBackwards, "seq advanced", static_cast<double>(utime));
+          make_rejection(RejectReason::kTimeBackwards, "seq advanced", static_cast<double>(utime));
       r.seq = seq;
       r.receive_ns = receive_ns;
       count_rejected(r);

@@ -255,7 +255,7 @@ AuthResult MessageVerifier::verify(std::string_view channel, const std::uint8_t*
   r.payload_size = size - kAuthTrailerBytes;
   r.trailer = read_header(data + r.payload_size);
   if (!mac_matches(*key_, channel, data, r.payload_size)) {
-    r.verdict = AuthVerdict::BadMac;
+    r.verdict = AuthVerdict::kBadMac;
     return r;
   }
   // Differences in doubles: a hostile (but correctly signed) time must not overflow.
@@ -263,7 +263,7 @@ AuthResult MessageVerifier::verify(std::string_view channel, const std::uint8_t*
                                        static_cast<double>(r.trailer.send_time_us));
   if (options_.check_freshness &&
       (r.age_us > options_.max_age_us || r.age_us < -options_.max_age_us)) {
-    r.verdict = AuthVerdict::Stale;
+    r.verdict = AuthVerdict::kStale;
     return r;
   }
   const std::uint64_t seq = r.trailer.seq;
@@ -272,7 +272,7 @@ AuthResult MessageVerifier::verify(std::string_view channel, const std::uint8_t*
     const bool too_old = w->top - seq >= kWindow;
     const std::uint64_t bit = std::uint64_t{1} << (seq % 64);
     if (too_old || (w->seen[(seq % kWindow) / 64] & bit) != 0) {
-      r.verdict = AuthVerdict::Replayed;
+      r.verdict = AuthVerdict::kReplayed;
       return r;
     }
   }
@@ -291,7 +291,7 @@ AuthResult MessageVerifier::verify(std::string_view channel, const std::uint8_t*
   }
   w->seen[(seq % kWindow) / 64] |= std::uint64_t{1} << (seq % 64);
   w->last_used = ++uses_;
-  r.verdict = AuthVerdict::Ok;
+  r.verdict = AuthVerdict::kOk;
   return r;
 }
 
@@ -303,9 +303,9 @@ std::int64_t realtime_now_us() noexcept {
 
 AuthVerdict verify_stored(const LinkKey& key, std::string_view channel, const std::uint8_t* data,
                           std::size_t size) noexcept {
-  if (!has_auth_trailer(data, size)) return AuthVerdict::Missing;
-  return mac_matches(key, channel, data, size - kAuthTrailerBytes) ? AuthVerdict::Ok
-                                                                   : AuthVerdict::BadMac;
+  if (!has_auth_trailer(data, size)) return AuthVerdict::kMissing;
+  return mac_matches(key, channel, data, size - kAuthTrailerBytes) ? AuthVerdict::kOk
+                                                                   : AuthVerdict::kBadMac;
 }
 
 }  // namespace tsmh::bridge

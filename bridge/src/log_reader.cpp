@@ -104,9 +104,9 @@ std::optional<std::size_t> authentic_size(const LogEvent& ev, const LinkKey* key
   if (options.skip_mac) return has_mac ? size - kAuthTrailerBytes : size;
   if (key != nullptr) {
     switch (verify_stored(*key, ev.channel, ev.data.data(), size)) {
-      case AuthVerdict::Ok:
+      case AuthVerdict::kOk:
         return size - kAuthTrailerBytes;
-      case AuthVerdict::Missing:
+      case AuthVerdict::kMissing:
         ++out.skipped_no_mac;
         return std::nullopt;
       default:
@@ -271,8 +271,8 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
     throw LogError(file, "not an LCM log (it does not start with LCM's event sync word)");
   // Our own reader: liblcm's trusts the length fields (issue 15).
   LogEventReader log(bytes);
-  const std::string state_channel = channel_name(prefix, Channel::SlaveState);
-  const std::string truth_channel = channel_name(prefix, Channel::SlaveTruth);
+  const std::string state_channel = channel_name(prefix, Channel::kSlaveState);
+  const std::string truth_channel = channel_name(prefix, Channel::kSlaveTruth);
 
   JointSeries out;
   out.source = file;

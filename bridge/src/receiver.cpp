@@ -32,7 +32,7 @@ void Receiver::on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string&
   std::size_t size = rbuf->data_size;
   if (route->verifier != nullptr) {
     const AuthResult auth = route->verifier->verify(channel, data, size, realtime_now_us());
-    if (auth.verdict != AuthVerdict::Ok) return inbox->reject_unauthentic(auth, receive_ns);
+    if (auth.verdict != AuthVerdict::kOk) return inbox->reject_unauthentic(auth, receive_ns);
     size = auth.payload_size;
   } else if (has_auth_trailer(data, size)) {
     size -= kAuthTrailerBytes;  // an unkeyed reader (a test, a tool) still decodes signed traffic

@@ -8,25 +8,25 @@ namespace tsmh::bridge {
 
 std::string_view reason_name(RejectReason reason) noexcept {
   switch (reason) {
-    case RejectReason::Decode:
+    case RejectReason::kDecode:
       return "decode";
-    case RejectReason::JointCount:
+    case RejectReason::kJointCount:
       return "joint_count";
-    case RejectReason::NonFinite:
+    case RejectReason::kNonFinite:
       return "non_finite";
-    case RejectReason::OutOfRange:
+    case RejectReason::kOutOfRange:
       return "out_of_range";
-    case RejectReason::TimeBackwards:
+    case RejectReason::kTimeBackwards:
       return "time_backwards";
-    case RejectReason::Implausible:
+    case RejectReason::kImplausible:
       return "implausible_step";
-    case RejectReason::Unauthenticated:
+    case RejectReason::kUnauthenticated:
       return "unauthenticated";
-    case RejectReason::BadMac:
+    case RejectReason::kBadMac:
       return "bad_mac";
-    case RejectReason::Stale:
+    case RejectReason::kStale:
       return "stale";
-    case RejectReason::Replayed:
+    case RejectReason::kReplayed:
       return "replayed";
   }
   return "unknown";
@@ -62,51 +62,51 @@ std::string describe(const Rejection& r, std::string_view channel) {
   }
   out += ": ";
   switch (r.reason) {
-    case RejectReason::Decode:
+    case RejectReason::kDecode:
       out += "cannot decode: ";
       out += field;
       break;
-    case RejectReason::JointCount:
+    case RejectReason::kJointCount:
       out += "joint count ";
       out += value;
       out += " rejected (";
       out += field;
       out += ')';
       break;
-    case RejectReason::NonFinite:
+    case RejectReason::kNonFinite:
       out += field;
       out += " = ";
       out += value;
       out += " is not finite";
       break;
-    case RejectReason::OutOfRange:
+    case RejectReason::kOutOfRange:
       out += field;
       out += " = ";
       out += value;
       out += " is outside its configured range";
       break;
-    case RejectReason::TimeBackwards:
+    case RejectReason::kTimeBackwards:
       out += "utime ";
       out += value;
       out += " us is not after the previous message's (";
       out += field;
       out += ')';
       break;
-    case RejectReason::Implausible:
+    case RejectReason::kImplausible:
       out += field;
       out += " stepped by ";
       out += value;
       out += " since the last accepted sample: faster than its configured limit";
       break;
-    case RejectReason::Unauthenticated:
+    case RejectReason::kUnauthenticated:
       out += "no authentication trailer (sender has no link key): ";
       out += field;
       break;
-    case RejectReason::BadMac:
+    case RejectReason::kBadMac:
       out += "MAC does not match (wrong link key, or altered on the way): ";
       out += field;
       break;
-    case RejectReason::Stale:
+    case RejectReason::kStale:
       out += "sent ";
       out += value;
       out +=
@@ -114,7 +114,7 @@ std::string describe(const Rejection& r, std::string_view channel) {
           "not synchronised): ";
       out += field;
       break;
-    case RejectReason::Replayed:
+    case RejectReason::kReplayed:
       out += "replayed: ";
       out += field;
       out += " already seen or older than the replay window";

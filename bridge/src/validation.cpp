@@ -13,8 +13,8 @@ std::optional<Rejection> check(const char* name, const JointArray& a, int n, con
   for (int j = 0; j < n; ++j) {
     const double v = a[static_cast<std::size_t>(j)];
     if (std::isnan(v) && allow_nan) continue;
-    if (!std::isfinite(v)) return make_rejection(RejectReason::NonFinite, name, v, j);
-    if (!range.contains(v)) return make_rejection(RejectReason::OutOfRange, name, v, j);
+    if (!std::isfinite(v)) return make_rejection(RejectReason::kNonFinite, name, v, j);
+    if (!range.contains(v)) return make_rejection(RejectReason::kOutOfRange, name, v, j);
   }
   return std::nullopt;
 }
@@ -27,7 +27,7 @@ std::optional<Rejection> check_step(const char* name, const JointArray& prev,
   for (int j = 0; j < n; ++j) {
     const auto k = static_cast<std::size_t>(j);
     const double d = next[k] - prev[k];
-    if (std::fabs(d) > max_step) return make_rejection(RejectReason::Implausible, name, d, j);
+    if (std::fabs(d) > max_step) return make_rejection(RejectReason::kImplausible, name, d, j);
   }
   return std::nullopt;
 }
@@ -48,12 +48,12 @@ std::optional<Rejection> check_joint_count(int num_joints, int expected) noexcep
   if (num_joints < 1 || num_joints > kMaxJoints) {
     char what[96];
     std::snprintf(what, sizeof what, "num_joints must be 1..%d", kMaxJoints);
-    return make_rejection(RejectReason::JointCount, what, num_joints);
+    return make_rejection(RejectReason::kJointCount, what, num_joints);
   }
   if (expected > 0 && num_joints != expected) {
     char what[96];
     std::snprintf(what, sizeof what, "configured for %d joints", expected);
-    return make_rejection(RejectReason::JointCount, what, num_joints);
+    return make_rejection(RejectReason::kJointCount, what, num_joints);
   }
   return std::nullopt;
 }

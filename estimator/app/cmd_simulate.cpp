@@ -19,9 +19,9 @@ struct SimulateOptions {
   std::string input;
   std::string output;
   std::optional<double> radius;
-  estimator::DerivativeSource derivatives = estimator::DerivativeSource::automatic;
-  estimator::SignMode sign = estimator::SignMode::smooth;
-  estimator::StartState start = estimator::StartState::free_tip;
+  estimator::DerivativeSource derivatives = estimator::DerivativeSource::kAutomatic;
+  estimator::SignMode sign = estimator::SignMode::kSmooth;
+  estimator::StartState start = estimator::StartState::kFreeTip;
 };
 
 // Without exact derivatives the friction is what haptic-server would have
@@ -44,11 +44,11 @@ void run_simulate(const SimulateOptions& o, const Context& ctx) {
   auto model = estimator::load_model(o.params);
   const auto rec = ctx.sources.load(o.input, o.radius, {});
   const bool exact =
-      o.derivatives == estimator::DerivativeSource::exact ||
-      (o.derivatives == estimator::DerivativeSource::automatic && rec.has_derivatives());
+      o.derivatives == estimator::DerivativeSource::kExact ||
+      (o.derivatives == estimator::DerivativeSource::kAutomatic && rec.has_derivatives());
   std::vector<double> f;
   if (exact) {
-    const auto motion = estimator::motion_from_recording(rec, estimator::DerivativeSource::exact);
+    const auto motion = estimator::motion_from_recording(rec, estimator::DerivativeSource::kExact);
     f = estimator::simulate_friction(*model, motion);
   } else {
     f = causal_friction(*model, rec, o);
@@ -85,21 +85,21 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "Pulley radius in m (overrides '# radius_m:' in the input)")
       ->check(CLI::PositiveNumber);
   const std::map<std::string, estimator::DerivativeSource> sources{
-      {"auto", estimator::DerivativeSource::automatic},
-      {"differentiator", estimator::DerivativeSource::differentiator},
-      {"exact", estimator::DerivativeSource::exact}};
+      {"auto", estimator::DerivativeSource::kAutomatic},
+      {"differentiator", estimator::DerivativeSource::kDifferentiator},
+      {"exact", estimator::DerivativeSource::kExact}};
   cmd->add_option("--derivatives", opts->derivatives,
                   "auto: xd_in/xdd_in when present, else the causal estimator haptic-server "
                   "runs (differentiator: always that; exact: xd_in/xdd_in)")
       ->transform(CLI::CheckedTransformer(sources, CLI::ignore_case));
-  const std::map<std::string, estimator::SignMode> signs{{"smooth", estimator::SignMode::smooth},
-                                                         {"hard", estimator::SignMode::hard}};
+  const std::map<std::string, estimator::SignMode> signs{{"smooth", estimator::SignMode::kSmooth},
+                                                         {"hard", estimator::SignMode::kHard}};
   cmd->add_option("--sign", opts->sign,
                   "sgn(xdd) of the causal estimator: smooth (haptic-server's default) or hard "
                   "(the paper's -1/0/+1 switch)")
       ->transform(CLI::CheckedTransformer(signs, CLI::ignore_case));
   const std::map<std::string, estimator::StartState> starts{
-      {"free_tip", estimator::StartState::free_tip}, {"zero", estimator::StartState::zero}};
+      {"free_tip", estimator::StartState::kFreeTip}, {"zero", estimator::StartState::kZero}};
   cmd->add_option("--start-state", opts->start,
                   "friction state at the first sample: free_tip (tared from tau_in, the "
                   "default) or zero")

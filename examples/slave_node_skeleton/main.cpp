@@ -123,7 +123,7 @@ struct CommandInbox {
     if (verifier != nullptr) {
       // Before decoding: only the holder of the link key moves the robot.
       const auto auth = verifier->verify(channel, data, size, tsmh::bridge::realtime_now_us());
-      if (auth.verdict != tsmh::bridge::AuthVerdict::Ok) {
+      if (auth.verdict != tsmh::bridge::AuthVerdict::kOk) {
         ++unauthentic;  // no MAC, wrong key, stale or replayed
         return;
       }

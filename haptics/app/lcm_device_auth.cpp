@@ -14,18 +14,18 @@ class BridgeLcmAuth final : public master_devices::LcmMessageAuth {
                                     std::size_t size, std::string& why) noexcept override {
     const bridge::AuthResult r = verifier_.verify(channel, data, size, bridge::realtime_now_us());
     switch (r.verdict) {
-      case bridge::AuthVerdict::Ok:
+      case bridge::AuthVerdict::kOk:
         return r.payload_size;
-      case bridge::AuthVerdict::Missing:
+      case bridge::AuthVerdict::kMissing:
         why = "no MAC trailer (the sender has no link key)";
         break;
-      case bridge::AuthVerdict::BadMac:
+      case bridge::AuthVerdict::kBadMac:
         why = "MAC does not match (wrong link key, or altered on the way)";
         break;
-      case bridge::AuthVerdict::Stale:
+      case bridge::AuthVerdict::kStale:
         why = "sent " + std::to_string(r.age_us) + " us from this host's clock (a recording?)";
         break;
-      case bridge::AuthVerdict::Replayed:
+      case bridge::AuthVerdict::kReplayed:
         why = "replayed (sender and sequence already seen)";
         break;
     }

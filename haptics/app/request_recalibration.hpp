@@ -42,7 +42,7 @@ inline int request_recalibration(const std::string& config_path, const std::stri
                "haptic-server: CALIBRATION_REQUEST sent on '%s' (%d joints, %s): move the "
                "instrument in free space for %.1f s; the outcome is in the server's log and "
                "HAPTIC_STATUS\n",
-               bridge::channel_name(b.prefix, bridge::Channel::CalibrationRequest).c_str(),
+               bridge::channel_name(b.prefix, bridge::Channel::kCalibrationRequest).c_str(),
                cfg.loop.joints, b.url.c_str(), cfg.loop.recalibration.collect_s);
   return 0;
 }

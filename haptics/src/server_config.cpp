@@ -211,11 +211,11 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
     jc.radius_m = in_range(j, "radius_m", 0.01, 0.0, 1.0, true);
     const std::string sign = j.get_string("sign", "smooth");
     if (sign != "smooth" && sign != "hard") j.fail("sign", "must be smooth or hard");
-    jc.sign = sign == "hard" ? estimator::SignMode::hard : estimator::SignMode::smooth;
+    jc.sign = sign == "hard" ? estimator::SignMode::kHard : estimator::SignMode::kSmooth;
     const std::string start = j.get_string("start_state", "free_tip");
     if (start != "free_tip" && start != "zero") j.fail("start_state", "must be free_tip or zero");
     jc.start_state =
-        start == "zero" ? estimator::StartState::zero : estimator::StartState::free_tip;
+        start == "zero" ? estimator::StartState::kZero : estimator::StartState::kFreeTip;
     c.joints.push_back(jc);
     c.loop.force[i] = {in_range(j, "force_scale", 1.0, 0.0, 1e3), unit_sign(j, "force_sign"),
                        in_range(j, "deadband_nm", 0.0, 0.0, 1e3)};

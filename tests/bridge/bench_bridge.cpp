@@ -88,7 +88,7 @@ class Pacer {
       : tx_(cfg, SenderOptions{mode.poll}), direct_(mode.direct) {
     box_ = &tx_.outbox<SlaveStateSample>();
     tx_.start();
-    channel_ = channel_name(cfg.prefix, Channel::SlaveState);
+    channel_ = channel_name(cfg.prefix, Channel::kSlaveState);
     thread_ = std::thread([this, count] {
       std::int64_t next = monotonic_now_ns();
       for (int i = 0; i < count && !stop_; ++i) {
@@ -178,7 +178,7 @@ void bench_publish_cost(const std::string& prefix, int count) {
   Sender poll_tx(poll_cfg, SenderOptions{std::chrono::microseconds(100)});
   auto& poll_box = poll_tx.outbox<SlaveStateSample>();
   poll_tx.start();
-  const std::string channel = channel_name(direct_cfg.prefix, Channel::SlaveState);
+  const std::string channel = channel_name(direct_cfg.prefix, Channel::kSlaveState);
 
   // Interleaved at 1 kHz each so that all three see the same machine load.
   std::vector<double> direct_us, notify_us, poll_us;

@@ -69,7 +69,7 @@ void bench(int joints, int count) {
   std::size_t ok = 0;
   for (const auto& m : messages) {
     const std::int64_t t0 = monotonic_now_ns();
-    ok += verifier.verify(channel, m.data(), m.size(), now_us).verdict == AuthVerdict::Ok;
+    ok += verifier.verify(channel, m.data(), m.size(), now_us).verdict == AuthVerdict::kOk;
     verify_ns.push_back(static_cast<double>(monotonic_now_ns() - t0));
   }
   // Back-to-back means (no timer inside the loop).
@@ -81,7 +81,7 @@ void bench(int joints, int count) {
   MessageVerifier fresh(key);
   const std::int64_t v0 = monotonic_now_ns();
   for (const auto& m : messages)
-    ok += fresh.verify(channel, m.data(), m.size(), now_us).verdict == AuthVerdict::Ok;
+    ok += fresh.verify(channel, m.data(), m.size(), now_us).verdict == AuthVerdict::kOk;
   const double verify_mean = static_cast<double>(monotonic_now_ns() - v0) / count;
 
   std::printf(

@@ -56,8 +56,8 @@ int publish_mode(const std::string& url, const std::string& prefix, long count, 
   auto& states = tx.outbox<SlaveStateSample>();
   auto& truths = tx.outbox<SlaveTruthSample>();
   tx.start();
-  const std::string state_channel = channel_name(prefix, Channel::SlaveState);
-  const std::string truth_channel = channel_name(prefix, Channel::SlaveTruth);
+  const std::string state_channel = channel_name(prefix, Channel::kSlaveState);
+  const std::string truth_channel = channel_name(prefix, Channel::kSlaveTruth);
   const auto period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
   timespec next{};
   clock_gettime(CLOCK_MONOTONIC, &next);

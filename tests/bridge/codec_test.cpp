@@ -167,22 +167,22 @@ TEST(Decoder, RejectsHostileBytesWithoutCrashingOrAllocatingHuge) {
     return r ? r->reason : static_cast<RejectReason>(255);
   };
 
-  EXPECT_EQ(reason({}), RejectReason::Decode) << "empty";
-  EXPECT_EQ(reason({good.begin(), good.begin() + 20}), RejectReason::Decode) << "truncated header";
-  EXPECT_EQ(reason({good.begin(), good.end() - 1}), RejectReason::Decode) << "one byte short";
+  EXPECT_EQ(reason({}), RejectReason::kDecode) << "empty";
+  EXPECT_EQ(reason({good.begin(), good.begin() + 20}), RejectReason::kDecode) << "truncated header";
+  EXPECT_EQ(reason({good.begin(), good.end() - 1}), RejectReason::kDecode) << "one byte short";
   auto longer = good;
   longer.push_back(0);
-  EXPECT_EQ(reason(longer), RejectReason::Decode) << "trailing byte";
+  EXPECT_EQ(reason(longer), RejectReason::kDecode) << "trailing byte";
 
   auto huge = good;
   set_num_joints(huge, 0x7fffffff);
-  EXPECT_EQ(reason(huge), RejectReason::JointCount) << "2^31-1 joints: must not resize vectors";
+  EXPECT_EQ(reason(huge), RejectReason::kJointCount) << "2^31-1 joints: must not resize vectors";
   auto negative = good;
   set_num_joints(negative, -1);
-  EXPECT_EQ(reason(negative), RejectReason::JointCount);
+  EXPECT_EQ(reason(negative), RejectReason::kJointCount);
   auto zero = good;
   set_num_joints(zero, 0);
-  EXPECT_EQ(reason(zero), RejectReason::JointCount);
+  EXPECT_EQ(reason(zero), RejectReason::kJointCount);
 
   std::vector<std::uint8_t> other;
   MasterCommandSample c;
@@ -190,7 +190,7 @@ TEST(Decoder, RejectsHostileBytesWithoutCrashingOrAllocatingHuge) {
   encode_sample(c, other);
   const auto r = d.decode(other.data(), other.size(), out);
   ASSERT_TRUE(r.has_value());
-  EXPECT_EQ(r->reason, RejectReason::Decode);
+  EXPECT_EQ(r->reason, RejectReason::kDecode);
   EXPECT_NE(std::string(r->what.data()).find("slave_state_t"), std::string::npos) << r->what.data();
 
   std::mt19937 rng(7);
@@ -216,7 +216,7 @@ TEST(Validation, RejectsNonFiniteAndOutOfRangeNamingTheField) {
   s.x_in[1] = std::nan("");
   auto r = validate(s, limits);
   ASSERT_TRUE(r.has_value());
-  EXPECT_EQ(r->reason, RejectReason::NonFinite);
+  EXPECT_EQ(r->reason, RejectReason::kNonFinite);
   EXPECT_EQ(r->joint, 1);
   r->seq = 3;
   EXPECT_EQ(describe(*r, "ARM1_SLAVE_STATE"),
@@ -230,7 +230,7 @@ TEST(Validation, RejectsNonFiniteAndOutOfRangeNamingTheField) {
   s.T3[0] = 1e6;
   r = validate(s, limits);
   ASSERT_TRUE(r.has_value());
-  EXPECT_EQ(r->reason, RejectReason::OutOfRange);
+  EXPECT_EQ(r->reason, RejectReason::kOutOfRange);
   EXPECT_STREQ(r->what.data(), "T3");
 
   s = make_state(3, 4);
@@ -249,7 +249,7 @@ TEST(Validation, RejectsNonFiniteAndOutOfRangeNamingTheField) {
   f.torque[0] = 150.0;
   r = validate(f, MasterForceLimits{});
   ASSERT_TRUE(r.has_value());
-  EXPECT_EQ(r->reason, RejectReason::OutOfRange);
+  EXPECT_EQ(r->reason, RejectReason::kOutOfRange);
 }
 
 TEST(Validation, JointCount) {
@@ -261,8 +261,8 @@ TEST(Validation, JointCount) {
 }
 
 TEST(Channels, NamesAndRegexEscape) {
-  EXPECT_EQ(channel_name("ARM1_", Channel::SlaveState), "ARM1_SLAVE_STATE");
-  EXPECT_EQ(channel_name("", Channel::MasterForce), "MASTER_FORCE");
+  EXPECT_EQ(channel_name("ARM1_", Channel::kSlaveState), "ARM1_SLAVE_STATE");
+  EXPECT_EQ(channel_name("", Channel::kMasterForce), "MASTER_FORCE");
   EXPECT_EQ(regex_escape("A.B+C"), "A\\.B\\+C");
   EXPECT_NO_THROW(check_channel_name(std::string(63, 'C')));
   EXPECT_THROW(check_channel_name(std::string(64, 'C')), std::invalid_argument);

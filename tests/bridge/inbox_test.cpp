@@ -54,10 +54,10 @@ TEST(Inbox, KeepsNewestValidSampleAndCountsEverything) {
   const ChannelStats st = in.stats();
   EXPECT_EQ(st.received, 8U);
   EXPECT_EQ(st.accepted, 2U);
-  EXPECT_EQ(st.rejected(RejectReason::NonFinite), 1U);
-  EXPECT_EQ(st.rejected(RejectReason::JointCount), 1U);
-  EXPECT_EQ(st.rejected(RejectReason::Decode), 1U);
-  EXPECT_EQ(st.rejected(RejectReason::TimeBackwards), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kNonFinite), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kJointCount), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kDecode), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kTimeBackwards), 1U);
   EXPECT_EQ(st.rejected(), 4U);
   EXPECT_EQ(st.duplicates, 1U);
   EXPECT_EQ(st.reordered, 1U);
@@ -73,7 +73,7 @@ TEST(Inbox, KeepsNewestValidSampleAndCountsEverything) {
 
   const auto last = in.last_rejection();
   ASSERT_TRUE(last.has_value());
-  EXPECT_EQ(last->reason, RejectReason::TimeBackwards);
+  EXPECT_EQ(last->reason, RejectReason::kTimeBackwards);
   EXPECT_EQ(last->seq, 6);
   EXPECT_NE(describe(*last, in.channel()).find("X_SLAVE_STATE seq 6"), std::string::npos);
 }
@@ -83,7 +83,7 @@ TEST(Inbox, ConfiguredRangesReject) {
   tight.x_in = {-0.5, 0.5};
   Inbox<SlaveStateSample> in("C", {.limits = tight, .clocks_shared = false});
   feed(in, make_state(0, 1), 10);  // x_in[1] = 1.0 is outside
-  EXPECT_EQ(in.stats().rejected(RejectReason::OutOfRange), 1U);
+  EXPECT_EQ(in.stats().rejected(RejectReason::kOutOfRange), 1U);
   auto one_joint = make_state(1, 2, 1);
   feed(in, one_joint, 20);
   EXPECT_EQ(in.stats().accepted, 1U);
@@ -169,7 +169,7 @@ TEST(Inbox, RejectsPhysicallyImpossibleStepsFromRandomBodies) {
         << "message " << k << ": a random body reached the loop (seq " << got.seq << ")";
   }
   const ChannelStats st = in.stats();
-  EXPECT_GE(st.rejected(RejectReason::Implausible), garbage_seen * 9 / 10);
+  EXPECT_GE(st.rejected(RejectReason::kImplausible), garbage_seen * 9 / 10);
   EXPECT_GE(st.accepted, genuine_sent * 9 / 10) << "the genuine stream must still get through";
   EXPECT_EQ(st.resyncs, 0U) << "bursts of garbage must never look like a re-homed slave";
 }
@@ -190,7 +190,7 @@ TEST(Inbox, RebasesOnAConsistentNewTrajectory) {
     feed(in, s, now_ns);
   }
   const ChannelStats st = in.stats();
-  EXPECT_EQ(st.rejected(RejectReason::Implausible), 4U);
+  EXPECT_EQ(st.rejected(RejectReason::kImplausible), 4U);
   EXPECT_EQ(st.resyncs, 1U);
   SlaveStateSample got;
   ASSERT_EQ(in.latest(got), 3U + 3U) << "3 before, then the 5th of the new trajectory on";

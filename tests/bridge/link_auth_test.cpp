@@ -66,11 +66,11 @@ TEST(LinkAuth, SignedMessageVerifiesAndGivesThePayloadSize) {
   EXPECT_TRUE(has_auth_trailer(m.data(), m.size()));
   EXPECT_FALSE(has_auth_trailer(payload.data(), payload.size()));
   const AuthResult r = verifier.verify("ARM1_MASTER_COMMAND", m.data(), m.size(), kNow);
-  EXPECT_EQ(r.verdict, AuthVerdict::Ok);
+  EXPECT_EQ(r.verdict, AuthVerdict::kOk);
   EXPECT_EQ(r.payload_size, payload.size());
   EXPECT_EQ(r.trailer.sender_id, signer.sender_id());
   EXPECT_EQ(r.trailer.seq, 1U);
-  EXPECT_EQ(verify_stored(*key, "ARM1_MASTER_COMMAND", m.data(), m.size()), AuthVerdict::Ok);
+  EXPECT_EQ(verify_stored(*key, "ARM1_MASTER_COMMAND", m.data(), m.size()), AuthVerdict::kOk);
 }
 
 TEST(LinkAuth, EveryAlteredByteIsRejected) {
@@ -83,8 +83,8 @@ TEST(LinkAuth, EveryAlteredByteIsRejected) {
     bad[i] ^= 0x01;
     const AuthVerdict v = verdict(verifier, "C", bad, kNow);
     // The magic and version bytes make it "no trailer"; every other byte the MAC covers.
-    EXPECT_TRUE(v == AuthVerdict::BadMac ||
-                (v == AuthVerdict::Missing && i >= m.size() - 64 && i < m.size() - 56))
+    EXPECT_TRUE(v == AuthVerdict::kBadMac ||
+                (v == AuthVerdict::kMissing && i >= m.size() - 64 && i < m.size() - 56))
         << "byte " << i << " flipped, verdict " << static_cast<int>(v);
   }
 }
@@ -94,11 +94,11 @@ TEST(LinkAuth, WrongKeyAndOtherChannelAreBadMac) {
   const MessageSigner signer(key);
   const auto m = signed_message(signer, "ARM1_MASTER_COMMAND", some_payload(), 1, kNow);
   MessageVerifier other_key(new_key());
-  EXPECT_EQ(verdict(other_key, "ARM1_MASTER_COMMAND", m, kNow), AuthVerdict::BadMac);
+  EXPECT_EQ(verdict(other_key, "ARM1_MASTER_COMMAND", m, kNow), AuthVerdict::kBadMac);
   MessageVerifier verifier(key);
-  EXPECT_EQ(verdict(verifier, "ARM2_MASTER_COMMAND", m, kNow), AuthVerdict::BadMac)
+  EXPECT_EQ(verdict(verifier, "ARM2_MASTER_COMMAND", m, kNow), AuthVerdict::kBadMac)
       << "the channel name is signed: one arm's command is not another's";
-  EXPECT_EQ(verdict(verifier, "ARM1_MASTER_COMMAND", some_payload(), kNow), AuthVerdict::Missing);
+  EXPECT_EQ(verdict(verifier, "ARM1_MASTER_COMMAND", some_payload(), kNow), AuthVerdict::kMissing);
 }
 
 TEST(LinkAuth, ReplayWindowRefusesRepeatsAndTooOldButAcceptsReordering) {
@@ -106,23 +106,23 @@ TEST(LinkAuth, ReplayWindowRefusesRepeatsAndTooOldButAcceptsReordering) {
   const MessageSigner signer(key);
   MessageVerifier v(key);
   auto msg = [&](std::uint64_t seq) { return signed_message(signer, "C", {1, 2, 3}, seq, kNow); };
-  EXPECT_EQ(verdict(v, "C", msg(10), kNow), AuthVerdict::Ok);
-  EXPECT_EQ(verdict(v, "C", msg(10), kNow), AuthVerdict::Replayed);
-  EXPECT_EQ(verdict(v, "C", msg(12), kNow), AuthVerdict::Ok);
-  EXPECT_EQ(verdict(v, "C", msg(11), kNow), AuthVerdict::Ok) << "late but never seen";
-  EXPECT_EQ(verdict(v, "C", msg(11), kNow), AuthVerdict::Replayed);
-  EXPECT_EQ(verdict(v, "C", msg(12), kNow), AuthVerdict::Replayed);
+  EXPECT_EQ(verdict(v, "C", msg(10), kNow), AuthVerdict::kOk);
+  EXPECT_EQ(verdict(v, "C", msg(10), kNow), AuthVerdict::kReplayed);
+  EXPECT_EQ(verdict(v, "C", msg(12), kNow), AuthVerdict::kOk);
+  EXPECT_EQ(verdict(v, "C", msg(11), kNow), AuthVerdict::kOk) << "late but never seen";
+  EXPECT_EQ(verdict(v, "C", msg(11), kNow), AuthVerdict::kReplayed);
+  EXPECT_EQ(verdict(v, "C", msg(12), kNow), AuthVerdict::kReplayed);
   // Slide the window by more than its width: everything before it is refused.
   const std::uint64_t top = 12 + MessageVerifier::kWindow + 5;
-  EXPECT_EQ(verdict(v, "C", msg(top), kNow), AuthVerdict::Ok);
-  EXPECT_EQ(verdict(v, "C", msg(13), kNow), AuthVerdict::Replayed) << "older than the window";
-  EXPECT_EQ(verdict(v, "C", msg(top - MessageVerifier::kWindow), kNow), AuthVerdict::Replayed);
-  EXPECT_EQ(verdict(v, "C", msg(top - MessageVerifier::kWindow + 1), kNow), AuthVerdict::Ok)
+  EXPECT_EQ(verdict(v, "C", msg(top), kNow), AuthVerdict::kOk);
+  EXPECT_EQ(verdict(v, "C", msg(13), kNow), AuthVerdict::kReplayed) << "older than the window";
+  EXPECT_EQ(verdict(v, "C", msg(top - MessageVerifier::kWindow), kNow), AuthVerdict::kReplayed);
+  EXPECT_EQ(verdict(v, "C", msg(top - MessageVerifier::kWindow + 1), kNow), AuthVerdict::kOk)
       << "the oldest number inside the window, never seen";
   // A slide by less than the width clears exactly the numbers it newly covers.
-  EXPECT_EQ(verdict(v, "C", msg(top + 100), kNow), AuthVerdict::Ok);
-  EXPECT_EQ(verdict(v, "C", msg(top + 50), kNow), AuthVerdict::Ok);
-  EXPECT_EQ(verdict(v, "C", msg(top), kNow), AuthVerdict::Replayed) << "still remembered";
+  EXPECT_EQ(verdict(v, "C", msg(top + 100), kNow), AuthVerdict::kOk);
+  EXPECT_EQ(verdict(v, "C", msg(top + 50), kNow), AuthVerdict::kOk);
+  EXPECT_EQ(verdict(v, "C", msg(top), kNow), AuthVerdict::kReplayed) << "still remembered";
 }
 
 TEST(LinkAuth, ForgedMessagesDoNotMoveTheWindow) {
@@ -130,15 +130,15 @@ TEST(LinkAuth, ForgedMessagesDoNotMoveTheWindow) {
   const MessageSigner signer(key);
   const MessageSigner rogue(new_key());
   MessageVerifier v(key);
-  EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 5, kNow), kNow), AuthVerdict::Ok);
+  EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 5, kNow), kNow), AuthVerdict::kOk);
   // Same sender id, huge seq, wrong key: if it moved the window, seq 6 would be "too old".
   auto forged = signed_message(rogue, "C", {1}, 1'000'000, kNow);
   const auto id = signer.sender_id();
   for (int i = 0; i < 8; ++i)  // overwrite the sender id (bytes 8..15 of the trailer)
     forged[forged.size() - 56 + static_cast<std::size_t>(i)] =
         static_cast<std::uint8_t>(id >> (8 * i));
-  EXPECT_EQ(verdict(v, "C", forged, kNow), AuthVerdict::BadMac);
-  EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 6, kNow), kNow), AuthVerdict::Ok);
+  EXPECT_EQ(verdict(v, "C", forged, kNow), AuthVerdict::kBadMac);
+  EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 6, kNow), kNow), AuthVerdict::kOk);
 }
 
 TEST(LinkAuth, StaleOrFutureSendTimeIsRefusedUnlessFreshnessIsOff) {
@@ -146,21 +146,21 @@ TEST(LinkAuth, StaleOrFutureSendTimeIsRefusedUnlessFreshnessIsOff) {
   const MessageSigner signer(key);
   MessageVerifier v(key, {.max_age_us = 2'000'000});
   EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 1, kNow - 1'999'000), kNow),
-            AuthVerdict::Ok);
+            AuthVerdict::kOk);
   const AuthResult old = [&] {
     const auto m = signed_message(signer, "C", {1}, 2, kNow - 2'001'000);
     return v.verify("C", m.data(), m.size(), kNow);
   }();
-  EXPECT_EQ(old.verdict, AuthVerdict::Stale);
+  EXPECT_EQ(old.verdict, AuthVerdict::kStale);
   EXPECT_EQ(old.age_us, 2'001'000);
   EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 3, kNow + 2'001'000), kNow),
-            AuthVerdict::Stale);
+            AuthVerdict::kStale);
   EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 4, INT64_MIN), kNow),
-            AuthVerdict::Stale)
+            AuthVerdict::kStale)
       << "a hostile time must not overflow into 'fresh'";
   MessageVerifier log_reader(key, {.check_freshness = false});
   EXPECT_EQ(verdict(log_reader, "C", signed_message(signer, "C", {1}, 5, 0), kNow),
-            AuthVerdict::Ok);
+            AuthVerdict::kOk);
 }
 
 TEST(LinkAuth, EachSenderHasItsOwnWindowAndTheOldestIsForgotten) {
@@ -170,21 +170,22 @@ TEST(LinkAuth, EachSenderHasItsOwnWindowAndTheOldestIsForgotten) {
   for (std::size_t i = 0; i <= MessageVerifier::kSenders; ++i)
     senders.push_back(std::make_unique<MessageSigner>(key));
   const auto first = signed_message(*senders[0], "C", {1}, 1, kNow);
-  EXPECT_EQ(verdict(v, "C", first, kNow), AuthVerdict::Ok);
+  EXPECT_EQ(verdict(v, "C", first, kNow), AuthVerdict::kOk);
   for (std::size_t i = 1; i < MessageVerifier::kSenders; ++i)
     EXPECT_EQ(verdict(v, "C", signed_message(*senders[i], "C", {1}, 1, kNow), kNow),
-              AuthVerdict::Ok)
+              AuthVerdict::kOk)
         << "seq 1 of sender " << i << " is new";
-  EXPECT_EQ(verdict(v, "C", first, kNow), AuthVerdict::Replayed) << "all senders still held";
+  EXPECT_EQ(verdict(v, "C", first, kNow), AuthVerdict::kReplayed) << "all senders still held";
   EXPECT_EQ(verdict(v, "C", signed_message(*senders[0], "C", {1}, 2, kNow), kNow),
-            AuthVerdict::Ok);  // sender 0 heard again: now sender 1 is the least recent
+            AuthVerdict::kOk);  // sender 0 heard again: now sender 1 is the least recent
   // One more sender than the table holds: the least recently heard (sender 1) goes.
   EXPECT_EQ(verdict(v, "C", signed_message(*senders.back(), "C", {1}, 1, kNow), kNow),
-            AuthVerdict::Ok);
-  EXPECT_EQ(verdict(v, "C", first, kNow), AuthVerdict::Replayed) << "sender 0 is still held";
+            AuthVerdict::kOk);
+  EXPECT_EQ(verdict(v, "C", first, kNow), AuthVerdict::kReplayed) << "sender 0 is still held";
   // The documented limit: a forgotten sender's fresh message passes once more
   // (max_age bounds how long that is possible).
-  EXPECT_EQ(verdict(v, "C", signed_message(*senders[1], "C", {1}, 1, kNow), kNow), AuthVerdict::Ok);
+  EXPECT_EQ(verdict(v, "C", signed_message(*senders[1], "C", {1}, 1, kNow), kNow),
+            AuthVerdict::kOk);
 }
 
 TEST(LinkAuth, SignerNumbersMessagesFromOne) {
@@ -195,7 +196,7 @@ TEST(LinkAuth, SignerNumbersMessagesFromOne) {
   for (std::uint64_t expect = 1; expect <= 3; ++expect) {
     signer.sign("C", m.data(), 10, m.data() + 10);
     const AuthResult r = v.verify("C", m.data(), m.size(), realtime_now_us());
-    EXPECT_EQ(r.verdict, AuthVerdict::Ok);
+    EXPECT_EQ(r.verdict, AuthVerdict::kOk);
     EXPECT_EQ(r.trailer.seq, expect);
   }
   EXPECT_NE(MessageSigner(key).sender_id(), signer.sender_id()) << "random per signer";
@@ -478,10 +479,10 @@ TEST(LinkAuthUdpm, RoguePublishersMoveNothingAuthenticatedPeerDoes) {
   std::this_thread::sleep_for(50ms);  // nothing else arrives late
   const ChannelStats st = in.stats();
   EXPECT_EQ(st.accepted, static_cast<std::uint64_t>(kGood)) << "nothing a rogue sent got through";
-  EXPECT_EQ(st.rejected(RejectReason::Unauthenticated), static_cast<std::uint64_t>(kEach));
-  EXPECT_EQ(st.rejected(RejectReason::BadMac), static_cast<std::uint64_t>(kEach));
-  EXPECT_EQ(st.rejected(RejectReason::Replayed), static_cast<std::uint64_t>(2 * kGood));
-  EXPECT_EQ(st.rejected(RejectReason::Stale), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kUnauthenticated), static_cast<std::uint64_t>(kEach));
+  EXPECT_EQ(st.rejected(RejectReason::kBadMac), static_cast<std::uint64_t>(kEach));
+  EXPECT_EQ(st.rejected(RejectReason::kReplayed), static_cast<std::uint64_t>(2 * kGood));
+  EXPECT_EQ(st.rejected(RejectReason::kStale), 1U);
   EXPECT_EQ(st.received, st.accepted + st.dropped());
   ASSERT_NE(in.latest(got), 0U);
   EXPECT_EQ(got.seq, kGood);

@@ -58,8 +58,8 @@ struct Recorded {
 Recorded read_back(const fs::path& log, const std::string& prefix) {
   Recorded r;
   r.log = log;
-  const std::string state = channel_name(prefix, Channel::SlaveState);
-  const std::string truth = channel_name(prefix, Channel::SlaveTruth);
+  const std::string state = channel_name(prefix, Channel::kSlaveState);
+  const std::string truth = channel_name(prefix, Channel::kSlaveTruth);
   lcm::LogFile in(log.string(), "r");
   Decoder<SlaveStateSample> sd;
   Decoder<SlaveTruthSample> td;
@@ -258,7 +258,7 @@ void write_replay_log(const fs::path& log, const std::string& channel) {
 TEST(LcmLog, LogplayerReplaysIntoOurReceiver) {
   const fs::path dir = temp_dir();
   const std::string prefix = test::unique_prefix();
-  const std::string channel = channel_name(prefix, Channel::SlaveState);
+  const std::string channel = channel_name(prefix, Channel::kSlaveState);
   const fs::path log = dir / "replay.lcmlog";
   write_replay_log(log, channel);
 
@@ -273,7 +273,7 @@ TEST(LcmLog, LogplayerReplaysIntoOurReceiver) {
       << "received " << inbox.stats().received;
   const ChannelStats st = inbox.stats();
   EXPECT_EQ(st.accepted, 100U);
-  EXPECT_EQ(st.rejected(RejectReason::Decode), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kDecode), 1U);
   SlaveStateSample s;
   ASSERT_EQ(inbox.latest(s), 100U);
   EXPECT_EQ(s.seq, 99);
@@ -322,7 +322,7 @@ std::string error_of(const fs::path& log, const std::string& prefix, const LogRe
 TEST(LcmLog, SignedLogIsVerifiedOrExplicitlySkipped) {
   const fs::path dir = temp_dir();
   const std::string prefix = test::unique_prefix();
-  const std::string channel = channel_name(prefix, Channel::SlaveState);
+  const std::string channel = channel_name(prefix, Channel::kSlaveState);
   const auto key = std::make_shared<const LinkKey>(LinkKey::generate());
   const fs::path log = dir / "signed.lcmlog";
   write_signed_log(log, channel, key, /*injected=*/true);
@@ -396,7 +396,7 @@ TEST(LcmLog, FileProviderUrlFeedsAReceiver) {
   const fs::path dir = temp_dir();
   const std::string prefix = test::unique_prefix();
   const fs::path log = dir / "replay.lcmlog";
-  write_replay_log(log, channel_name(prefix, Channel::SlaveState));
+  write_replay_log(log, channel_name(prefix, Channel::kSlaveState));
   Receiver rx({.url = test::cat("file://", log.string(), "?speed=0"), .prefix = prefix});
   auto& inbox = rx.subscribe<SlaveStateSample>({.expected_joints = 2, .clocks_shared = false});
   rx.start();

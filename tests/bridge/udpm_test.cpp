@@ -94,7 +94,7 @@ TEST(Udpm, HostileMessagesAreCountedAndNeverReachTheLoop) {
   auto& slave = rx.subscribe<SlaveStateSample>({.expected_joints = 2});
   rx.start();
   auto raw = open_lcm(test::test_url());
-  const std::string ch = channel_name(prefix, Channel::SlaveState);
+  const std::string ch = channel_name(prefix, Channel::kSlaveState);
   int sent = 0;
   auto send_bytes = [&](const std::vector<std::uint8_t>& b) {
     ASSERT_EQ(raw->publish(ch, b.data(), static_cast<unsigned>(b.size())), 0);
@@ -147,11 +147,11 @@ TEST(Udpm, HostileMessagesAreCountedAndNeverReachTheLoop) {
       << slave.stats().received << " of " << sent;
   const ChannelStats st = slave.stats();
   EXPECT_EQ(st.accepted, 2U);
-  EXPECT_EQ(st.rejected(RejectReason::NonFinite), 2U);
-  EXPECT_EQ(st.rejected(RejectReason::OutOfRange), 1U);
-  EXPECT_EQ(st.rejected(RejectReason::JointCount), 3U);
-  EXPECT_EQ(st.rejected(RejectReason::Decode), 3U);
-  EXPECT_EQ(st.rejected(RejectReason::TimeBackwards), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kNonFinite), 2U);
+  EXPECT_EQ(st.rejected(RejectReason::kOutOfRange), 1U);
+  EXPECT_EQ(st.rejected(RejectReason::kJointCount), 3U);
+  EXPECT_EQ(st.rejected(RejectReason::kDecode), 3U);
+  EXPECT_EQ(st.rejected(RejectReason::kTimeBackwards), 1U);
   EXPECT_EQ(st.duplicates, 1U);
   EXPECT_EQ(st.seq_gaps, 1U) << "one gap: seq 1..5 never accepted";
   EXPECT_EQ(st.seq_missing, 5U);

@@ -104,9 +104,9 @@ int main(int argc, char** argv) {
       const double peak = peak_of(syn.true_friction);
       const auto& r = syn.recording;
       std::printf("%4llu %.3f %.3f", static_cast<unsigned long long>(seed),
-                  pct(r, sim(truth, motion_from_recording(r, DerivativeSource::exact)),
+                  pct(r, sim(truth, motion_from_recording(r, DerivativeSource::kExact)),
                       syn.true_friction, peak),
-                  pct(r, sim(truth, motion_from_recording(r, DerivativeSource::differentiator)),
+                  pct(r, sim(truth, motion_from_recording(r, DerivativeSource::kDifferentiator)),
                       syn.true_friction, peak));
       for (double q : psds)
         for (double sg : sigmas) {
@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const double fitted = pct(rec, run.fit.simulated, syn.true_friction, peak);
       const double limit = pct(rec, sim(truth, run.data.motion), syn.true_friction, peak);
-      const auto exact = motion_from_recording(syn.recording, DerivativeSource::exact);
+      const auto exact = motion_from_recording(syn.recording, DerivativeSource::kExact);
       const double fitted_exact = pct(rec, sim(*run.fit.model, exact), syn.true_friction, peak);
       worst = std::max(worst, fitted);
       worst_limit = std::max(worst_limit, limit);
@@ -213,33 +213,33 @@ int main(int argc, char** argv) {
         const int form = static_cast<int>(seed % 3);
         const auto add = [&](const std::string& family) {
           if (family == "viscous") {
-            spec.add(TermKind::viscous).p[0] = 0.1;
+            spec.add(TermKind::kViscous).p[0] = 0.1;
             hidden += "viscous(c_v 0.1) ";
           } else if (family == "load") {
             if (form == 1) {
-              spec.add(TermKind::load_saturating).p = {0.04, 5.0};
+              spec.add(TermKind::kLoadSaturating).p = {0.04, 5.0};
               hidden += "load_dependent(saturating 0.04, 5 N) ";
             } else {
-              spec.add(TermKind::load_dependent).p[0] = 0.02;
+              spec.add(TermKind::kLoadDependent).p[0] = 0.02;
               hidden += "load_dependent(linear 0.02) ";
             }
           } else if (family == "position") {
             if (form == 0) {
-              spec.add(TermKind::position_dependent).p = {0.1, 0.1};
+              spec.add(TermKind::kPositionDependent).p = {0.1, 0.1};
               hidden += "position_dependent(slope 0.1, 0.1) ";
             } else if (form == 1) {
-              spec.add(TermKind::position_ripple).p = {0.08, 0.0, 9.4};
+              spec.add(TermKind::kPositionRipple).p = {0.08, 0.0, 9.4};
               hidden += "position_dependent(ripple 0.08, k 9.4) ";
             } else {
-              spec.add(TermKind::position_bump).p = {0.15, 0.3, 0.15};
+              spec.add(TermKind::kPositionBump).p = {0.15, 0.3, 0.15};
               hidden += "position_dependent(bump 0.15 at 0.3, w 0.15) ";
             }
           } else if (family == "time") {
             if (form == 2) {
-              spec.add(TermKind::time_varying).p = {0.004, 0.0, 1e6, 0.0};
+              spec.add(TermKind::kTimeVarying).p = {0.004, 0.0, 1e6, 0.0};
               hidden += "time_varying(drift 0.004/s) ";
             } else {
-              spec.add(TermKind::time_varying).p = {0.0, 0.1, 25.0, 0.0};
+              spec.add(TermKind::kTimeVarying).p = {0.0, 0.1, 25.0, 0.0};
               hidden += "time_varying(step 0.1 at 25 s) ";
             }
           }

@@ -28,8 +28,8 @@ int main() {
   for (const Case c : {Case{"two hidden effects", true}, Case{"no hidden effect", false}}) {
     TsmModelSpec s = paper_spec();
     if (c.hidden) {
-      s.add(TermKind::load_dependent).p = {0.03};
-      s.add(TermKind::position_dependent).p = {0.25, 0.2};
+      s.add(TermKind::kLoadDependent).p = {0.03};
+      s.add(TermKind::kPositionDependent).p = {0.25, 0.2};
     }
     SyntheticConfig sc;
     sc.seed = 2000;

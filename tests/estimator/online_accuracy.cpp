@@ -72,7 +72,7 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
   const TsmFrictionModel truth(paper_spec());
   SyntheticConfig sc;
   sc.motion = c.kind;
-  if (c.kind == MotionKind::multisine) {
+  if (c.kind == MotionKind::kMultisine) {
     sc.f_low_hz = c.f_low;
     sc.f_high_hz = c.f_high;
   }
@@ -86,9 +86,9 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
 
   // The recordings start at rest with the true friction state at zero, so
   // the estimators start there too (the server's default tares the state
-  // from the proximal torque instead: StartState::free_tip).
-  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::zero);
-  DistalTorqueEstimator exact(truth.clone(), rec.radius_m, diff, StartState::zero);
+  // from the proximal torque instead: StartState::kFreeTip).
+  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::kZero);
+  DistalTorqueEstimator exact(truth.clone(), rec.radius_m, diff, StartState::kZero);
   std::vector<double> f_causal(rec.size()), f_exact(rec.size());
   std::vector<Estimate> trace(dump_path.empty() ? 0 : rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
@@ -164,14 +164,14 @@ int main(int argc, char** argv) {
   app.add_option("--smooth-sigmas", diff.smooth_sigmas, "smooth sign: width in sd");
   app.add_option("--still-time", diff.still_time, "encoder unchanged this long: rest");
   CLI11_PARSE(app, argc, argv);
-  diff.sign_mode = sign_mode == "hard" ? SignMode::hard : SignMode::smooth;
+  diff.sign_mode = sign_mode == "hard" ? SignMode::kHard : SignMode::kSmooth;
 
   const std::vector<Case> all{
-      {"multisine", MotionKind::multisine, 0.2, 1.0, true},
-      {"surgeon", MotionKind::surgeon, 0, 0, true},
-      {"reversals", MotionKind::reversals, 0, 0, true},
-      {"creep", MotionKind::creep, 0, 0, true},
-      {"multisine-fast", MotionKind::multisine, 1.0, 2.0, false},
+      {"multisine", MotionKind::kMultisine, 0.2, 1.0, true},
+      {"surgeon", MotionKind::kSurgeon, 0, 0, true},
+      {"reversals", MotionKind::kReversals, 0, 0, true},
+      {"creep", MotionKind::kCreep, 0, 0, true},
+      {"multisine-fast", MotionKind::kMultisine, 1.0, 2.0, false},
   };
   std::vector<Case> cases;
   std::size_t pos = 0;

@@ -123,8 +123,8 @@ TEST(Differentiator, UnevenTimeStampsAndDroppedSamples) {
 }
 
 TEST(Differentiator, HardAccelerationSignFollowsTruthWithoutChatter) {
-  // The paper's switch (SignMode::hard): -1, 0 or +1 with hysteresis.
-  Differentiator d(DifferentiatorConfig{.position_noise = 2e-5, .sign_mode = SignMode::hard});
+  // The paper's switch (SignMode::kHard): -1, 0 or +1 with hysteresis.
+  Differentiator d(DifferentiatorConfig{.position_noise = 2e-5, .sign_mode = SignMode::kHard});
   std::mt19937 rng(5);
   std::normal_distribution<double> noise(0.0, 2e-5);
   std::vector<double> sign, xdd_true;
@@ -171,7 +171,7 @@ TEST(Differentiator, SmoothSignIsCertainAwayFromCrossingsAndQuickAtThem) {
 }
 
 TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVelocity) {
-  for (SignMode mode : {SignMode::smooth, SignMode::hard}) {
+  for (SignMode mode : {SignMode::kSmooth, SignMode::kHard}) {
     Differentiator d(DifferentiatorConfig{.sign_mode = mode});
     double sum = 0.0;
     int moving = 0, nonzero_at_rest = 0, transitions = 0;
@@ -196,10 +196,10 @@ TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVeloci
     // Quantisation makes the estimate jitter around zero at constant speed:
     // the smooth sign averages to about zero (the model is linear in it), the
     // hard one stays at 0.
-    RecordProperty(mode == SignMode::hard ? "hard_mean_sign" : "smooth_mean_sign",
+    RecordProperty(mode == SignMode::kHard ? "hard_mean_sign" : "smooth_mean_sign",
                    std::to_string(sum / moving));
     EXPECT_LT(std::fabs(sum / moving), 0.15) << "mode " << static_cast<int>(mode);
-    if (mode == SignMode::hard) {
+    if (mode == SignMode::kHard) {
       EXPECT_LE(transitions, 2);
     }
   }

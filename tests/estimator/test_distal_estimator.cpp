@@ -83,8 +83,8 @@ TEST(DistalEstimator, StartsWithTheTipFreeUnlessToldOtherwise) {
       e = est.update(i * 1e-3, 0.3, 0.05);
     return e.tau_out_est;
   };
-  EXPECT_NEAR(run(StartState::free_tip), 0.0, 1e-9);
-  EXPECT_NEAR(run(StartState::zero), 0.05, 1e-9);
+  EXPECT_NEAR(run(StartState::kFreeTip), 0.0, 1e-9);
+  EXPECT_NEAR(run(StartState::kZero), 0.05, 1e-9);
   // Beyond what the sheath can hold at rest (gamma Ff = 20.4 N, 0.204 N m)
   // the rest is tip torque.
   DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);

@@ -113,14 +113,14 @@ TEST(FitData, SplitsIntoAlternateBlocksAfterWarmUp) {
   for (std::size_t i = 0; i < d.size(); ++i) {
     const double t = d.motion[i].t;
     if (t < 0.5) {
-      EXPECT_EQ(d.role[i], SampleRole::ignored);
+      EXPECT_EQ(d.role[i], SampleRole::kIgnored);
     } else {
       const int block = static_cast<int>(std::floor((t - 0.5) / 2.0));
-      EXPECT_EQ(d.role[i], block % 2 == 0 ? SampleRole::train : SampleRole::validation) << t;
+      EXPECT_EQ(d.role[i], block % 2 == 0 ? SampleRole::kTrain : SampleRole::kValidation) << t;
     }
   }
-  const double train = static_cast<double>(d.count(SampleRole::train));
-  const double val = static_cast<double>(d.count(SampleRole::validation));
+  const double train = static_cast<double>(d.count(SampleRole::kTrain));
+  const double val = static_cast<double>(d.count(SampleRole::kValidation));
   EXPECT_NEAR(train / val, 1.0, 0.3);
   // A short record gets shorter blocks: at least three of each.
   const FitData s = prepare_fit_data(sine_recording(8.0));
@@ -156,7 +156,7 @@ TEST(ErrorMetrics, RegimesLocateAnErrorOnNegativeVelocity) {
   for (std::size_t i = 0; i < d.size(); ++i) {
     if (d.motion[i].xd < -0.3) model[i] += 1.0;  // wrong only when moving backwards
   }
-  const auto regimes = regime_errors(d, model, SampleRole::validation);
+  const auto regimes = regime_errors(d, model, SampleRole::kValidation);
   double pos = 0.0, neg = 0.0;
   for (const auto& r : regimes) {
     if (r.name == "positive_velocity") pos = r.metrics.rmse;
@@ -221,7 +221,7 @@ TEST(ParameterMap, RoundTripsEachScaleAndSkipsFixed) {
   // theta spans four decades: log scale, so u = 0.5 is the geometric mean.
   for (std::size_t k = 0; k < map.size(); ++k) {
     if (map.free()[k].name == "core.theta") {
-      EXPECT_EQ(map.free()[k].scale, ParameterScale::log);
+      EXPECT_EQ(map.free()[k].scale, ParameterScale::kLog);
       EXPECT_NEAR(map.from_unit(k, 0.5), std::sqrt(0.1 * 1000.0), 1e-9);
     }
   }

@@ -110,7 +110,7 @@ TEST(GapPaperWorld, NothingHiddenNothingFound) {
 }
 
 TEST(GapPaperWorld, HiddenViscousDrag) {
-  const auto g = gap(paper_world(112, {{TermKind::viscous, {0.3}}}));
+  const auto g = gap(paper_world(112, {{TermKind::kViscous, {0.3}}}));
   const double floor = floor_of(paper_world(112, {}));
   record(g, floor);
   EXPECT_EQ(names(g), std::vector<std::string>{"viscous"});
@@ -119,7 +119,7 @@ TEST(GapPaperWorld, HiddenViscousDrag) {
 }
 
 TEST(GapPaperWorld, HiddenLoadDependence) {
-  const auto g = gap(paper_world(113, {{TermKind::load_dependent, {0.03}}}));
+  const auto g = gap(paper_world(113, {{TermKind::kLoadDependent, {0.03}}}));
   const double floor = floor_of(paper_world(113, {}));
   record(g, floor);
   EXPECT_EQ(names(g), std::vector<std::string>{"load_dependent"});
@@ -128,7 +128,7 @@ TEST(GapPaperWorld, HiddenLoadDependence) {
 }
 
 TEST(GapPaperWorld, HiddenPositionDependence) {
-  const auto g = gap(paper_world(114, {{TermKind::position_dependent, {0.25, 0.2}}}));
+  const auto g = gap(paper_world(114, {{TermKind::kPositionDependent, {0.25, 0.2}}}));
   const double floor = floor_of(paper_world(114, {}));
   record(g, floor);
   EXPECT_EQ(names(g), std::vector<std::string>{"position_dependent"});
@@ -138,7 +138,7 @@ TEST(GapPaperWorld, HiddenPositionDependence) {
 
 TEST(GapPaperWorld, HiddenStepInTime) {
   // The sheath re-routed at t = 22 s: every sliding level up by 0.2.
-  const auto g = gap(paper_world(115, {{TermKind::time_varying, {0.0, 0.2, 22.0, 0.0}}}));
+  const auto g = gap(paper_world(115, {{TermKind::kTimeVarying, {0.0, 0.2, 22.0, 0.0}}}));
   const double floor = floor_of(paper_world(115, {}));
   record(g, floor);
   ASSERT_EQ(names(g), std::vector<std::string>{"time_varying"});
@@ -153,7 +153,7 @@ TEST(GapPaperWorld, HiddenStepInTime) {
 
 TEST(GapPaperWorld, TwoHiddenEffectsAreBothNamed) {
   const auto g = gap(paper_world(
-      116, {{TermKind::load_dependent, {0.03}}, {TermKind::position_dependent, {0.25, 0.2}}}));
+      116, {{TermKind::kLoadDependent, {0.03}}, {TermKind::kPositionDependent, {0.25, 0.2}}}));
   const double floor = floor_of(paper_world(116, {}));
   record(g, floor);
   const auto n = names(g);
@@ -178,7 +178,7 @@ TEST(GapPaperWorld, DahlBaseRediscoversThePaperEffects) {
 TEST(GapPaperWorld, RippleAlongTheStrokeIsNamedWithItsShape) {
   // Not the quadratic form of position_dependent: a ripple, 3 periods over
   // the stroke. The flexible candidates name it and close the gap.
-  const auto g = gap(paper_world(119, {{TermKind::position_ripple, {0.08, 0.0, 9.4}}}));
+  const auto g = gap(paper_world(119, {{TermKind::kPositionRipple, {0.08, 0.0, 9.4}}}));
   record(g, g.noise);
   ASSERT_EQ(names(g), std::vector<std::string>{"position_dependent"});
   EXPECT_EQ(g.effects.front().form, "position_ripple");
@@ -345,7 +345,7 @@ TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   TsmModelSpec s = paper_spec();
-  s.add(TermKind::position_dependent).p = {0.3, 0.2};
+  s.add(TermKind::kPositionDependent).p = {0.3, 0.2};
   SyntheticConfig c;
   c.seed = 118;
   c.duration_s = 20.0;
@@ -376,7 +376,7 @@ TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
   const auto model = load_model((dir / "g" / "params.yaml").string());
   const auto* tsm = dynamic_cast<const TsmFrictionModel*>(model.get());
   ASSERT_NE(tsm, nullptr);
-  EXPECT_TRUE(tsm->spec().has(TermKind::position_dependent));
+  EXPECT_TRUE(tsm->spec().has(TermKind::kPositionDependent));
   std::ifstream sum(dir / "g" / "summary.txt");
   std::stringstream text;
   text << sum.rdbuf();

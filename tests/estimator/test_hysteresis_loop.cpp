@@ -28,7 +28,7 @@ Loop run_sine(bool exact_derivatives) {
     rec.xdd_in.push_back(-0.8 * w * w * std::sin(w * t));
   }
   const auto motion = motion_from_recording(
-      rec, exact_derivatives ? DerivativeSource::exact : DerivativeSource::differentiator);
+      rec, exact_derivatives ? DerivativeSource::kExact : DerivativeSource::kDifferentiator);
   TsmFrictionModel model(paper_spec());
   Loop loop{rec.t, rec.x_in, rec.xd_in, simulate_friction(model, motion)};
   return loop;

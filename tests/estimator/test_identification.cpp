@@ -34,7 +34,7 @@ double peak_of(const std::vector<double>& v) {
 }
 
 double validation_rmse(const FitData& d, std::span<const double> a, std::span<const double> b) {
-  return error_metrics(a, b, [&](std::size_t i) { return d.role[i] == SampleRole::validation; })
+  return error_metrics(a, b, [&](std::size_t i) { return d.role[i] == SampleRole::kValidation; })
       .rmse;
 }
 
@@ -86,7 +86,7 @@ Acceptance accept(std::uint64_t seed, const TsmModelSpec& start) {
   const double peak = peak_of(syn.true_friction);
   auto t = truth.clone();
   const auto true_offline = simulate_friction(*t, d.motion);
-  const auto exact_motion = motion_from_recording(syn.recording, DerivativeSource::exact);
+  const auto exact_motion = motion_from_recording(syn.recording, DerivativeSource::kExact);
   const auto fitted_exact = simulate_friction(*a.run.fit.model, exact_motion);
   a.identified_pct = 100.0 * validation_rmse(d, true_offline, a.run.fit.simulated) / peak;
   a.fitted_pct = 100.0 * validation_rmse(d, syn.true_friction, a.run.fit.simulated) / peak;
@@ -192,7 +192,7 @@ TEST(Identification, DeterministicForASeedWhateverTheThreads) {
   auto start = TsmFrictionModel(paper_spec());
   const auto f0 = simulate_friction(start, d.motion);
   EXPECT_LE(a.train_rmse,
-            std::sqrt(weighted_mse(d.measured, f0, d.weights(SampleRole::train))) + 1e-9);
+            std::sqrt(weighted_mse(d.measured, f0, d.weights(SampleRole::kTrain))) + 1e-9);
 }
 
 TEST(Identification, WarmRefitOnlyPolishes) {

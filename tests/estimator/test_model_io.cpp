@@ -101,8 +101,8 @@ TEST(ModelIo, ErrorsNameTheField) {
 
 TEST(ModelIo, ComposedModelWithAddedEffectRoundTrips) {
   TsmModelSpec spec = paper_spec();
-  spec.add(TermKind::viscous).p = {0.12};
-  spec.add(TermKind::time_varying).p = {0.001, 0.3, 12.0, 1.5};
+  spec.add(TermKind::kViscous).p = {0.12};
+  spec.add(TermKind::kTimeVarying).p = {0.001, 0.3, 12.0, 1.5};
   const TsmFrictionModel model(spec);
   const auto back = parse_model(model_to_yaml(model), "composed");
   const auto p = back->parameters();

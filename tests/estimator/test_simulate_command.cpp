@@ -25,7 +25,7 @@ TEST(SimulateCommand, WithoutDerivativesRunsTheServersEstimatorSampleBySample) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   SyntheticConfig c;
-  c.motion = MotionKind::surgeon;
+  c.motion = MotionKind::kSurgeon;
   c.duration_s = 8.0;
   c.jitter_s = 2e-4;       // uneven time stamps
   c.drop_fraction = 0.02;  // and lost samples

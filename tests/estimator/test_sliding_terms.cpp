@@ -62,7 +62,7 @@ TEST(SlidingLevel, UsesDebouncedSignNotRawAcceleration) {
 
 TEST(SlidingLevel, FlooredAtMinimum) {
   TsmModelSpec spec = dahl_spec();
-  spec.add(TermKind::load_dependent).p = {-1.0};
+  spec.add(TermKind::kLoadDependent).p = {-1.0};
   const TsmFrictionModel model(spec);
   EXPECT_DOUBLE_EQ(model.sliding_level(Motion{.xd = 1.0, .load = 100.0}), kMinSlidingLevel);
 }
@@ -81,34 +81,34 @@ TEST(SlidingTerms, CatalogNamesAreStableAndUnique) {
   }
   EXPECT_FALSE(term_kind_from_name("nonsense").has_value());
   // The further forms are reported under their effect's name.
-  EXPECT_EQ(term_family(TermKind::position_ripple), "position_dependent");
-  EXPECT_EQ(term_family(TermKind::position_bump), "position_dependent");
-  EXPECT_EQ(term_family(TermKind::load_saturating), "load_dependent");
-  EXPECT_EQ(term_family(TermKind::viscous), "viscous");
+  EXPECT_EQ(term_family(TermKind::kPositionRipple), "position_dependent");
+  EXPECT_EQ(term_family(TermKind::kPositionBump), "position_dependent");
+  EXPECT_EQ(term_family(TermKind::kLoadSaturating), "load_dependent");
+  EXPECT_EQ(term_family(TermKind::kViscous), "viscous");
 }
 
 TEST(SlidingTerms, FlexibleFormsHaveTheirShapes) {
   Motion m;
   m.x = 0.5;
   m.load = 10.0;
-  const Term ripple{TermKind::position_ripple, {0.2, 0.1, 3.0}};
+  const Term ripple{TermKind::kPositionRipple, {0.2, 0.1, 3.0}};
   EXPECT_NEAR(term_level(ripple, m, false), 0.2 * std::sin(1.5) + 0.1 * std::cos(1.5), 1e-12);
-  const Term bump{TermKind::position_bump, {0.3, 0.4, 0.1}};
+  const Term bump{TermKind::kPositionBump, {0.3, 0.4, 0.1}};
   EXPECT_NEAR(term_level(bump, m, false), 0.3 * std::exp(-0.5), 1e-12);  // one width away
-  const Term sat{TermKind::load_saturating, {0.02, 5.0}};
+  const Term sat{TermKind::kLoadSaturating, {0.02, 5.0}};
   EXPECT_NEAR(term_level(sat, m, false), 0.02 * 5.0 * std::tanh(2.0), 1e-12);
   m.load = 1e-3;  // linear for small loads: c_sat x load
   EXPECT_NEAR(term_level(sat, m, false), 0.02 * 1e-3, 1e-9);
 }
 
 TEST(SlidingTerms, AddedEffectsContribute) {
-  Term viscous{TermKind::viscous, {0.3}};
+  Term viscous{TermKind::kViscous, {0.3}};
   EXPECT_DOUBLE_EQ(term_level(viscous, Motion{.xd = -2.0}, false), 0.6);
-  Term load{TermKind::load_dependent, {0.01}};
+  Term load{TermKind::kLoadDependent, {0.01}};
   EXPECT_DOUBLE_EQ(term_level(load, Motion{.load = 50.0}, false), 0.5);
-  Term pos{TermKind::position_dependent, {0.1, 0.2}};
+  Term pos{TermKind::kPositionDependent, {0.1, 0.2}};
   EXPECT_DOUBLE_EQ(term_level(pos, Motion{.x = 2.0}, false), 0.1 * 2.0 + 0.2 * 4.0);
-  Term time{TermKind::time_varying, {0.01, 0.5, 10.0, 2.0}};
+  Term time{TermKind::kTimeVarying, {0.01, 0.5, 10.0, 2.0}};
   EXPECT_DOUBLE_EQ(term_level(time, Motion{.t = 5.0}, false), 0.01 * 3.0);
   EXPECT_DOUBLE_EQ(term_level(time, Motion{.t = 10.0}, false), 0.01 * 8.0 + 0.5);
 }

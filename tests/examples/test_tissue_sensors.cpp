@@ -43,7 +43,7 @@ TEST(Tissue, NoduleHasTheSoftSlopeThenTheHardSlope) {
 }
 
 TEST(Tissue, ContactIsOneSided) {
-  for (auto law : {vts::ContactLaw::kelvin_voigt, vts::ContactLaw::hunt_crossley}) {
+  for (auto law : {vts::ContactLaw::kKelvinVoigt, vts::ContactLaw::kHuntCrossley}) {
     auto t = vts::tissue_preset("hard", law);
     t.surface_rad = 0.0;
     EXPECT_EQ(vts::contact(t, -0.1, 0.0).force_n, 0.0);    // not touching
@@ -53,8 +53,8 @@ TEST(Tissue, ContactIsOneSided) {
 }
 
 TEST(Tissue, HuntCrossleyHasNoForceJumpAtImpact) {
-  auto hc = vts::tissue_preset("hard", vts::ContactLaw::hunt_crossley);
-  auto kv = vts::tissue_preset("hard", vts::ContactLaw::kelvin_voigt);
+  auto hc = vts::tissue_preset("hard", vts::ContactLaw::kHuntCrossley);
+  auto kv = vts::tissue_preset("hard", vts::ContactLaw::kKelvinVoigt);
   hc.surface_rad = kv.surface_rad = 0.0;
   const double q = 1e-6, qd = 2.0;  // just touching, fast
   EXPECT_LT(vts::contact(hc, q, qd).force_n, 1e-3);

@@ -85,10 +85,10 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
       "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3}\n  - {max_torque_nm: 0.3, sign: "
       "hard, start_state: zero}\n",
       "server.yaml", "/cfg");
-  EXPECT_EQ(c.joints[0].sign, estimator::SignMode::smooth);
-  EXPECT_EQ(c.joints[0].start_state, estimator::StartState::free_tip);
-  EXPECT_EQ(c.joints[1].sign, estimator::SignMode::hard);
-  EXPECT_EQ(c.joints[1].start_state, estimator::StartState::zero);
+  EXPECT_EQ(c.joints[0].sign, estimator::SignMode::kSmooth);
+  EXPECT_EQ(c.joints[0].start_state, estimator::StartState::kFreeTip);
+  EXPECT_EQ(c.joints[1].sign, estimator::SignMode::kHard);
+  EXPECT_EQ(c.joints[1].start_state, estimator::StartState::kZero);
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: soft}\n")
                 .find("joints[0].sign"),
             std::string::npos);

@@ -176,12 +176,12 @@ TEST(Recalibration, LoopTakesARequestFromTheLinkAndReportsInStatus) {
   for (int j = 0; j < 2; ++j)
     est.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
         std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), kR,
-        estimator::DifferentiatorConfig{}, estimator::StartState::zero));
+        estimator::DifferentiatorConfig{}, estimator::StartState::kZero));
   HapticLoop loop(c, device, link, std::move(est));
   // The "slave": friction of the same model at 1.5x, on the measured motion.
   estimator::DistalTorqueEstimator twin(
       std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), kR,
-      estimator::DifferentiatorConfig{}, estimator::StartState::zero);
+      estimator::DifferentiatorConfig{}, estimator::StartState::kZero);
   std::int64_t now = 1'000'000'000;
   double last_torque = 0.0, worst_step = 0.0;
   bool drift_seen = false;

@@ -10,24 +10,25 @@
 namespace tsmh::bridge {
 
 enum class Channel {
-  SlaveState,     ///< slave -> master, per slave tick (1 kHz)
-  SlaveTruth,     ///< virtual slave -> evaluation: true distal torque, friction
-  MasterCommand,  ///< haptic server -> slave, per haptic tick
-  HapticStatus,   ///< haptic server -> monitors, 100 Hz
-  MasterState,    ///< external master driver -> haptic server
-  MasterForce,    ///< haptic server -> external master driver
+  kSlaveState,     ///< slave -> master, per slave tick (1 kHz)
+  kSlaveTruth,     ///< virtual slave -> evaluation: true distal torque, friction
+  kMasterCommand,  ///< haptic server -> slave, per haptic tick
+  kHapticStatus,   ///< haptic server -> monitors, 100 Hz
+  kMasterState,    ///< external master driver -> haptic server
+  kMasterForce,    ///< haptic server -> external master driver
 
-  CalibrationRequest,  ///< external console -> haptic server: recalibrate (issue 17)
+  kCalibrationRequest,  ///< external console -> haptic server: recalibrate (issue 17)
 };
 
 inline constexpr std::array<Channel, 7> kAllChannels = {
-    Channel::SlaveState,  Channel::SlaveTruth,  Channel::MasterCommand,     Channel::HapticStatus,
-    Channel::MasterState, Channel::MasterForce, Channel::CalibrationRequest};
+    Channel::kSlaveState,        Channel::kSlaveTruth,  Channel::kMasterCommand,
+    Channel::kHapticStatus,      Channel::kMasterState, Channel::kMasterForce,
+    Channel::kCalibrationRequest};
 
 /// "SLAVE_STATE", "SLAVE_TRUTH", ...
 std::string_view base_name(Channel channel) noexcept;
 
-/// prefix + base name, e.g. channel_name("ARM1_", Channel::SlaveState) == "ARM1_SLAVE_STATE".
+/// prefix + base name, e.g. channel_name("ARM1_", Channel::kSlaveState) == "ARM1_SLAVE_STATE".
 std::string channel_name(std::string_view prefix, Channel channel);
 
 /// LCM refuses longer channel names (LCM_MAX_CHANNEL_NAME_LENGTH).

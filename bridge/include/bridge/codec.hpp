@@ -43,43 +43,43 @@ template <>
 struct SampleTraits<SlaveStateSample> {
   using Message = tsmh::slave_state_t;
   using Limits = SlaveStateLimits;
-  static constexpr Channel channel = Channel::SlaveState;
+  static constexpr Channel channel = Channel::kSlaveState;
 };
 template <>
 struct SampleTraits<SlaveTruthSample> {
   using Message = tsmh::slave_truth_t;
   using Limits = SlaveTruthLimits;
-  static constexpr Channel channel = Channel::SlaveTruth;
+  static constexpr Channel channel = Channel::kSlaveTruth;
 };
 template <>
 struct SampleTraits<MasterCommandSample> {
   using Message = tsmh::master_command_t;
   using Limits = MasterCommandLimits;
-  static constexpr Channel channel = Channel::MasterCommand;
+  static constexpr Channel channel = Channel::kMasterCommand;
 };
 template <>
 struct SampleTraits<HapticStatusSample> {
   using Message = tsmh::haptic_status_t;
   using Limits = HapticStatusLimits;
-  static constexpr Channel channel = Channel::HapticStatus;
+  static constexpr Channel channel = Channel::kHapticStatus;
 };
 template <>
 struct SampleTraits<MasterStateSample> {
   using Message = tsmh::master_state_t;
   using Limits = MasterStateLimits;
-  static constexpr Channel channel = Channel::MasterState;
+  static constexpr Channel channel = Channel::kMasterState;
 };
 template <>
 struct SampleTraits<MasterForceSample> {
   using Message = tsmh::master_force_t;
   using Limits = MasterForceLimits;
-  static constexpr Channel channel = Channel::MasterForce;
+  static constexpr Channel channel = Channel::kMasterForce;
 };
 template <>
 struct SampleTraits<CalibrationRequestSample> {
   using Message = tsmh::calibration_request_t;
   using Limits = CalibrationRequestLimits;
-  static constexpr Channel channel = Channel::CalibrationRequest;
+  static constexpr Channel channel = Channel::kCalibrationRequest;
 };
 
 // Sample -> message (copies num_joints entries of each array; receive_ns is not sent).

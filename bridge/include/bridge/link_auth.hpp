@@ -104,15 +104,15 @@ class MessageSigner {
 };
 
 enum class AuthVerdict : std::uint8_t {
-  Ok,
-  Missing,   ///< no trailer: an unauthenticated sender
-  BadMac,    ///< wrong key, or bytes altered on the way
-  Stale,     ///< send time further than max_age from the receiver's clock
-  Replayed,  ///< (sender id, sequence) already seen, or older than the window
+  kOk,
+  kMissing,   ///< no trailer: an unauthenticated sender
+  kBadMac,    ///< wrong key, or bytes altered on the way
+  kStale,     ///< send time further than max_age from the receiver's clock
+  kReplayed,  ///< (sender id, sequence) already seen, or older than the window
 };
 
 struct AuthResult {
-  AuthVerdict verdict = AuthVerdict::Missing;
+  AuthVerdict verdict = AuthVerdict::kMissing;
   std::size_t payload_size = 0;  ///< valid when verdict is Ok
   AuthTrailer trailer{};         ///< decoded when a trailer was present
   std::int64_t age_us = 0;       ///< receiver clock - send time (Stale)

@@ -10,17 +10,17 @@
 namespace tsmh::bridge {
 
 enum class RejectReason : std::uint8_t {
-  Decode,         ///< truncated, oversized, garbage bytes or another message type
-  JointCount,     ///< num_joints outside 1..kMaxJoints or not the configured count
-  NonFinite,      ///< NaN or Inf where a number is required
-  OutOfRange,     ///< outside the configured Range
-  TimeBackwards,  ///< utime not after the last accepted one although seq advanced
-  Implausible,    ///< a step from the last accepted sample faster than the hardware can move
+  kDecode,         ///< truncated, oversized, garbage bytes or another message type
+  kJointCount,     ///< num_joints outside 1..kMaxJoints or not the configured count
+  kNonFinite,      ///< NaN or Inf where a number is required
+  kOutOfRange,     ///< outside the configured Range
+  kTimeBackwards,  ///< utime not after the last accepted one although seq advanced
+  kImplausible,    ///< a step from the last accepted sample faster than the hardware can move
   // Authentication (keyed Receiver only; bridge/link_auth.hpp), checked first:
-  Unauthenticated,  ///< no MAC trailer: a sender without the link key
-  BadMac,           ///< MAC does not match: wrong key, or bytes altered
-  Stale,            ///< send time too far from the receiver's clock (an old recording)
-  Replayed,         ///< (sender id, sequence) already seen or older than the replay window
+  kUnauthenticated,  ///< no MAC trailer: a sender without the link key
+  kBadMac,           ///< MAC does not match: wrong key, or bytes altered
+  kStale,            ///< send time too far from the receiver's clock (an old recording)
+  kReplayed,         ///< (sender id, sequence) already seen or older than the replay window
 };
 inline constexpr int kRejectReasons = 10;
 
@@ -29,7 +29,7 @@ inline constexpr int kRejectReasons = 10;
 std::string_view reason_name(RejectReason reason) noexcept;
 
 struct Rejection {
-  RejectReason reason = RejectReason::Decode;
+  RejectReason reason = RejectReason::kDecode;
   std::int32_t joint = -1;      ///< joint index at fault, -1 when not joint-specific
   double value = 0;             ///< the offending value (field value, joint count, byte count)
   std::int64_t seq = -1;        ///< the message's seq when it could be read, else -1

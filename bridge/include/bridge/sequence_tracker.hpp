@@ -8,22 +8,22 @@
 namespace tsmh::bridge {
 
 enum class Order : std::uint8_t {
-  First,          ///< first message seen: accepted
-  Next,           ///< seq = last + 1: accepted
-  Gap,            ///< seq > last + 1: accepted, `missing` numbers skipped
-  Restart,        ///< seq went down but utime went up: the sender restarted, accepted
-  Resync,         ///< accepted after `resync_after` consecutive late/backwards drops
-  Duplicate,      ///< seq = last: dropped (a stuck sender must not look fresh)
-  Late,           ///< seq < last and utime not newer: reordered, dropped
-  TimeBackwards,  ///< seq > last but utime <= last: dropped (rejected)
+  kFirst,          ///< first message seen: accepted
+  kNext,           ///< seq = last + 1: accepted
+  kGap,            ///< seq > last + 1: accepted, `missing` numbers skipped
+  kRestart,        ///< seq went down but utime went up: the sender restarted, accepted
+  kResync,         ///< accepted after `resync_after` consecutive late/backwards drops
+  kDuplicate,      ///< seq = last: dropped (a stuck sender must not look fresh)
+  kLate,           ///< seq < last and utime not newer: reordered, dropped
+  kTimeBackwards,  ///< seq > last but utime <= last: dropped (rejected)
 };
 
 struct OrderVerdict {
-  Order order = Order::First;
+  Order order = Order::kFirst;
   std::int64_t missing = 0;  ///< sequence numbers skipped (Gap only)
   constexpr bool accepted() const noexcept {
-    return order == Order::First || order == Order::Next || order == Order::Gap ||
-           order == Order::Restart || order == Order::Resync;
+    return order == Order::kFirst || order == Order::kNext || order == Order::kGap ||
+           order == Order::kRestart || order == Order::kResync;
   }
 };
 

@@ -116,7 +116,7 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
     in_band_ = 0.0;
     return 0.0;
   }
-  if (cfg_.sign_mode == SignMode::smooth) {
+  if (cfg_.sign_mode == SignMode::kSmooth) {
     // The expected sign across the estimate's uncertainty, as a ramp: no
     // decision delay at a zero crossing and no chatter. The model is linear
     // in sgn(xdd), so a fraction acts as the expected value of both branches.

@@ -41,7 +41,7 @@ Estimate DistalTorqueEstimator::finish(double t, double x, double xd, double xdd
                                        double tau_in) noexcept {
   const double dt = started_ ? t - t_prev_ : 0.0;
   const Motion m{t, x, xd, xdd, acc_sign, std::fabs(tau_in) / radius_};
-  if (!started_ && start_ == StartState::free_tip) model_->preset(tau_in / radius_, m);
+  if (!started_ && start_ == StartState::kFreeTip) model_->preset(tau_in / radius_, m);
   started_ = true;
   t_prev_ = t;
   const double f = dt > 0.0 ? model_->step(m, dt) : model_->friction();

@@ -36,38 +36,39 @@ constexpr ParamSpec kLoadSat[] = {{"c_sat", 0.0, -1.0, 5.0, "level/N"},
                                   {"l_sat", 10.0, 0.1, 1000.0, "N"}};
 
 constexpr TermInfo kCatalog[] = {
-    {TermKind::coulomb, "coulomb", "Coulomb sliding level rho1 (eqs. 6, 7)",
+    {TermKind::kCoulomb, "coulomb", "Coulomb sliding level rho1 (eqs. 6, 7)",
      "everywhere in sliding", kCoulomb},
-    {TermKind::direction_asymmetry, "direction_asymmetry",
+    {TermKind::kDirectionAsymmetry, "direction_asymmetry",
      "different sliding level for negative velocity, rho2 (eqs. 9-11): unequal sheaths and "
      "pretensions",
      "sliding with xd < 0 vs xd > 0", kAsymmetry},
-    {TermKind::stribeck, "stribeck", "Stribeck rise of friction at low speed, mu1 e^(-kappa1 |xd|)",
-     "low |xd|, both directions", kStribeck},
-    {TermKind::acceleration_dependence, "acceleration_dependence",
+    {TermKind::kStribeck, "stribeck",
+     "Stribeck rise of friction at low speed, mu1 e^(-kappa1 |xd|)", "low |xd|, both directions",
+     kStribeck},
+    {TermKind::kAccelerationDependence, "acceleration_dependence",
      "different levels accelerating vs decelerating (mu2 terms of eqs. 6-7, mu3 of eqs. 9-10)",
      "same speed, opposite sign of xdd", kAcceleration},
-    {TermKind::reversal_offset, "reversal_offset",
+    {TermKind::kReversalOffset, "reversal_offset",
      "offset lambda of the hysteresis near zero velocity, g = xd + lambda sgn(xdd) (eq. 4)",
      "near velocity reversals", kReversal},
-    {TermKind::viscous, "viscous", "viscous drag, friction grows linearly with speed",
+    {TermKind::kViscous, "viscous", "viscous drag, friction grows linearly with speed",
      "high |xd|, both directions", kViscous},
-    {TermKind::load_dependent, "load_dependent",
+    {TermKind::kLoadDependent, "load_dependent",
      "capstan effect: friction grows with the transmitted load (tension)",
      "high |tau_in|, in contact", kLoad},
-    {TermKind::position_dependent, "position_dependent",
+    {TermKind::kPositionDependent, "position_dependent",
      "friction varies with the pulley angle (wrap changes along the stroke)",
      "one end of the stroke vs the other", kPosition},
-    {TermKind::time_varying, "time_varying",
+    {TermKind::kTimeVarying, "time_varying",
      "friction drifts or steps over time (sheath re-routed, wear, temperature)",
      "late vs early in the recording", kTime},
-    {TermKind::position_ripple, "position_ripple",
+    {TermKind::kPositionRipple, "position_ripple",
      "friction varies periodically with the pulley angle (a ripple along the stroke)",
      "periodic in the angle", kRipple, "position_dependent"},
-    {TermKind::position_bump, "position_bump",
+    {TermKind::kPositionBump, "position_bump",
      "friction rises or falls locally around one angle (a kink in the sheath)",
      "around one angle of the stroke", kBump, "position_dependent"},
-    {TermKind::load_saturating, "load_saturating",
+    {TermKind::kLoadSaturating, "load_saturating",
      "capstan effect that levels off: friction grows with the load up to a limit",
      "high |tau_in|, in contact", kLoadSat, "load_dependent"},
 };
@@ -99,13 +100,13 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
   const bool negative = negative_branch(m.xd);
   const double speed = std::fabs(m.xd);
   switch (term.kind) {
-    case TermKind::coulomb:
+    case TermKind::kCoulomb:
       return (negative && asymmetric) ? 0.0 : p[0];
-    case TermKind::direction_asymmetry:
+    case TermKind::kDirectionAsymmetry:
       return negative ? p[0] : 0.0;
-    case TermKind::stribeck:
+    case TermKind::kStribeck:
       return p[0] * std::exp(-p[1] * speed);
-    case TermKind::acceleration_dependence: {
+    case TermKind::kAccelerationDependence: {
       if (!negative) {
         // eqs. (6)/(7): + when accelerating (xdd > 0), - when decelerating;
         // at xdd = 0 both give 0, so the shared boundary is consistent.
@@ -120,23 +121,23 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
       const double f2 = p[3] * speed / (std::fabs(m.xdd) + p[4]);
       return s * p[2] * std::exp(-f2);
     }
-    case TermKind::reversal_offset:
+    case TermKind::kReversalOffset:
       return 0.0;  // acts on g, not on Ff
-    case TermKind::viscous:
+    case TermKind::kViscous:
       return p[0] * speed;
-    case TermKind::load_dependent:
+    case TermKind::kLoadDependent:
       return p[0] * m.load;
-    case TermKind::position_dependent:
+    case TermKind::kPositionDependent:
       return (p[0] + p[1] * m.x) * m.x;
-    case TermKind::time_varying:
+    case TermKind::kTimeVarying:
       return p[0] * (m.t - p[3]) + (m.t >= p[2] ? p[1] : 0.0);
-    case TermKind::position_ripple:
+    case TermKind::kPositionRipple:
       return p[0] * std::sin(p[2] * m.x) + p[1] * std::cos(p[2] * m.x);
-    case TermKind::position_bump: {
+    case TermKind::kPositionBump: {
       const double u = (m.x - p[1]) / p[2];
       return p[0] * std::exp(-0.5 * u * u);
     }
-    case TermKind::load_saturating:
+    case TermKind::kLoadSaturating:
       return p[0] * p[1] * std::tanh(m.load / p[1]);
   }
   return 0.0;

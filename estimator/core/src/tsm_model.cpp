@@ -32,11 +32,11 @@ TsmModelSpec paper_spec() {
   s.gamma = 9.5651;
   s.n = 2.0;
   s.sigma = 1.0;
-  s.add(TermKind::coulomb).p = {1.038};
-  s.add(TermKind::direction_asymmetry).p = {0.8904};
-  s.add(TermKind::stribeck).p = {1.0978, 6.1264};
-  s.add(TermKind::acceleration_dependence).p = {0.0458, 0.0269, 0.145, 13.248, 6.0297};
-  s.add(TermKind::reversal_offset).p = {0.2};
+  s.add(TermKind::kCoulomb).p = {1.038};
+  s.add(TermKind::kDirectionAsymmetry).p = {0.8904};
+  s.add(TermKind::kStribeck).p = {1.0978, 6.1264};
+  s.add(TermKind::kAccelerationDependence).p = {0.0458, 0.0269, 0.145, 13.248, 6.0297};
+  s.add(TermKind::kReversalOffset).p = {0.2};
   return s;
 }
 
@@ -46,7 +46,7 @@ TsmModelSpec dahl_spec() {
   s.gamma = 9.5651;
   s.n = 1.0;
   s.sigma = 1.0;
-  s.add(TermKind::coulomb).p = {1.0};
+  s.add(TermKind::kCoulomb).p = {1.0};
   return s;
 }
 
@@ -76,12 +76,12 @@ void validate(const TsmModelSpec& s) {
       finite("terms." + std::string(info.name) + "." + std::string(info.params[k].name),
              s.terms[i].p[k]);
     }
-    if (s.terms[i].kind == TermKind::acceleration_dependence && s.terms[i].p[4] <= 0.0) {
+    if (s.terms[i].kind == TermKind::kAccelerationDependence && s.terms[i].p[4] <= 0.0) {
       bad("terms.acceleration_dependence.kappa4", "must be > 0 (divisor of f2, eq. 9)");
     }
-    if (s.terms[i].kind == TermKind::position_bump && s.terms[i].p[2] <= 0.0)
+    if (s.terms[i].kind == TermKind::kPositionBump && s.terms[i].p[2] <= 0.0)
       bad("terms.position_bump.width", "must be > 0");
-    if (s.terms[i].kind == TermKind::load_saturating && s.terms[i].p[1] <= 0.0)
+    if (s.terms[i].kind == TermKind::kLoadSaturating && s.terms[i].p[1] <= 0.0)
       bad("terms.load_saturating.l_sat", "must be > 0");
   }
 }
@@ -93,10 +93,10 @@ TsmFrictionModel::TsmFrictionModel(TsmModelSpec spec) : spec_(std::move(spec)) {
 
 void TsmFrictionModel::refresh_cache() {
   shape_ = {spec_.theta, spec_.n, spec_.sigma};
-  asymmetric_ = spec_.has(TermKind::direction_asymmetry);
+  asymmetric_ = spec_.has(TermKind::kDirectionAsymmetry);
   lambda_ = 0.0;
   for (const auto& t : spec_.terms) {
-    if (t.kind == TermKind::reversal_offset) lambda_ = t.p[0];
+    if (t.kind == TermKind::kReversalOffset) lambda_ = t.p[0];
   }
 }
 

@@ -33,20 +33,20 @@ std::string fixed(double v, int digits) {
 
 const char* derivatives_name(FitDerivatives d) {
   switch (d) {
-    case FitDerivatives::automatic:
+    case FitDerivatives::kAutomatic:
       return "automatic";
-    case FitDerivatives::offline:
+    case FitDerivatives::kOffline:
       return "offline";
-    case FitDerivatives::deployed:
+    case FitDerivatives::kDeployed:
       return "deployed";
   }
   return "?";
 }
 
 FitDerivatives derivatives_from_name(const std::string& name) {
-  if (name == "auto" || name == "automatic") return FitDerivatives::automatic;
-  if (name == "offline") return FitDerivatives::offline;
-  if (name == "deployed") return FitDerivatives::deployed;
+  if (name == "auto" || name == "automatic") return FitDerivatives::kAutomatic;
+  if (name == "offline") return FitDerivatives::kOffline;
+  if (name == "deployed") return FitDerivatives::kDeployed;
   throw std::invalid_argument("derivatives must be auto, offline or deployed, not '" + name + "'");
 }
 
@@ -119,16 +119,16 @@ FitData prepare_fit_data(const Recording& rec, const SplitConfig& split,
   // By default exact derivatives when the file has them, else the zero-phase
   // smoother: the fit then finds the physical parameters, not ones bent to
   // imitate the online differentiator's lag (issue 14).
-  if (derivatives == FitDerivatives::automatic)
-    derivatives = rec.has_derivatives() ? FitDerivatives::automatic : FitDerivatives::offline;
-  if (derivatives == FitDerivatives::automatic) {
-    d.motion = motion_from_recording(rec, DerivativeSource::exact, diff);
+  if (derivatives == FitDerivatives::kAutomatic)
+    derivatives = rec.has_derivatives() ? FitDerivatives::kAutomatic : FitDerivatives::kOffline;
+  if (derivatives == FitDerivatives::kAutomatic) {
+    d.motion = motion_from_recording(rec, DerivativeSource::kExact, diff);
     d.derivatives = "exact";
-  } else if (derivatives == FitDerivatives::offline) {
+  } else if (derivatives == FitDerivatives::kOffline) {
     d.motion = offline_motion(rec, offline);
     d.derivatives = "offline";
   } else {
-    d.motion = motion_from_recording(rec, DerivativeSource::differentiator, diff);
+    d.motion = motion_from_recording(rec, DerivativeSource::kDifferentiator, diff);
     d.derivatives = "deployed";
   }
   d.reversals = count_reversals(d.motion, need.reversal_speed);
@@ -148,11 +148,11 @@ FitData prepare_fit_data(const Recording& rec, const SplitConfig& split,
   d.role.resize(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
     if (rec.t[i] < t0) {
-      d.role[i] = SampleRole::ignored;
+      d.role[i] = SampleRole::kIgnored;
       continue;
     }
     const auto block = static_cast<long>(std::floor((rec.t[i] - t0) / d.block_s));
-    d.role[i] = block % 2 == 0 ? SampleRole::train : SampleRole::validation;
+    d.role[i] = block % 2 == 0 ? SampleRole::kTrain : SampleRole::kValidation;
   }
   return d;
 }

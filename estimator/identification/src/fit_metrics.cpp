@@ -63,7 +63,7 @@ RegimeThresholds regime_thresholds(const FitData& data) {
   RegimeThresholds th;
   std::vector<double> speed, load, pos;
   for (std::size_t i = 0; i < data.size(); ++i) {
-    if (data.role[i] == SampleRole::ignored) continue;
+    if (data.role[i] == SampleRole::kIgnored) continue;
     speed.push_back(std::fabs(data.motion[i].xd));
     load.push_back(data.motion[i].load);
     pos.push_back(data.motion[i].x);

@@ -106,9 +106,9 @@ FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::st
   run.fit = identify(*start, run.data, o.fit);
   for (const auto& note : run.fit.notes)
     run.notes.push_back(note);
-  run.train = error_metrics(run.data, run.fit.simulated, SampleRole::train);
-  run.validation = error_metrics(run.data, run.fit.simulated, SampleRole::validation);
-  run.regimes = regime_errors(run.data, run.fit.simulated, SampleRole::validation);
+  run.train = error_metrics(run.data, run.fit.simulated, SampleRole::kTrain);
+  run.validation = error_metrics(run.data, run.fit.simulated, SampleRole::kValidation);
+  run.regimes = regime_errors(run.data, run.fit.simulated, SampleRole::kValidation);
   if (o.uncertainty) {
     run.uncertainty = estimate_uncertainty(*run.fit.model, run.data);
     // The fit's weak prior holds what the data leave undetermined; say which.
@@ -210,8 +210,8 @@ nlohmann::json fit_report_json(const FitRun& run, const FitWorkflowOptions& o, d
   r["split"] = {{"rule", "alternate contiguous blocks, train first, after a warm-up"},
                 {"block_s", d.block_s},
                 {"warmup_s", o.split.warmup_s},
-                {"train_samples", d.count(SampleRole::train)},
-                {"validation_samples", d.count(SampleRole::validation)}};
+                {"train_samples", d.count(SampleRole::kTrain)},
+                {"validation_samples", d.count(SampleRole::kValidation)}};
   r["train"] = to_json(run.train);
   r["validation"] = to_json(run.validation);
   r["regimes"] = to_json(run.regimes);

@@ -37,7 +37,7 @@ struct Scored {
 };
 
 Scored full_rate(const FitData& d) {
-  return {d.motion, d.measured, d.weights(SampleRole::train)};
+  return {d.motion, d.measured, d.weights(SampleRole::kTrain)};
 }
 
 // Every k-th sample, k chosen for the requested period. The model integrates
@@ -51,7 +51,7 @@ Scored decimated(const FitData& d, double period) {
   for (std::size_t i = 0; i < d.size(); i += k) {
     s.motion.push_back(d.motion[i]);
     s.measured.push_back(d.measured[i]);
-    s.weight.push_back(d.role[i] == SampleRole::train ? 1.0 : 0.0);
+    s.weight.push_back(d.role[i] == SampleRole::kTrain ? 1.0 : 0.0);
   }
   return s;
 }
@@ -410,13 +410,13 @@ struct Plateaus {
 std::optional<Plateaus> sliding_plateaus(const FitData& d, double gamma) {
   std::vector<double> speed;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (d.role[i] != SampleRole::ignored) speed.push_back(std::fabs(d.motion[i].xd));
+    if (d.role[i] != SampleRole::kIgnored) speed.push_back(std::fabs(d.motion[i].xd));
   }
   Plateaus p;
   p.v_fast = 0.5 * quantile_of(speed, 0.95);
   std::vector<double> fpos, fneg, vfast;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (d.role[i] == SampleRole::ignored) continue;
+    if (d.role[i] == SampleRole::kIgnored) continue;
     if (d.motion[i].xd > p.v_fast) fpos.push_back(d.measured[i]);
     if (d.motion[i].xd < -p.v_fast) fneg.push_back(-d.measured[i]);
     if (std::fabs(d.motion[i].xd) > p.v_fast) vfast.push_back(std::fabs(d.motion[i].xd));
@@ -450,7 +450,7 @@ std::optional<double> reversal_slope(const FitData& d, double f_band) {
       flush();
       state = now;
     }
-    if (d.role[i] != SampleRole::ignored && std::fabs(d.measured[i]) < f_band && state != 0) {
+    if (d.role[i] != SampleRole::kIgnored && std::fabs(d.measured[i]) < f_band && state != 0) {
       sx += m.x;
       sy += d.measured[i];
       sxx += m.x * m.x;
@@ -467,26 +467,26 @@ std::optional<double> reversal_slope(const FitData& d, double f_band) {
 // theta factor, lambda and Stribeck rate; nullopt when it is not a valid spec.
 std::optional<std::vector<double>> grid_start(TsmModelSpec s, const Plateaus& pl, double theta,
                                               double lam, double k1) {
-  const bool has_stribeck = s.has(TermKind::stribeck);
+  const bool has_stribeck = s.has(TermKind::kStribeck);
   s.theta = theta;
   const double mu1 = has_stribeck ? 0.5 * std::min(pl.level_pos, pl.level_neg) : 0.0;
   const double strib = mu1 * std::exp(-k1 * pl.v_mid);
   for (auto& t : s.terms) {
     switch (t.kind) {
-      case TermKind::coulomb:
+      case TermKind::kCoulomb:
         t.p[0] = std::max(0.02, pl.level_pos - strib);
         break;
-      case TermKind::direction_asymmetry:
+      case TermKind::kDirectionAsymmetry:
         t.p[0] = std::max(0.02, pl.level_neg - strib);
         break;
-      case TermKind::stribeck:
+      case TermKind::kStribeck:
         t.p[0] = mu1;
         t.p[1] = k1;
         break;
-      case TermKind::reversal_offset:
+      case TermKind::kReversalOffset:
         t.p[0] = lam;
         break;
-      case TermKind::acceleration_dependence:
+      case TermKind::kAccelerationDependence:
         // An amplitude and its rate both at 0 (a "flat" start) is a
         // saddle: mu2 (1 - e^(-kappa2 |xdd|)) has no gradient in either.
         // Start such pairs at small values of the paper's order.
@@ -504,9 +504,9 @@ std::optional<std::vector<double>> grid_start(TsmModelSpec s, const Plateaus& pl
         break;
     }
   }
-  if (!s.has(TermKind::direction_asymmetry)) {
+  if (!s.has(TermKind::kDirectionAsymmetry)) {
     for (auto& t : s.terms)
-      if (t.kind == TermKind::coulomb)
+      if (t.kind == TermKind::kCoulomb)
         t.p[0] = std::max(0.02, 0.5 * (pl.level_pos + pl.level_neg) - strib);
   }
   try {
@@ -541,8 +541,8 @@ std::vector<std::vector<double>> informed_starts(const TsmFrictionModel& initial
   const double theta_factors[] = {0.35, 1.0};
   const double lambdas[] = {0.05, 0.2, 0.6};
   const double kappas[] = {3.0, 12.0};
-  const bool has_stribeck = spec.has(TermKind::stribeck);
-  const bool has_lambda = spec.has(TermKind::reversal_offset);
+  const bool has_stribeck = spec.has(TermKind::kStribeck);
+  const bool has_lambda = spec.has(TermKind::kReversalOffset);
   for (double tf : theta_factors) {
     for (double lam : lambdas) {
       if (!has_lambda && lam != lambdas[0]) continue;
@@ -941,7 +941,7 @@ std::string adapt_scale_to_data(FrictionModel& model, const FitData& data) {
   // The data's sliding friction: a high quantile of |F| on scored samples.
   std::vector<double> mag;
   for (std::size_t i = 0; i < data.size(); ++i) {
-    if (data.role[i] != SampleRole::ignored) mag.push_back(std::fabs(data.measured[i]));
+    if (data.role[i] != SampleRole::kIgnored) mag.push_back(std::fabs(data.measured[i]));
   }
   if (mag.empty()) return "";
   const auto k = static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(mag.size() - 1));

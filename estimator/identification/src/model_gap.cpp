@@ -35,13 +35,13 @@ std::string qualified(TermKind kind, std::size_t param) {
 // the other parameters are shapes kept at their catalog defaults until the refit.
 std::vector<std::size_t> amplitude_params(TermKind kind) {
   switch (kind) {
-    case TermKind::position_dependent:
+    case TermKind::kPositionDependent:
       return {0, 1};
-    case TermKind::time_varying:
+    case TermKind::kTimeVarying:
       return {0, 1};  // drift, step (at the scanned step time)
-    case TermKind::position_ripple:
+    case TermKind::kPositionRipple:
       return {0, 1};  // sine and cosine amplitudes (at the scanned wavenumber)
-    case TermKind::acceleration_dependence:
+    case TermKind::kAccelerationDependence:
       return {0, 2};  // mu2, mu3
     default:
       return {0};
@@ -50,7 +50,7 @@ std::vector<std::size_t> amplitude_params(TermKind kind) {
 
 double coulomb_level(const TsmModelSpec& s) {
   for (const auto& t : s.terms) {
-    if (t.kind == TermKind::coulomb) return t.p[0];
+    if (t.kind == TermKind::kCoulomb) return t.p[0];
   }
   return 0.0;
 }
@@ -63,8 +63,8 @@ TsmModelSpec with_neutral_term(TsmModelSpec spec, TermKind kind, double t_start,
   Term& t = spec.add(kind);
   for (std::size_t k : amplitude_params(kind))
     t.p[k] = 0.0;
-  if (kind == TermKind::direction_asymmetry) t.p[0] = std::max(rho1, 0.01);
-  if (kind == TermKind::time_varying) {
+  if (kind == TermKind::kDirectionAsymmetry) t.p[0] = std::max(rho1, 0.01);
+  if (kind == TermKind::kTimeVarying) {
     t.p[2] = t_end + 1.0;  // t_step: no step inside the record
     t.p[3] = t_start;      // t0
   }
@@ -118,7 +118,7 @@ Projection project(const FitData& d, std::span<const double> residual,
   Eigen::VectorXd gtr = Eigen::VectorXd::Zero(m);
   double rr = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (d.role[i] != SampleRole::train) continue;
+    if (d.role[i] != SampleRole::kTrain) continue;
     rr += residual[i] * residual[i];
     for (Eigen::Index a = 0; a < m; ++a) {
       const double ga = regressors[static_cast<std::size_t>(a)][i];
@@ -191,7 +191,7 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
     return v[static_cast<std::size_t>(k)];
   };
   switch (kind) {
-    case TermKind::time_varying: {
+    case TermKind::kTimeVarying: {
       // Step time over the record (5 %..95 %), each searched within +-5 %.
       min_separation = 0.1 * (t1 - t0);
       const double half = 0.05 * (t1 - t0);
@@ -201,7 +201,7 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
       }
       break;
     }
-    case TermKind::position_ripple: {
+    case TermKind::kPositionRipple: {
       // 1 to 12 periods over the stroke, each searched within +-15 %.
       min_separation = 1.5 * 2.0 * std::numbers::pi / span;
       for (int j = 1; j <= 12; ++j) {
@@ -210,7 +210,7 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
       }
       break;
     }
-    case TermKind::position_bump: {
+    case TermKind::kPositionBump: {
       // 12 places along the stroke, two widths; each place searched within
       // +-1/8 of the stroke.
       min_separation = span / 6.0;
@@ -225,7 +225,7 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
       }
       break;
     }
-    case TermKind::load_saturating: {
+    case TermKind::kLoadSaturating: {
       min_separation = 0.0;
       for (double f : {0.5, 0.9}) {
         const double l = std::max(q(load, f), 0.2);
@@ -274,14 +274,14 @@ Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
   };
   // time_varying's drift does not depend on the step time: one regressor.
   std::vector<double> drift;
-  if (kind == TermKind::time_varying) drift = sensitivity(neutral, amp[0], d.motion, f_cur);
+  if (kind == TermKind::kTimeVarying) drift = sensitivity(neutral, amp[0], d.motion, f_cur);
   std::vector<std::pair<double, std::size_t>> scan;  // explained, shape
   std::vector<Projection> projections;
   for (std::size_t s = 0; s < shapes.size(); ++s) {
     const TsmFrictionModel m = with_shape(shapes[s]);
     std::vector<std::vector<double>> regs;
     for (std::size_t a = 0; a < amp.size(); ++a) {
-      if (kind == TermKind::time_varying && a == 0)
+      if (kind == TermKind::kTimeVarying && a == 0)
         regs.push_back(drift);
       else
         regs.push_back(sensitivity(m, amp[a], d.motion, f_cur));
@@ -294,7 +294,7 @@ Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
   std::vector<std::size_t> chosen;
   // The scans pick the right shape reliably; time keeps two step times
   // (a step and a drift look alike to first order).
-  const std::size_t keep = kind == TermKind::time_varying ? 2 : 1;
+  const std::size_t keep = kind == TermKind::kTimeVarying ? 2 : 1;
   for (const auto& [e, s] : scan) {
     const bool apart = std::all_of(chosen.begin(), chosen.end(), [&](std::size_t c) {
       return std::fabs(shapes[c].key - shapes[s].key) > min_separation;
@@ -326,7 +326,7 @@ std::vector<TermKind> candidate_kinds(const GapOptions& o) {
   std::vector<TermKind> out;
   if (o.candidates.empty()) {
     for (const auto& info : term_catalog()) {
-      if (info.kind != TermKind::coulomb) out.push_back(info.kind);
+      if (info.kind != TermKind::kCoulomb) out.push_back(info.kind);
     }
     return out;
   }
@@ -388,16 +388,16 @@ std::vector<double> residual_of(const FitData& d, std::span<const double> f) {
 // The regime group where a term's absence shows (fit_metrics.hpp groups).
 std::string group_of(TermKind kind) {
   switch (kind) {
-    case TermKind::viscous:
-    case TermKind::stribeck:
+    case TermKind::kViscous:
+    case TermKind::kStribeck:
       return "speed";
-    case TermKind::load_dependent:
+    case TermKind::kLoadDependent:
       return "load";
-    case TermKind::position_dependent:
+    case TermKind::kPositionDependent:
       return "position";
-    case TermKind::time_varying:
+    case TermKind::kTimeVarying:
       return "time";
-    case TermKind::acceleration_dependence:
+    case TermKind::kAccelerationDependence:
       return "acceleration";
     default:
       return "direction";
@@ -466,13 +466,13 @@ CandidateTrial refit_candidate(const FitData& d, std::span<const double> f_cur,
   t.name = std::string(term_info(p.kind).name);
   t.family = std::string(term_family(p.kind));
   t.explained = p.explained;
-  t.validation = error_metrics(d, fit.simulated, SampleRole::validation);
+  t.validation = error_metrics(d, fit.simulated, SampleRole::kValidation);
   t.train_mse = fit.train_rmse * fit.train_rmse;
   t.free_parameters = free_count(*fit.model);
   t.gain = 1.0 - t.validation.rmse / gap_cur.rmse;
   std::vector<double> drop;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (d.role[i] != SampleRole::validation) continue;
+    if (d.role[i] != SampleRole::kValidation) continue;
     const double eb = d.measured[i] - f_cur[i], ea = d.measured[i] - fit.simulated[i];
     drop.push_back(eb * eb - ea * ea);
   }
@@ -525,8 +525,8 @@ void fit_base(GapResult& g, const FrictionModel& base, const GapOptions& o, cons
   g.evaluations += base_fit.evaluations;
   g.base_model = base_fit.model->clone();
   g.base_simulated = base_fit.simulated;
-  g.gap_base = error_metrics(g.data, g.base_simulated, SampleRole::validation);
-  g.regimes_base = regime_errors(g.data, g.base_simulated, SampleRole::validation);
+  g.gap_base = error_metrics(g.data, g.base_simulated, SampleRole::kValidation);
+  g.regimes_base = regime_errors(g.data, g.base_simulated, SampleRole::kValidation);
 }
 
 // Why no further round runs ("" to run one); `todo` gets the candidates not
@@ -553,15 +553,15 @@ void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& 
                 const GapOptions& o, const Say& say, Clock::time_point t_start, GapRound& round) {
   const FitData& d = g.data;
   const auto residual = residual_of(d, cur.f);
-  const auto train_w = d.weights(SampleRole::train);
+  const auto train_w = d.weights(SampleRole::kTrain);
   const double mse_cur = weighted_mse(d.measured, cur.f, train_w);
   // Effective sample size for BIC: the residual is correlated in time.
   std::vector<double> train_resid;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (d.role[i] == SampleRole::train) train_resid.push_back(residual[i]);
+    if (d.role[i] == SampleRole::kTrain) train_resid.push_back(residual[i]);
   }
   const double n_eff =
-      static_cast<double>(d.count(SampleRole::train)) / correlation_time(train_resid);
+      static_cast<double>(d.count(SampleRole::kTrain)) / correlation_time(train_resid);
   const double bic_cur = bic(mse_cur, n_eff, free_count(*cur.model));
 
   round.trials.resize(todo.size());
@@ -634,7 +634,7 @@ void check_rivals(GapResult& g, const GapState& cur, const CandidateTrial& win, 
                                                   d.motion.front().t, d.motion.back().t));
     with_rival.set_values(r->values);
     const auto f_r = simulate_friction(with_rival, d.motion);
-    const auto gap_r = error_metrics(d, f_r, SampleRole::validation);
+    const auto gap_r = error_metrics(d, f_r, SampleRole::kValidation);
     const Prepared pw = prepare_candidate(d, with_rival, f_r, residual_of(d, f_r), kind);
     const CandidateTrial back =
         refit_candidate(d, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
@@ -666,7 +666,7 @@ void polish(GapResult& g, TsmFrictionModel& model, const CandidateTrial& win, co
   if (re.train_rmse < std::sqrt(win.train_mse)) {
     model.set_values(re.values);
     f = std::move(re.simulated);
-    gap = error_metrics(g.data, f, SampleRole::validation);
+    gap = error_metrics(g.data, f, SampleRole::kValidation);
   }
 }
 
@@ -675,7 +675,7 @@ void polish(GapResult& g, TsmFrictionModel& model, const CandidateTrial& win, co
 void describe_shape(const FitData& d, const TsmFrictionModel& model, TermKind kind,
                     EffectFound& e) {
   const auto& spec = model.spec();
-  const bool asym = spec.has(TermKind::direction_asymmetry);
+  const bool asym = spec.has(TermKind::kDirectionAsymmetry);
   e.variable = variable_of(term_family(kind));
   for (const auto& t : spec.terms) {
     if (t.kind != kind) continue;
@@ -703,7 +703,7 @@ void accept_effect(GapResult& g, GapState& cur, const CandidateTrial& win, const
   std::vector<double> f = simulate_friction(*next_model, d.motion);
   ErrorMetrics gap_after = win.validation;
   if (o.reidentify) polish(g, *next_model, win, o, say, f, gap_after);
-  auto regimes_after = regime_errors(d, f, SampleRole::validation);
+  auto regimes_after = regime_errors(d, f, SampleRole::kValidation);
 
   EffectFound e;
   e.name = std::string(term_family(kind));
@@ -787,7 +787,7 @@ ResidualDiagnostics diagnose_residual(const FitData& d, const TsmFrictionModel& 
   const auto r = residual_of(d, simulated);
   std::vector<double> val;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (d.role[i] == SampleRole::validation) val.push_back(r[i]);
+    if (d.role[i] == SampleRole::kValidation) val.push_back(r[i]);
   }
   diag.lag1_autocorrelation = autocorrelation(val, 1);
   diag.correlation_time = correlation_time(val);
@@ -1008,8 +1008,8 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
             {"samples", g.data.size()},
             {"duration_s", g.data.duration()},
             {"radius_m", g.data.radius_m},
-            {"train_samples", g.data.count(SampleRole::train)},
-            {"validation_samples", g.data.count(SampleRole::validation)},
+            {"train_samples", g.data.count(SampleRole::kTrain)},
+            {"validation_samples", g.data.count(SampleRole::kValidation)},
             {"block_s", g.data.block_s}}},
           {"noise_floor", g.noise},
           {"acceptance", acceptance_json(o)},

@@ -23,9 +23,9 @@ ParameterMap::ParameterMap(const std::vector<Parameter>& params,
     f.lower = p.lower;
     f.upper = p.upper;
     if (p.lower > 0.0 && p.upper / p.lower >= 20.0) {
-      f.scale = ParameterScale::log;
+      f.scale = ParameterScale::kLog;
     } else if (p.lower == 0.0 && p.upper > 0.0) {
-      f.scale = ParameterScale::log_offset;
+      f.scale = ParameterScale::kLogOffset;
       f.offset = p.upper / 1000.0;
     }
     free_.push_back(f);
@@ -36,12 +36,12 @@ double ParameterMap::to_unit(std::size_t k, double value) const {
   const auto& f = free_[k];
   const double v = std::clamp(value, f.lower, f.upper);
   switch (f.scale) {
-    case ParameterScale::log:
+    case ParameterScale::kLog:
       return std::log(v / f.lower) / std::log(f.upper / f.lower);
-    case ParameterScale::log_offset:
+    case ParameterScale::kLogOffset:
       return std::log((v + f.offset) / (f.lower + f.offset)) /
              std::log((f.upper + f.offset) / (f.lower + f.offset));
-    case ParameterScale::linear:
+    case ParameterScale::kLinear:
       break;
   }
   return (v - f.lower) / (f.upper - f.lower);
@@ -52,14 +52,14 @@ double ParameterMap::from_unit(std::size_t k, double u) const {
   const double c = std::clamp(u, 0.0, 1.0);
   double v = 0.0;
   switch (f.scale) {
-    case ParameterScale::log:
+    case ParameterScale::kLog:
       v = f.lower * std::pow(f.upper / f.lower, c);
       break;
-    case ParameterScale::log_offset:
+    case ParameterScale::kLogOffset:
       v = (f.lower + f.offset) * std::pow((f.upper + f.offset) / (f.lower + f.offset), c) -
           f.offset;
       break;
-    case ParameterScale::linear:
+    case ParameterScale::kLinear:
       v = f.lower + c * (f.upper - f.lower);
       break;
   }

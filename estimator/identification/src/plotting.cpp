@@ -81,7 +81,7 @@ std::vector<std::pair<double, double>> validation_spans(const FitData& d) {
   std::vector<std::pair<double, double>> spans;
   bool open = false;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    const bool v = d.role[i] == SampleRole::validation;
+    const bool v = d.role[i] == SampleRole::kValidation;
     if (v && !open) spans.push_back({d.motion[i].t, d.motion[i].t});
     if (v) spans.back().second = d.motion[i].t;
     open = v;
@@ -222,7 +222,7 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
   // starts at rest, the joint may not) is clipped instead of stretching the axis.
   double scored_max = 0.0;
   for (std::size_t i = 0; i < data.size(); ++i)
-    if (data.role[i] != SampleRole::ignored)
+    if (data.role[i] != SampleRole::kIgnored)
       for (const auto& c : curves)
         if (std::isfinite(c.friction[i]))
           scored_max = std::max(scored_max, std::fabs(data.measured[i] - c.friction[i]));

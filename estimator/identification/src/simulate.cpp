@@ -6,8 +6,8 @@ namespace tsmh::estimator {
 
 std::vector<Motion> motion_from_recording(const Recording& rec, DerivativeSource source,
                                           const DifferentiatorConfig& diff) {
-  const bool exact = source == DerivativeSource::exact ||
-                     (source == DerivativeSource::automatic && rec.has_derivatives());
+  const bool exact = source == DerivativeSource::kExact ||
+                     (source == DerivativeSource::kAutomatic && rec.has_derivatives());
   if (exact && !rec.has_derivatives())
     throw DataError(rec.source, 0, "xd_in",
                     "exact derivatives requested but xd_in/xdd_in are missing");

@@ -171,7 +171,7 @@ VelocityProfile creep_profile(double t_start, double t_end, double amplitude,
 
 std::optional<MotionKind> motion_kind_from_name(std::string_view name) {
   for (MotionKind k :
-       {MotionKind::multisine, MotionKind::surgeon, MotionKind::reversals, MotionKind::creep}) {
+       {MotionKind::kMultisine, MotionKind::kSurgeon, MotionKind::kReversals, MotionKind::kCreep}) {
     if (name == motion_kind_name(k)) return k;
   }
   return std::nullopt;
@@ -179,13 +179,13 @@ std::optional<MotionKind> motion_kind_from_name(std::string_view name) {
 
 const char* motion_kind_name(MotionKind kind) {
   switch (kind) {
-    case MotionKind::multisine:
+    case MotionKind::kMultisine:
       return "multisine";
-    case MotionKind::surgeon:
+    case MotionKind::kSurgeon:
       return "surgeon";
-    case MotionKind::reversals:
+    case MotionKind::kReversals:
       return "reversals";
-    case MotionKind::creep:
+    case MotionKind::kCreep:
       return "creep";
   }
   return "?";
@@ -216,15 +216,15 @@ SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& 
   std::mt19937_64 sampling_rng(c.seed * 0x9E3779B97F4A7C15ULL + 2);
   std::optional<VelocityProfile> profile;
   switch (c.motion) {
-    case MotionKind::multisine:
+    case MotionKind::kMultisine:
       break;
-    case MotionKind::surgeon:
+    case MotionKind::kSurgeon:
       profile = surgeon_profile(-fade, c.duration_s + 1.0, c.amplitude_rad, path_rng);
       break;
-    case MotionKind::reversals:
+    case MotionKind::kReversals:
       profile = reversal_profile(-fade, c.duration_s + 1.0, c.amplitude_rad, path_rng);
       break;
-    case MotionKind::creep:
+    case MotionKind::kCreep:
       profile = creep_profile(-fade, c.duration_s + 1.0, c.amplitude_rad, path_rng);
       break;
   }

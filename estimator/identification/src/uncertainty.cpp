@@ -173,7 +173,7 @@ UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitDat
 
   std::vector<std::size_t> train;
   for (std::size_t i = 0; i < data.size(); ++i) {
-    if (data.role[i] == SampleRole::train) train.push_back(i);
+    if (data.role[i] == SampleRole::kTrain) train.push_back(i);
   }
   const std::size_t n = train.size();
   const std::size_t p = map.size();

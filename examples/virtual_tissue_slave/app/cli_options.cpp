@@ -161,7 +161,7 @@ std::string tissue_json(const TissueParams& t) {
     j["inclusion"] = nullptr;
   }
   j["damping"] = t.damping;
-  j["exponent"] = t.law == ContactLaw::hunt_crossley ? t.exponent : 1.0;
+  j["exponent"] = t.law == ContactLaw::kHuntCrossley ? t.exponent : 1.0;
   return j.dump(2);
 }
 

@@ -41,7 +41,7 @@ Scenario make_scenario(std::string_view name) {
   Scenario s;
   s.name = std::string(name);
   if (name == "sine") {
-    s.kind = ScenarioKind::sine;
+    s.kind = ScenarioKind::kSine;
     s.description =
         "0.8 rad sines (Joint1 0.5 Hz, Joint2 0.4 Hz) as in the paper's Fig. 2/8/9; "
         "soft tissue at 0.6 rad, touched lightly at the top of each cycle";
@@ -49,7 +49,7 @@ Scenario make_scenario(std::string_view name) {
     s.tissue = "soft";
     s.surface_rad = 0.6;
   } else if (name == "multisine") {
-    s.kind = ScenarioKind::multisine;
+    s.kind = ScenarioKind::kMultisine;
     s.description =
         "sum of four sines (0.13-2.3 Hz, up to 0.8 rad): many speeds and accelerations; "
         "soft tissue at 0.5 rad";
@@ -57,7 +57,7 @@ Scenario make_scenario(std::string_view name) {
     s.tissue = "soft";
     s.surface_rad = 0.5;
   } else if (name == "palpate") {
-    s.kind = ScenarioKind::palpate;
+    s.kind = ScenarioKind::kPalpate;
     s.description =
         "press the nodule tissue (surface 0.2 rad) every 5 s, alternately gently "
         "(0.08 rad, soft layer) and deeply (0.3 rad, onto the inclusion)";
@@ -65,13 +65,13 @@ Scenario make_scenario(std::string_view name) {
     s.tissue = "nodule";
     s.surface_rad = 0.2;
   } else if (name == "chirp") {
-    s.kind = ScenarioKind::chirp;
+    s.kind = ScenarioKind::kChirp;
     s.description = "0.5 rad chirp 0.1 -> 1.5 Hz over 30 s, repeated; free motion";
     s.default_duration_s = 60.0;
     s.tissue = "none";
     s.surface_rad = 0.6;
   } else if (name == "excite") {
-    s.kind = ScenarioKind::excite;
+    s.kind = ScenarioKind::kExcite;
     s.description =
         "identification: a three-sine mix (0.23-1.4 Hz) whose amplitude steps through 0.05, "
         "0.15, 0.4 and 0.8 rad every 10 s, so fits see small strokes as well as large; free motion";
@@ -87,18 +87,18 @@ Scenario make_scenario(std::string_view name) {
 
 double Scenario::reference(double t, int joint) const {
   switch (kind) {
-    case ScenarioKind::sine:
+    case ScenarioKind::kSine:
       return 0.8 * std::sin(kTwoPi * (joint == 0 ? 0.5 : 0.4) * t);
-    case ScenarioKind::multisine: {
+    case ScenarioKind::kMultisine: {
       const double phase = joint == 0 ? 0.0 : 1.3;
       return 0.35 * std::sin(kTwoPi * 0.13 * t + phase) +
              0.25 * std::sin(kTwoPi * 0.41 * t + 1.0 + phase) +
              0.15 * std::sin(kTwoPi * 0.97 * t + 2.0 + phase) +
              0.05 * std::sin(kTwoPi * 2.3 * t + 3.0 + phase);
     }
-    case ScenarioKind::palpate:
+    case ScenarioKind::kPalpate:
       return palpation(joint == 0 ? t : t + 2.5, surface_rad);
-    case ScenarioKind::chirp: {
+    case ScenarioKind::kChirp: {
       constexpr double kSweep = 30.0, kF0 = 0.1, kF1 = 1.5;
       const double u = std::fmod(t, kSweep);
       // Phase of a linear chirp; the amplitude ramps in over the first second
@@ -107,7 +107,7 @@ double Scenario::reference(double t, int joint) const {
       const double ramp = smoothstep(u) * smoothstep((kSweep - u) / 1.0);
       return 0.5 * ramp * std::sin(phase);
     }
-    case ScenarioKind::excite: {
+    case ScenarioKind::kExcite: {
       // Small strokes matter as much as large ones: a surgeon's gentle motion
       // never leaves the pre-sliding part of the hysteresis.
       constexpr double kLevels[] = {0.05, 0.15, 0.4, 0.8};

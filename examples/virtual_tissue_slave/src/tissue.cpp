@@ -21,14 +21,14 @@ std::vector<std::string> tissue_preset_names() {
 }
 
 ContactLaw parse_contact_law(std::string_view name) {
-  if (name == "kelvin-voigt") return ContactLaw::kelvin_voigt;
-  if (name == "hunt-crossley") return ContactLaw::hunt_crossley;
+  if (name == "kelvin-voigt") return ContactLaw::kKelvinVoigt;
+  if (name == "hunt-crossley") return ContactLaw::kHuntCrossley;
   throw std::invalid_argument("unknown contact law '" + std::string(name) +
                               "' (known: kelvin-voigt, hunt-crossley)");
 }
 
 std::string_view contact_law_name(ContactLaw law) {
-  return law == ContactLaw::kelvin_voigt ? "kelvin-voigt" : "hunt-crossley";
+  return law == ContactLaw::kKelvinVoigt ? "kelvin-voigt" : "hunt-crossley";
 }
 
 TissueParams tissue_preset(std::string_view name, ContactLaw law) {
@@ -43,22 +43,22 @@ TissueParams tissue_preset(std::string_view name, ContactLaw law) {
   } else if (name == "soft") {
     t.present = true;
     t.outer_stiffness_n_per_m = kSoft;
-    t.damping = law == ContactLaw::kelvin_voigt ? 2.0 : 0.5;
+    t.damping = law == ContactLaw::kKelvinVoigt ? 2.0 : 0.5;
   } else if (name == "hard") {
     t.present = true;
     t.outer_stiffness_n_per_m = kHard;
-    t.damping = law == ContactLaw::kelvin_voigt ? 6.0 : 0.3;
+    t.damping = law == ContactLaw::kKelvinVoigt ? 6.0 : 0.3;
   } else if (name == "nodule") {
     t.present = true;
     t.outer_stiffness_n_per_m = kSoft;
     t.inclusion_depth_m = 0.15 * kLever;  // 0.15 rad of joint travel past the surface
     t.inclusion_stiffness_n_per_m = kHard;
-    t.damping = law == ContactLaw::kelvin_voigt ? 2.0 : 0.5;
+    t.damping = law == ContactLaw::kKelvinVoigt ? 2.0 : 0.5;
   } else {
     throw std::invalid_argument("unknown tissue preset '" + std::string(name) +
                                 "' (known: none, soft, hard, nodule)");
   }
-  t.exponent = law == ContactLaw::kelvin_voigt ? 1.0 : 1.5;
+  t.exponent = law == ContactLaw::kKelvinVoigt ? 1.0 : 1.5;
   return t;
 }
 
@@ -84,13 +84,13 @@ void validate(const TissueParams& t) {
 namespace {
 
 double outer_force(const TissueParams& t, double d) {
-  const double n = t.law == ContactLaw::hunt_crossley ? t.exponent : 1.0;
+  const double n = t.law == ContactLaw::kHuntCrossley ? t.exponent : 1.0;
   if (n == 1.0) return t.outer_stiffness_n_per_m * d;
   return t.outer_stiffness_n_per_m * t.reference_depth_m * std::pow(d / t.reference_depth_m, n);
 }
 
 double outer_slope(const TissueParams& t, double d) {
-  const double n = t.law == ContactLaw::hunt_crossley ? t.exponent : 1.0;
+  const double n = t.law == ContactLaw::kHuntCrossley ? t.exponent : 1.0;
   if (n == 1.0) return t.outer_stiffness_n_per_m;
   return t.outer_stiffness_n_per_m * n * std::pow(d / t.reference_depth_m, n - 1.0);
 }
@@ -113,7 +113,7 @@ ContactState contact(const TissueParams& t, double q, double qd) {
   const double dd = t.lever_m * qd;
   const double fe = elastic_force(t, d);
   const double f =
-      t.law == ContactLaw::kelvin_voigt ? fe + t.damping * dd : fe * (1.0 + t.damping * dd);
+      t.law == ContactLaw::kKelvinVoigt ? fe + t.damping * dd : fe * (1.0 + t.damping * dd);
   c.indentation_m = d;
   c.force_n = std::max(0.0, f);  // tissue pushes, never pulls the tool
   c.torque_nm = t.lever_m * c.force_n;

@@ -28,9 +28,9 @@ struct JointConfig {
   double radius_m = 0.01;
   /// sgn(xdd) as the model sees it: the smoothed expected sign (default) or
   /// the paper's -1/0/+1 switch (docs/friction-model.md).
-  estimator::SignMode sign = estimator::SignMode::smooth;
+  estimator::SignMode sign = estimator::SignMode::kSmooth;
   /// The estimator's friction state at start: tip assumed free (default) or zero.
-  estimator::StartState start_state = estimator::StartState::free_tip;
+  estimator::StartState start_state = estimator::StartState::kFreeTip;
 };
 
 struct RealtimeConfig {

@@ -25,12 +25,12 @@ namespace tsmh::estimator {
 enum class SignMode {
   /// -1, 0 or +1, the paper's model as written: +-1 beyond `sign_sigmas`
   /// standard deviations, held inside the release band for `sign_hold`, then 0.
-  hard,
+  kHard,
   /// The expected sign across the estimate's uncertainty, a ramp
   /// clamp(xdd / (smooth_sigmas sd), -1, 1): no decision delay at a zero
   /// crossing and no chatter; +-1 once the sign is certain. The default: the
   /// server and `tsm simulate` use it (docs/friction-model.md has both).
-  smooth,
+  kSmooth,
 };
 
 struct DifferentiatorConfig {
@@ -45,7 +45,7 @@ struct DifferentiatorConfig {
   double quantum = 2.0 * std::numbers::pi / 40960.0;
   /// Additional white measurement noise on the angle, rad (standard deviation).
   double position_noise = 0.0;
-  SignMode sign_mode = SignMode::smooth;
+  SignMode sign_mode = SignMode::kSmooth;
   /// Smooth sign: |xdd| at which the sign is +-1, in standard deviations.
   double smooth_sigmas = 0.3;
   /// Hard sign: +-1 beyond this many standard deviations, released below

@@ -28,10 +28,10 @@ enum class StartState {
   /// The tip is free at the first sample: the proximal torque is all
   /// friction, F = tau_in / R, within what the model allows at rest. Like
   /// taring a force sensor; a session starts with the instrument free.
-  free_tip,
+  kFreeTip,
   /// Zero friction state (the paper's initial condition): whatever friction
   /// the sheath holds at start reads as tip torque until motion saturates it.
-  zero,
+  kZero,
 };
 
 class DistalTorqueEstimator {
@@ -40,7 +40,7 @@ class DistalTorqueEstimator {
   /// (throws std::invalid_argument otherwise).
   DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> model, double radius_m,
                         const DifferentiatorConfig& diff = {},
-                        StartState start = StartState::free_tip);
+                        StartState start = StartState::kFreeTip);
 
   /// One sample with the proximal torque given. Never allocates or throws.
   Estimate update(double t, double x_in, double tau_in) noexcept;

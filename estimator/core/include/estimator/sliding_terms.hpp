@@ -20,22 +20,22 @@
 namespace tsmh::estimator {
 
 enum class TermKind : std::uint8_t {
-  coulomb,                  ///< rho1: the level (both directions unless direction_asymmetry)
-  direction_asymmetry,      ///< rho2: the level for xd < 0, replacing rho1 there
-  stribeck,                 ///< mu1 e^(-kappa1 |xd|)
-  acceleration_dependence,  ///< eqs. 6-10: +-mu2 (1 - e^-|kappa2 xdd|) and +-mu3 e^-f2
-  reversal_offset,          ///< lambda in g = xd + lambda sgn(xdd) (eq. 4); adds nothing to Ff
-  viscous,                  ///< c_v |xd|: friction grows with speed
-  load_dependent,           ///< c_load |tau_in|/R: capstan, friction grows with tension
-  position_dependent,       ///< p1 x + p2 x^2: friction varies along the stroke
-  time_varying,             ///< drift (t - t0) + step [t >= t_step]: sheath re-routed, wear
+  kCoulomb,                 ///< rho1: the level (both directions unless direction_asymmetry)
+  kDirectionAsymmetry,      ///< rho2: the level for xd < 0, replacing rho1 there
+  kStribeck,                ///< mu1 e^(-kappa1 |xd|)
+  kAccelerationDependence,  ///< eqs. 6-10: +-mu2 (1 - e^-|kappa2 xdd|) and +-mu3 e^-f2
+  kReversalOffset,          ///< lambda in g = xd + lambda sgn(xdd) (eq. 4); adds nothing to Ff
+  kViscous,                 ///< c_v |xd|: friction grows with speed
+  kLoadDependent,           ///< c_load |tau_in|/R: capstan, friction grows with tension
+  kPositionDependent,       ///< p1 x + p2 x^2: friction varies along the stroke
+  kTimeVarying,             ///< drift (t - t0) + step [t >= t_step]: sheath re-routed, wear
   // Further forms of the same physical effects (issue 14: real effects do not
   // come in one form). Each belongs to a family (TermInfo::family), the name
   // under which tsm gap reports it.
-  position_ripple,  ///< a sin(k x) + b cos(k x): periodic friction along the stroke (family
+  kPositionRipple,  ///< a sin(k x) + b cos(k x): periodic friction along the stroke (family
                     ///< position)
-  position_bump,    ///< amp exp(-((x - center)/width)^2 / 2): a local kink in the sheath
-  load_saturating,  ///< c_sat l_sat tanh(load / l_sat): capstan growth that levels off
+  kPositionBump,    ///< amp exp(-((x - center)/width)^2 / 2): a local kink in the sheath
+  kLoadSaturating,  ///< c_sat l_sat tanh(load / l_sat): capstan growth that levels off
 };
 
 inline constexpr int kMaxTermParams = 5;
@@ -69,7 +69,7 @@ const TermInfo& term_info(TermKind kind);
 std::optional<TermKind> term_kind_from_name(std::string_view name);
 
 struct Term {
-  TermKind kind = TermKind::coulomb;
+  TermKind kind = TermKind::kCoulomb;
   std::array<double, kMaxTermParams> p{};  ///< in the order of term_info(kind).params
 };
 

@@ -23,21 +23,21 @@
 namespace tsmh::estimator {
 
 enum class SampleRole : std::uint8_t {
-  ignored,     ///< warm-up: the model starts at rest, the real joint may not
-  train,       ///< scored by the identification cost
-  validation,  ///< scored only by the report
+  kIgnored,     ///< warm-up: the model starts at rest, the real joint may not
+  kTrain,       ///< scored by the identification cost
+  kValidation,  ///< scored only by the report
 };
 
 /// Where the velocity and acceleration a fit sees come from.
 enum class FitDerivatives : std::uint8_t {
   /// The file's exact xd_in/xdd_in when it has them, else `offline`.
-  automatic,
+  kAutomatic,
   /// Zero-phase RTS smoothing of the recorded angle (offline_derivatives.hpp):
   /// no lag, so the parameters found are the physical ones.
-  offline,
+  kOffline,
   /// The deployed causal differentiator, as the haptic loop runs it (the
   /// parameters then also absorb its lag; the behaviour before issue 14).
-  deployed,
+  kDeployed,
 };
 
 /// Name for reports: "exact", "offline" or "deployed" (what was actually used).
@@ -85,7 +85,7 @@ struct FitData {
 /// values, too short, no motion.
 FitData prepare_fit_data(const Recording& rec, const SplitConfig& split = {},
                          const DataRequirements& need = {}, const DifferentiatorConfig& diff = {},
-                         FitDerivatives derivatives = FitDerivatives::automatic,
+                         FitDerivatives derivatives = FitDerivatives::kAutomatic,
                          const OfflineDerivativeConfig& offline = {});
 
 /// Velocity reversals in `motion`: sign changes of xd between excursions

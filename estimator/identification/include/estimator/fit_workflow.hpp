@@ -51,7 +51,7 @@ struct FitWorkflowOptions {
   DataRequirements requirements;
   DifferentiatorConfig differentiator;
   /// Where xd, xdd come from (default: exact columns, else offline smoothing).
-  FitDerivatives derivatives = FitDerivatives::automatic;
+  FitDerivatives derivatives = FitDerivatives::kAutomatic;
   OfflineDerivativeConfig offline;
   bool uncertainty = true;
 };

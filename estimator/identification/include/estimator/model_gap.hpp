@@ -80,7 +80,7 @@ struct GapOptions {
   DataRequirements requirements;
   DifferentiatorConfig differentiator;
   /// Where xd, xdd come from (default: exact columns, else offline smoothing).
-  FitDerivatives derivatives = FitDerivatives::automatic;
+  FitDerivatives derivatives = FitDerivatives::kAutomatic;
   OfflineDerivativeConfig offline;
   /// Progress text, called from the calling thread.
   std::function<void(const std::string&)> progress;

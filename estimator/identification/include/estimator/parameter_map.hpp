@@ -14,14 +14,14 @@
 
 namespace tsmh::estimator {
 
-enum class ParameterScale { linear, log, log_offset };
+enum class ParameterScale { kLinear, kLog, kLogOffset };
 
 struct FreeParameter {
   std::size_t index = 0;  ///< position in FrictionModel::parameters()
   std::string name;
   double lower = 0.0;
   double upper = 0.0;
-  ParameterScale scale = ParameterScale::linear;
+  ParameterScale scale = ParameterScale::kLinear;
   double offset = 0.0;  ///< for log_offset
 };
 

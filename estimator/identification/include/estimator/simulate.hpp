@@ -15,9 +15,9 @@
 namespace tsmh::estimator {
 
 enum class DerivativeSource {
-  automatic,       ///< xd_in/xdd_in when the recording has them, else the differentiator
-  differentiator,  ///< always the project's differentiator, as deployed in the loop
-  exact,           ///< xd_in/xdd_in (throws DataError when absent)
+  kAutomatic,       ///< xd_in/xdd_in when the recording has them, else the differentiator
+  kDifferentiator,  ///< always the project's differentiator, as deployed in the loop
+  kExact,           ///< xd_in/xdd_in (throws DataError when absent)
 };
 
 /// Motion samples for every row of `rec`. load = |tau_in|/R when both are known.

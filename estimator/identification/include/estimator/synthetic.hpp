@@ -28,10 +28,10 @@ namespace tsmh::estimator {
 /// How the input pulley moves. Every kind has exact, continuous velocity and
 /// acceleration, so the true model runs on exact derivatives.
 enum class MotionKind {
-  multisine,  ///< sum of `components` sines, log-spaced in [f_low_hz, f_high_hz]
-  surgeon,    ///< smooth point-to-point moves (bell-shaped velocity) between holds at rest
-  reversals,  ///< constant-speed strokes joined by fast reversals (40-120 ms)
-  creep,      ///< slow motion: speeds of 5-50 mrad/s changing smoothly, with pauses
+  kMultisine,  ///< sum of `components` sines, log-spaced in [f_low_hz, f_high_hz]
+  kSurgeon,    ///< smooth point-to-point moves (bell-shaped velocity) between holds at rest
+  kReversals,  ///< constant-speed strokes joined by fast reversals (40-120 ms)
+  kCreep,      ///< slow motion: speeds of 5-50 mrad/s changing smoothly, with pauses
 };
 
 struct SyntheticConfig {
@@ -56,7 +56,7 @@ struct SyntheticConfig {
   int substeps = 4;
   /// Also store the exact xd_in, xdd_in columns (a simulator's recording).
   bool exact_derivatives = false;
-  MotionKind motion = MotionKind::multisine;
+  MotionKind motion = MotionKind::kMultisine;
   /// Sampling-time jitter: each sample is taken at i/rate + U(-jitter, +jitter) s
   /// (kept below half a period, so times stay increasing).
   double jitter_s = 0.0;

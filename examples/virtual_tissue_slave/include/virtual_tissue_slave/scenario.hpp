@@ -8,10 +8,10 @@
 
 namespace tsmh::virtual_tissue_slave {
 
-enum class ScenarioKind { sine, multisine, palpate, chirp, excite };
+enum class ScenarioKind { kSine, kMultisine, kPalpate, kChirp, kExcite };
 
 struct Scenario {
-  ScenarioKind kind = ScenarioKind::sine;
+  ScenarioKind kind = ScenarioKind::kSine;
   std::string name;
   std::string description;
   double default_duration_s = 30.0;

@@ -14,14 +14,14 @@
 namespace tsmh::virtual_tissue_slave {
 
 enum class ContactLaw {
-  kelvin_voigt,   ///< F = Fe(delta) + c * delta_dot, clamped at >= 0
-  hunt_crossley,  ///< F = Fe(delta) * (1 + lambda * delta_dot), >= 0: no force jump at impact
+  kKelvinVoigt,   ///< F = Fe(delta) + c * delta_dot, clamped at >= 0
+  kHuntCrossley,  ///< F = Fe(delta) * (1 + lambda * delta_dot), >= 0: no force jump at impact
 };
 
 struct TissueParams {
   std::string name = "none";
   bool present = false;  ///< false: free motion, no contact anywhere
-  ContactLaw law = ContactLaw::kelvin_voigt;
+  ContactLaw law = ContactLaw::kKelvinVoigt;
   double surface_rad = 0.3;              ///< joint angle at which the tool touches the surface, rad
   double lever_m = 0.03;                 ///< joint axis to tool tip, m
   double outer_stiffness_n_per_m = 0.0;  ///< slope of the outer layer, N/m
@@ -58,7 +58,7 @@ struct TissueTruth {
 std::vector<std::string> tissue_preset_names();
 /// A preset with the given contact law. Throws std::invalid_argument naming the
 /// unknown preset and listing the known ones.
-TissueParams tissue_preset(std::string_view name, ContactLaw law = ContactLaw::kelvin_voigt);
+TissueParams tissue_preset(std::string_view name, ContactLaw law = ContactLaw::kKelvinVoigt);
 /// "kelvin-voigt" or "hunt-crossley"; throws std::invalid_argument otherwise.
 ContactLaw parse_contact_law(std::string_view name);
 std::string_view contact_law_name(ContactLaw law);
