@@ -23,7 +23,7 @@
 
 #include "bridge/clock.hpp"
 #include "bridge/codec.hpp"
-#include "scratch_dir_test.hpp"
+#include "scratch_dir_fixture.hpp"
 #include "test_link_key.hpp"
 
 namespace tsmh::haptics {

@@ -28,7 +28,7 @@
 #include "bridge/codec.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/stop_signals.hpp"
-#include "scratch_dir_test.hpp"
+#include "scratch_dir_fixture.hpp"
 #include "test_link_key.hpp"
 
 namespace tsmh::haptics {
