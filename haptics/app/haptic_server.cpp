@@ -390,9 +390,8 @@ int session_exit_code(const haptics::HapticLoop& loop, const char** verdict) {
   return kExitClean;
 }
 
-int run(const Options& o, const sigset_t& stop_signals) {
-  int exit_code = kExitClean;
-  haptics::ServerConfig cfg = haptics::load_server_config(o.config);
+// The command line's overrides of the configuration.
+void apply_command_line(haptics::ServerConfig& cfg, const Options& o) {
   if (o.duration) cfg.duration_s = *o.duration;
   if (o.feedback) cfg.loop.source = haptics::feedback_source_from_string(*o.feedback);
   if (o.rate) {
@@ -404,8 +403,12 @@ int run(const Options& o, const sigset_t& stop_signals) {
   if (o.prefix) cfg.lcm_prefix = *o.prefix;
   if (!o.trace.empty()) cfg.evaluation.trace = o.trace;
   if (!o.report.empty()) cfg.evaluation.report = o.report;
+}
 
-  // Estimators first: a bad params file must fail before anything is opened.
+// One estimator per joint; a bad params file fails here, before anything
+// is opened.
+std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> make_estimators(
+    const haptics::ServerConfig& cfg) {
   std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators;
   for (const auto& j : cfg.joints) {
     try {
@@ -416,6 +419,99 @@ int run(const Options& o, const sigset_t& stop_signals) {
       throw haptics::ConfigError(cfg.source + ": joint '" + j.name + "': " + e.what());
     }
   }
+  return estimators;
+}
+
+std::unique_ptr<master_devices::Device> create_device(
+    const haptics::ServerConfig& cfg, const master_devices::DriverRegistry& registry) {
+  master_devices::DriverContext ctx{cfg.source, "device.settings",
+                                    std::filesystem::path(cfg.source).parent_path()};
+  try {
+    return registry.create(cfg.device_driver, cfg.device_settings, ctx);
+  } catch (const master_devices::ConfigError&) {
+    throw;  // a bad setting: exit 2 with the file, field and line
+  } catch (const std::exception& e) {
+    throw DeviceError(std::string("cannot create the master device (") + cfg.device_driver +
+                      "): " + e.what());
+  }
+}
+
+// The configured torque limit never exceeds what the device can take.
+void cap_torque_to_device(haptics::ServerConfig& cfg, const master_devices::DeviceSpec& spec) {
+  for (int j = 0; j < cfg.loop.joints; ++j) {
+    const double peak = spec.peak_torque_nm[static_cast<std::size_t>(j)];
+    auto& lim = cfg.loop.limits[static_cast<std::size_t>(j)];
+    if (peak > 0.0 && lim.max_torque_nm > peak) {
+      std::fprintf(
+          stderr,
+          "haptic-server: joint %d: max_torque_nm %.3g above the device's peak %.3g; using %.3g\n",
+          j, lim.max_torque_nm, peak, peak);
+      lim.max_torque_nm = peak;
+    }
+  }
+}
+
+// Trace and report: rows stream to an unlinked spool file beside the output
+// through a fixed ring (memory does not grow with the run). The output
+// folders must exist: checked before anything is opened. nullptr: neither
+// is asked for.
+std::unique_ptr<haptics::TraceSpool> make_trace_spool(const haptics::ServerConfig& cfg) {
+  if (cfg.evaluation.trace.empty() && cfg.evaluation.report.empty()) return nullptr;
+  for (const std::string* out : {&cfg.evaluation.trace, &cfg.evaluation.report}) {
+    if (out->empty()) continue;
+    const auto folder = std::filesystem::path(*out).parent_path();
+    std::error_code ec;
+    if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
+      throw haptics::ConfigError(*out + ": the folder '" + folder.string() +
+                                 "' does not exist (outputs are written into existing "
+                                 "folders only)");
+  }
+  const std::string& first =
+      cfg.evaluation.trace.empty() ? cfg.evaluation.report : cfg.evaluation.trace;
+  return std::make_unique<haptics::TraceSpool>(
+      cfg.loop.joints, std::filesystem::path(first).parent_path(),
+      static_cast<std::uint64_t>(cfg.evaluation.max_trace_s * cfg.loop.rate_hz) + 16);
+}
+
+// After the loop: the trace mapped back from disk, written as CSV and
+// evaluated into the report.
+void write_trace_and_report(const haptics::HapticLoop& loop, haptics::TraceSpool& trace,
+                            const haptics::ServerConfig& cfg,
+                            const haptic_server::CalibrationLog& calibration, bool quiet) {
+  // The loop is over: nothing needs locked memory any more, and the trace
+  // is mapped back from disk (page cache, not locked).
+  if (cfg.realtime.lock_memory) munlockall();
+  const haptics::Trace recorded = trace.finish();
+  const std::uint64_t spooled = trace.bytes_written();
+  if (recorded.dropped() > 0)
+    std::fprintf(stderr,
+                 "haptic-server: warning: trace: %llu rows not recorded (past "
+                 "evaluation.max_trace_s, or the writer fell %zu rows behind)\n",
+                 static_cast<unsigned long long>(recorded.dropped()),
+                 haptics::TraceSpool::kRingRows);
+  if (!quiet)
+    std::fprintf(stderr, "haptic-server: trace: %zu rows, %.1f MB spooled to disk\n",
+                 recorded.size(), static_cast<double>(spooled) * 1e-6);
+  if (!cfg.evaluation.trace.empty()) recorded.write_csv(cfg.evaluation.trace);
+  if (cfg.evaluation.report.empty()) return;
+  auto report = haptics::evaluate(loop, recorded, cfg);
+  for (const auto& e : calibration.events())
+    report.calibration.push_back({e.t_s, e.kind, e.joint, e.scale, e.detail});
+  for (int j = 0; j < cfg.loop.joints; ++j)
+    report.friction_scale.push_back(loop.calibration().applied_scale(j));
+  haptics::write_report(report, cfg.evaluation.report);
+  if (!quiet) std::cerr << haptics::format_report(report);
+}
+
+std::int64_t monotonic_ns_of(const timespec& t) {
+  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+int run(const Options& o, const sigset_t& stop_signals) {
+  int exit_code = kExitClean;
+  haptics::ServerConfig cfg = haptics::load_server_config(o.config);
+  apply_command_line(cfg, o);
+  auto estimators = make_estimators(cfg);
 
   haptics::LcmSlaveLinkConfig link_cfg;
   link_cfg.bridge.url = bridge::resolve_lcm_url(o.lcm_url.empty() ? cfg.lcm_url : o.lcm_url);
@@ -431,51 +527,10 @@ int run(const Options& o, const sigset_t& stop_signals) {
   haptics::LcmSlaveLink link(link_cfg);
 
   const auto registry = make_registry(haptics::make_lcm_device_auth(security.key));
-  master_devices::DriverContext ctx{cfg.source, "device.settings",
-                                    std::filesystem::path(cfg.source).parent_path()};
-  std::unique_ptr<master_devices::Device> device;
-  try {
-    device = registry.create(cfg.device_driver, cfg.device_settings, ctx);
-  } catch (const master_devices::ConfigError&) {
-    throw;  // a bad setting: exit 2 with the file, field and line
-  } catch (const std::exception& e) {
-    throw DeviceError(std::string("cannot create the master device (") + cfg.device_driver +
-                      "): " + e.what());
-  }
+  std::unique_ptr<master_devices::Device> device = create_device(cfg, registry);
   haptics::check_against_device(cfg, device->spec());
-  // The configured torque limit never exceeds what the device can take.
-  for (int j = 0; j < cfg.loop.joints; ++j) {
-    const double peak = device->spec().peak_torque_nm[static_cast<std::size_t>(j)];
-    auto& lim = cfg.loop.limits[static_cast<std::size_t>(j)];
-    if (peak > 0.0 && lim.max_torque_nm > peak) {
-      std::fprintf(
-          stderr,
-          "haptic-server: joint %d: max_torque_nm %.3g above the device's peak %.3g; using %.3g\n",
-          j, lim.max_torque_nm, peak, peak);
-      lim.max_torque_nm = peak;
-    }
-  }
-
-  // Trace and report: rows stream to an unlinked spool file beside the
-  // output through a fixed ring (memory does not grow with the run). The
-  // output folders must exist: checked before anything is opened.
-  std::unique_ptr<haptics::TraceSpool> trace;
-  if (!cfg.evaluation.trace.empty() || !cfg.evaluation.report.empty()) {
-    for (const std::string* out : {&cfg.evaluation.trace, &cfg.evaluation.report}) {
-      if (out->empty()) continue;
-      const auto folder = std::filesystem::path(*out).parent_path();
-      std::error_code ec;
-      if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
-        throw haptics::ConfigError(*out + ": the folder '" + folder.string() +
-                                   "' does not exist (outputs are written into existing "
-                                   "folders only)");
-    }
-    const std::string& first =
-        cfg.evaluation.trace.empty() ? cfg.evaluation.report : cfg.evaluation.trace;
-    trace = std::make_unique<haptics::TraceSpool>(
-        cfg.loop.joints, std::filesystem::path(first).parent_path(),
-        static_cast<std::uint64_t>(cfg.evaluation.max_trace_s * cfg.loop.rate_hz) + 16);
-  }
+  cap_torque_to_device(cfg, device->spec());
+  std::unique_ptr<haptics::TraceSpool> trace = make_trace_spool(cfg);
 
   try {
     device->open();
@@ -510,17 +565,16 @@ int run(const Options& o, const sigset_t& stop_signals) {
           cfg.device_driver.c_str(), device->spec().model.c_str(), link_cfg.bridge.url.c_str(),
           cfg.lcm_prefix.empty() ? "" : " prefix ", cfg.lcm_prefix.c_str());
     const std::string slave_channel = cfg.lcm_prefix + "SLAVE_STATE";
+    const bool live = !o.quiet && isatty(STDERR_FILENO) != 0;
     EventLog events(loop.events(),
                     {.slave_channel = slave_channel,
                      .url = link_cfg.bridge.url,
                      .slave_timeout_s = cfg.loop.slave_timeout_s,
                      .feedback = std::string(to_string(cfg.loop.source)),
                      .joints = cfg.loop.joints,
-                     .live = !o.quiet && isatty(STDERR_FILENO) != 0},
-                    static_cast<std::int64_t>(t0.tv_sec) * 1'000'000'000 + t0.tv_nsec);
-    haptic_server::CalibrationLog calibration(
-        loop.calibration(), static_cast<std::int64_t>(t0.tv_sec) * 1'000'000'000 + t0.tv_nsec,
-        !o.quiet && isatty(STDERR_FILENO) != 0);
+                     .live = live},
+                    monotonic_ns_of(t0));
+    haptic_server::CalibrationLog calibration(loop.calibration(), monotonic_ns_of(t0), live);
     const int sig = wait_for_stop(stop_signals, runner, events, calibration);
     events.poll();  // anything the loop reported in its last ticks
     calibration.poll(bridge::monotonic_now_ns());
@@ -529,8 +583,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     runner.join();  // the loop thread wrote zero torque on its way out
     timespec t1{};
     clock_gettime(CLOCK_MONOTONIC, &t1);
-    const double seconds =
-        static_cast<double>(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
+    const double seconds = static_cast<double>(monotonic_ns_of(t1) - monotonic_ns_of(t0)) * 1e-9;
     link.stop();
     device->close();
     if (sig)
@@ -542,32 +595,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     if (exit_code == kExitFault && loop.state() == haptics::LoopState::kFault)
       verdict_text += std::string(": ") + std::string(to_string(loop.fault()));
     print_summary(loop, link, slave_channel, seconds, exit_code, verdict_text.c_str());
-    if (trace) {
-      // The loop is over: nothing needs locked memory any more, and the
-      // trace is mapped back from disk (page cache, not locked).
-      if (cfg.realtime.lock_memory) munlockall();
-      const haptics::Trace recorded = trace->finish();
-      const std::uint64_t spooled = trace->bytes_written();
-      if (recorded.dropped() > 0)
-        std::fprintf(stderr,
-                     "haptic-server: warning: trace: %llu rows not recorded (past "
-                     "evaluation.max_trace_s, or the writer fell %zu rows behind)\n",
-                     static_cast<unsigned long long>(recorded.dropped()),
-                     haptics::TraceSpool::kRingRows);
-      if (!o.quiet)
-        std::fprintf(stderr, "haptic-server: trace: %zu rows, %.1f MB spooled to disk\n",
-                     recorded.size(), static_cast<double>(spooled) * 1e-6);
-      if (!cfg.evaluation.trace.empty()) recorded.write_csv(cfg.evaluation.trace);
-      if (!cfg.evaluation.report.empty()) {
-        auto report = haptics::evaluate(loop, recorded, cfg);
-        for (const auto& e : calibration.events())
-          report.calibration.push_back({e.t_s, e.kind, e.joint, e.scale, e.detail});
-        for (int j = 0; j < cfg.loop.joints; ++j)
-          report.friction_scale.push_back(loop.calibration().applied_scale(j));
-        haptics::write_report(report, cfg.evaluation.report);
-        if (!o.quiet) std::cerr << haptics::format_report(report);
-      }
-    }
+    if (trace) write_trace_and_report(loop, *trace, cfg, calibration, o.quiet);
   } catch (...) {
     loop.shutdown();  // zero torque before anything else happens
     device->close();

@@ -165,6 +165,7 @@ class HapticLoop {
   /// Drift alarm and recalibration: request() and identify_pending() are for
   /// other threads (recalibration.hpp).
   Recalibration& calibration() noexcept { return calibration_; }
+  const Recalibration& calibration() const noexcept { return calibration_; }
 
  private:
   // What one tick decided, step by step (tick()); status and trace publish
