@@ -82,6 +82,113 @@ FeedbackSource feedback_source_from_string(const std::string& s) {
   throw ConfigError("feedback: '" + s + "' is not one of estimated, naive, none");
 }
 
+namespace {
+
+void parse_safety(FieldReader& safety, const std::string& origin, LoopConfig& loop) {
+  const auto ms = [&](const char* key, double def) {
+    return in_range(safety, key, def, 0.0, 1e6, true) * 1e-3;
+  };
+  loop.timing.stale_after_s = ms("stale_after_ms", 20.0);
+  loop.timing.fade_s = ms("fade_ms", 50.0);
+  loop.timing.recover_s = ms("recover_ms", 200.0);
+  loop.slave_timeout_s = ms("slave_timeout_ms", 1000.0);
+  loop.device_stale_fault_s = ms("device_stale_fault_ms", 50.0);
+  loop.estimate_fault_s = ms("estimate_fault_ms", 500.0);
+  FieldReader oscillation(safety.node("oscillation"), origin, "safety.oscillation");
+  loop.oscillation = parse_oscillation(oscillation, loop.rate_hz);
+  safety.reject_unknown();
+}
+
+void parse_slave_limits(FieldReader& slave, bridge::SlaveStateLimits& sl) {
+  sl.max_x_in_rate_rad_s = in_range(slave, "max_motor_speed_rad_s", sl.max_x_in_rate_rad_s, 0, 1e6);
+  sl.max_x_out_rate_rad_s =
+      in_range(slave, "max_joint_speed_rad_s", sl.max_x_out_rate_rad_s, 0, 1e6);
+  sl.max_tension_rate_n_per_s =
+      in_range(slave, "max_tension_rate_n_per_s", sl.max_tension_rate_n_per_s, 0, 1e9);
+  sl.step_slack_s = in_range(slave, "step_slack_ms", sl.step_slack_s * 1e3, 0, 1e4) * 1e-3;
+  slave.reject_unknown();
+}
+
+void parse_realtime(FieldReader& rt, RealtimeConfig& c) {
+  c.sched_fifo = rt.get_bool("sched_fifo", true);
+  c.priority = static_cast<int>(in_range(rt, "priority", 80, 1, 99));
+  c.lock_memory = rt.get_bool("lock_memory", true);
+  c.cpu_dma_latency = rt.get_bool("cpu_dma_latency", true);
+  c.cpu = static_cast<int>(in_range(rt, "cpu", -1, -1, 1023));
+  if (c.cpu >= 0) {
+    // Pinning to a CPU this process may not use fails at start-up at best;
+    // refuse it here, with the CPUs there are.
+    cpu_set_t allowed;
+    CPU_ZERO(&allowed);
+    if (sched_getaffinity(0, sizeof allowed, &allowed) == 0 && !CPU_ISSET(c.cpu, &allowed))
+      rt.fail("cpu", "CPU " + std::to_string(c.cpu) + " is not available (" +
+                         std::to_string(CPU_COUNT(&allowed)) + " CPUs: " + cpu_list(allowed) +
+                         "); use one of them or -1 for no pinning");
+  }
+  rt.reject_unknown();
+}
+
+// Drift alarm and one-button recalibration (recalibration.hpp).
+void parse_calibration(FieldReader& drift, FieldReader& recal, LoopConfig& loop) {
+  auto& d = loop.drift;
+  d.enabled = drift.get_bool("enabled", d.enabled);
+  d.threshold = in_range(drift, "threshold", d.threshold, 0.0, 10.0, true);
+  d.hold_s = in_range(drift, "hold_s", d.hold_s, 0.0, 600.0);
+  d.time_constant_s = in_range(drift, "time_constant_s", d.time_constant_s, 0.0, 600.0, true);
+  drift.reject_unknown();
+  auto& rc = loop.recalibration;
+  rc.collect_s = in_range(recal, "collect_s", rc.collect_s, 0.5, 60.0);
+  rc.min_span_rad = in_range(recal, "min_span_rad", rc.min_span_rad, 0.0, 10.0);
+  rc.min_improvement = in_range(recal, "min_improvement", rc.min_improvement, 0.0, 0.99);
+  rc.ramp_per_s = in_range(recal, "ramp_per_s", rc.ramp_per_s, 0.0, 100.0, true);
+  // Two slave samples per loop tick at most, for the whole collection.
+  rc.capacity = static_cast<std::size_t>(rc.collect_s * 2.0 * 4000.0) + 100;
+  recal.reject_unknown();
+}
+
+void parse_evaluation(FieldReader& ev, const std::filesystem::path& base_dir, EvaluationConfig& c) {
+  c.truth = ev.get_bool("truth", false);
+  c.trace = resolve(base_dir, ev.get_string("trace", ""));
+  c.report = resolve(base_dir, ev.get_string("report", ""));
+  c.max_trace_s = in_range(ev, "max_trace_s", 600.0, 1.0, 86400.0);
+  ev.reject_unknown();
+}
+
+// One entry of `joints:`: the estimator's settings, the force and position
+// mapping and the safety limits of joint i.
+void parse_joint(FieldReader& j, std::size_t i, const std::filesystem::path& base_dir,
+                 ServerConfig& c) {
+  JointConfig jc;
+  jc.name = j.get_string("name", "joint" + std::to_string(i + 1));
+  jc.params = j.get_string("params", "paper");
+  if (jc.params.find('/') != std::string::npos || jc.params.ends_with(".yaml") ||
+      jc.params.ends_with(".yml"))
+    jc.params = resolve(base_dir, jc.params);
+  jc.radius_m = in_range(j, "radius_m", 0.01, 0.0, 1.0, true);
+  const std::string sign = j.get_string("sign", "smooth");
+  if (sign != "smooth" && sign != "hard") j.fail("sign", "must be smooth or hard");
+  jc.sign = sign == "hard" ? estimator::SignMode::kHard : estimator::SignMode::kSmooth;
+  const std::string start = j.get_string("start_state", "free_tip");
+  if (start != "free_tip" && start != "zero") j.fail("start_state", "must be free_tip or zero");
+  jc.start_state = start == "zero" ? estimator::StartState::kZero : estimator::StartState::kFreeTip;
+  c.joints.push_back(jc);
+  c.loop.force[i] = {in_range(j, "force_scale", 1.0, 0.0, 1e3), unit_sign(j, "force_sign"),
+                     in_range(j, "deadband_nm", 0.0, 0.0, 1e3)};
+  PositionMappingConfig pm;
+  pm.scale = in_range(j, "position_scale", 1.0, 0.0, 1e3, true);
+  pm.sign = unit_sign(j, "position_sign");
+  pm.min_ref = in_range(j, "slave_min_rad", -1e3, -1e3, 1e3);
+  pm.max_ref = in_range(j, "slave_max_rad", 1e3, -1e3, 1e3);
+  if (pm.min_ref >= pm.max_ref) j.fail("slave_min_rad", "must be below slave_max_rad");
+  c.loop.position[i] = pm;
+  if (!j.has("max_torque_nm")) j.fail("max_torque_nm", "missing: every joint needs a torque limit");
+  c.loop.limits[i] = {in_range(j, "max_torque_nm", 0.0, 0.0, 1e3, true),
+                      in_range(j, "max_rate_nm_per_s", 50.0, 0.0, 1e6, true)};
+  j.reject_unknown();
+}
+
+}  // namespace
+
 ServerConfig parse_server_config(const std::string& text, const std::string& origin,
                                  const std::filesystem::path& base_dir) {
   YAML::Node root;
@@ -125,74 +232,18 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   lcm.reject_unknown();
 
   FieldReader safety(r.node("safety"), origin, "safety");
-  const auto ms = [&](const char* key, double def) {
-    return in_range(safety, key, def, 0.0, 1e6, true) * 1e-3;
-  };
-  c.loop.timing.stale_after_s = ms("stale_after_ms", 20.0);
-  c.loop.timing.fade_s = ms("fade_ms", 50.0);
-  c.loop.timing.recover_s = ms("recover_ms", 200.0);
-  c.loop.slave_timeout_s = ms("slave_timeout_ms", 1000.0);
-  c.loop.device_stale_fault_s = ms("device_stale_fault_ms", 50.0);
-  c.loop.estimate_fault_s = ms("estimate_fault_ms", 500.0);
-  FieldReader oscillation(safety.node("oscillation"), origin, "safety.oscillation");
-  c.loop.oscillation = parse_oscillation(oscillation, c.loop.rate_hz);
-  safety.reject_unknown();
-
+  parse_safety(safety, origin, c.loop);
   FieldReader passivity(r.node("passivity"), origin, "passivity");
   c.loop.passivity = parse_passivity(passivity);
-
   FieldReader slave(r.node("slave_state"), origin, "slave_state");
-  auto& sl = c.slave_limits;
-  sl.max_x_in_rate_rad_s = in_range(slave, "max_motor_speed_rad_s", sl.max_x_in_rate_rad_s, 0, 1e6);
-  sl.max_x_out_rate_rad_s =
-      in_range(slave, "max_joint_speed_rad_s", sl.max_x_out_rate_rad_s, 0, 1e6);
-  sl.max_tension_rate_n_per_s =
-      in_range(slave, "max_tension_rate_n_per_s", sl.max_tension_rate_n_per_s, 0, 1e9);
-  sl.step_slack_s = in_range(slave, "step_slack_ms", sl.step_slack_s * 1e3, 0, 1e4) * 1e-3;
-  slave.reject_unknown();
-
+  parse_slave_limits(slave, c.slave_limits);
   FieldReader rt(r.node("realtime"), origin, "realtime");
-  c.realtime.sched_fifo = rt.get_bool("sched_fifo", true);
-  c.realtime.priority = static_cast<int>(in_range(rt, "priority", 80, 1, 99));
-  c.realtime.lock_memory = rt.get_bool("lock_memory", true);
-  c.realtime.cpu_dma_latency = rt.get_bool("cpu_dma_latency", true);
-  c.realtime.cpu = static_cast<int>(in_range(rt, "cpu", -1, -1, 1023));
-  if (c.realtime.cpu >= 0) {
-    // Pinning to a CPU this process may not use fails at start-up at best;
-    // refuse it here, with the CPUs there are.
-    cpu_set_t allowed;
-    CPU_ZERO(&allowed);
-    if (sched_getaffinity(0, sizeof allowed, &allowed) == 0 && !CPU_ISSET(c.realtime.cpu, &allowed))
-      rt.fail("cpu", "CPU " + std::to_string(c.realtime.cpu) + " is not available (" +
-                         std::to_string(CPU_COUNT(&allowed)) + " CPUs: " + cpu_list(allowed) +
-                         "); use one of them or -1 for no pinning");
-  }
-  rt.reject_unknown();
-
-  // Drift alarm and one-button recalibration (issue 17, recalibration.hpp).
+  parse_realtime(rt, c.realtime);
   FieldReader drift(r.node("drift"), origin, "drift");
-  auto& d = c.loop.drift;
-  d.enabled = drift.get_bool("enabled", d.enabled);
-  d.threshold = in_range(drift, "threshold", d.threshold, 0.0, 10.0, true);
-  d.hold_s = in_range(drift, "hold_s", d.hold_s, 0.0, 600.0);
-  d.time_constant_s = in_range(drift, "time_constant_s", d.time_constant_s, 0.0, 600.0, true);
-  drift.reject_unknown();
   FieldReader recal(r.node("recalibration"), origin, "recalibration");
-  auto& rc = c.loop.recalibration;
-  rc.collect_s = in_range(recal, "collect_s", rc.collect_s, 0.5, 60.0);
-  rc.min_span_rad = in_range(recal, "min_span_rad", rc.min_span_rad, 0.0, 10.0);
-  rc.min_improvement = in_range(recal, "min_improvement", rc.min_improvement, 0.0, 0.99);
-  rc.ramp_per_s = in_range(recal, "ramp_per_s", rc.ramp_per_s, 0.0, 100.0, true);
-  // Two slave samples per loop tick at most, for the whole collection.
-  rc.capacity = static_cast<std::size_t>(rc.collect_s * 2.0 * 4000.0) + 100;
-  recal.reject_unknown();
-
+  parse_calibration(drift, recal, c.loop);
   FieldReader ev(r.node("evaluation"), origin, "evaluation");
-  c.evaluation.truth = ev.get_bool("truth", false);
-  c.evaluation.trace = resolve(base_dir, ev.get_string("trace", ""));
-  c.evaluation.report = resolve(base_dir, ev.get_string("report", ""));
-  c.evaluation.max_trace_s = in_range(ev, "max_trace_s", 600.0, 1.0, 86400.0);
-  ev.reject_unknown();
+  parse_evaluation(ev, base_dir, c.evaluation);
 
   const YAML::Node joints = r.node("joints");
   if (!joints.IsSequence() || joints.size() == 0)
@@ -202,35 +253,7 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   c.loop.joints = static_cast<int>(joints.size());
   for (std::size_t i = 0; i < joints.size(); ++i) {
     FieldReader j(joints[i], origin, "joints[" + std::to_string(i) + "]");
-    JointConfig jc;
-    jc.name = j.get_string("name", "joint" + std::to_string(i + 1));
-    jc.params = j.get_string("params", "paper");
-    if (jc.params.find('/') != std::string::npos || jc.params.ends_with(".yaml") ||
-        jc.params.ends_with(".yml"))
-      jc.params = resolve(base_dir, jc.params);
-    jc.radius_m = in_range(j, "radius_m", 0.01, 0.0, 1.0, true);
-    const std::string sign = j.get_string("sign", "smooth");
-    if (sign != "smooth" && sign != "hard") j.fail("sign", "must be smooth or hard");
-    jc.sign = sign == "hard" ? estimator::SignMode::kHard : estimator::SignMode::kSmooth;
-    const std::string start = j.get_string("start_state", "free_tip");
-    if (start != "free_tip" && start != "zero") j.fail("start_state", "must be free_tip or zero");
-    jc.start_state =
-        start == "zero" ? estimator::StartState::kZero : estimator::StartState::kFreeTip;
-    c.joints.push_back(jc);
-    c.loop.force[i] = {in_range(j, "force_scale", 1.0, 0.0, 1e3), unit_sign(j, "force_sign"),
-                       in_range(j, "deadband_nm", 0.0, 0.0, 1e3)};
-    PositionMappingConfig pm;
-    pm.scale = in_range(j, "position_scale", 1.0, 0.0, 1e3, true);
-    pm.sign = unit_sign(j, "position_sign");
-    pm.min_ref = in_range(j, "slave_min_rad", -1e3, -1e3, 1e3);
-    pm.max_ref = in_range(j, "slave_max_rad", 1e3, -1e3, 1e3);
-    if (pm.min_ref >= pm.max_ref) j.fail("slave_min_rad", "must be below slave_max_rad");
-    c.loop.position[i] = pm;
-    if (!j.has("max_torque_nm"))
-      j.fail("max_torque_nm", "missing: every joint needs a torque limit");
-    c.loop.limits[i] = {in_range(j, "max_torque_nm", 0.0, 0.0, 1e3, true),
-                        in_range(j, "max_rate_nm_per_s", 50.0, 0.0, 1e6, true)};
-    j.reject_unknown();
+    parse_joint(j, i, base_dir, c);
   }
   if (!has_device)
     r.fail("device",
