@@ -1,11 +1,10 @@
-#include "bridge/codec.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <random>
 
+#include "bridge/codec.hpp"
 #include "bridge/validation.hpp"
 #include "test_support.hpp"
 

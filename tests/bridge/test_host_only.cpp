@@ -1,8 +1,6 @@
 // Receiving from this host only on udpm with ttl=0 (bridge/host_only.hpp):
 // datagrams from another host (a network namespace joined by a veth pair
 // stands in for it) are dropped by the socket filter; local traffic flows.
-#include "bridge/host_only.hpp"
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -11,6 +9,7 @@
 #include <string>
 
 #include "bridge/clock.hpp"
+#include "bridge/host_only.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
 #include "process.hpp"

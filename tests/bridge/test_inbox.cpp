@@ -1,12 +1,11 @@
 // Inbox logic fed directly with bytes (no network): what reaches the loop,
 // what is counted, and how a rejection is described.
-#include "bridge/inbox.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
+#include "bridge/inbox.hpp"
 #include "test_support.hpp"
 
 namespace tsmh::bridge {

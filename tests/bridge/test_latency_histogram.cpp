@@ -1,6 +1,6 @@
-#include "bridge/latency_histogram.hpp"
-
 #include <gtest/gtest.h>
+
+#include "bridge/latency_histogram.hpp"
 
 namespace tsmh::bridge {
 namespace {

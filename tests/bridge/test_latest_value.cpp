@@ -1,5 +1,3 @@
-#include "bridge/latest_value.hpp"
-
 #include <gtest/gtest.h>
 #include <pthread.h>
 #include <sched.h>
@@ -13,6 +11,7 @@
 #include <thread>
 #include <utility>
 
+#include "bridge/latest_value.hpp"
 #include "bridge/samples.hpp"
 
 namespace tsmh::bridge {

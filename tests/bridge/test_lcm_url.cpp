@@ -1,7 +1,6 @@
-#include "bridge/lcm_url.hpp"
-
 #include <gtest/gtest.h>
 
+#include "bridge/lcm_url.hpp"
 #include "process.hpp"
 #include "test_support.hpp"
 

@@ -2,8 +2,6 @@
 // the replay window, freshness, key files and the key search order; over
 // real udpm, rogue publishers (no key, wrong key, replayed, reordered, stale)
 // against a keyed Receiver.
-#include "bridge/link_auth.hpp"
-
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -16,6 +14,7 @@
 #include <vector>
 
 #include "bridge/clock.hpp"
+#include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"

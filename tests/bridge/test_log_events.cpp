@@ -4,8 +4,6 @@
 // and how many events were lost, and never crash. The same logs seed the
 // libFuzzer target (bridge/fuzz/fuzz_log_reader.cpp); here they are replayed
 // and mutated at random under GCC, so every build checks them.
-#include "bridge/log_events.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -18,6 +16,7 @@
 #include <vector>
 
 #include "bridge/codec.hpp"
+#include "bridge/log_events.hpp"
 #include "bridge/log_reader.hpp"
 #include "process.hpp"
 #include "test_support.hpp"

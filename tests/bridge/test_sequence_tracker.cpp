@@ -1,6 +1,6 @@
-#include "bridge/sequence_tracker.hpp"
-
 #include <gtest/gtest.h>
+
+#include "bridge/sequence_tracker.hpp"
 
 namespace tsmh::bridge {
 namespace {

@@ -1,9 +1,9 @@
-#include "bridge/spsc_queue.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <thread>
+
+#include "bridge/spsc_queue.hpp"
 
 namespace tsmh::bridge {
 namespace {

@@ -54,7 +54,7 @@ class JointController {
   double update(double reference, const Measurement& m, double radius_m, double dt);
   double motor_reference() const { return motor_ref_; }
   double backlash_estimate() const { return c_hat_; }
-  double side() const { return side_; }               ///< d, the side of the dead band
+  double side() const { return side_; }  ///< d, the side of the dead band
   const ControllerParams& params() const { return params_; }
 
  private:
