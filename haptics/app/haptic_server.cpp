@@ -503,10 +503,6 @@ void write_trace_and_report(const haptics::HapticLoop& loop, haptics::TraceSpool
   if (!quiet) std::cerr << haptics::format_report(report);
 }
 
-std::int64_t monotonic_ns_of(const timespec& t) {
-  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
-
 int run(const Options& o, const sigset_t& stop_signals) {
   int exit_code = kExitClean;
   haptics::ServerConfig cfg = haptics::load_server_config(o.config);
@@ -553,8 +549,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     link.start();
     haptics::LoopRunner runner(loop, {cfg.loop.rate_hz, cfg.realtime.sched_fifo,
                                       cfg.realtime.priority, cfg.realtime.cpu, cfg.duration_s});
-    timespec t0{};
-    clock_gettime(CLOCK_MONOTONIC, &t0);
+    const std::int64_t t0 = bridge::monotonic_now_ns();
     runner.start();
     const auto& rt = runner.status();
     if (!rt.sched_fifo) std::fprintf(stderr, "haptic-server: warning: %s\n", rt.sched_note.c_str());
@@ -573,17 +568,15 @@ int run(const Options& o, const sigset_t& stop_signals) {
                      .feedback = std::string(to_string(cfg.loop.source)),
                      .joints = cfg.loop.joints,
                      .live = live},
-                    monotonic_ns_of(t0));
-    haptic_server::CalibrationLog calibration(loop.calibration(), monotonic_ns_of(t0), live);
+                    t0);
+    haptic_server::CalibrationLog calibration(loop.calibration(), t0, live);
     const int sig = wait_for_stop(stop_signals, runner, events, calibration);
     events.poll();  // anything the loop reported in its last ticks
     calibration.poll(bridge::monotonic_now_ns());
     events.clear();
     runner.stop();
     runner.join();  // the loop thread wrote zero torque on its way out
-    timespec t1{};
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    const double seconds = static_cast<double>(monotonic_ns_of(t1) - monotonic_ns_of(t0)) * 1e-9;
+    const double seconds = static_cast<double>(bridge::monotonic_now_ns() - t0) * 1e-9;
     link.stop();
     device->close();
     if (sig)
