@@ -336,7 +336,7 @@ std::int32_t HapticLoop::calibration_status(bridge::HapticStatusSample& st) cons
 
 // HAPTIC_STATUS flags from what this tick decided and what happened in
 // the status period (lcmtypes/haptic_status_t.lcm).
-std::int32_t HapticLoop::status_flags_of(const TickFacts& f) noexcept {
+std::int32_t HapticLoop::status_flags_of(const TickFacts& f) const noexcept {
   std::int32_t flags = 0;
   if (f.out.flags & safety_flags::kStaleFade) flags |= status_flags::kStaleFade;
   if (reading_.buttons.e_stop) flags |= status_flags::kEStop;
@@ -348,9 +348,6 @@ std::int32_t HapticLoop::status_flags_of(const TickFacts& f) noexcept {
   if (overrun_in_period_) flags |= status_flags::kOverrun;
   if (oscillation_.tripped()) flags |= status_flags::kOscillation;
   if (passivity_in_period_) flags |= status_flags::kPassivityActive;
-  clock_reset_in_period_ = false;
-  overrun_in_period_ = false;
-  passivity_in_period_ = false;
   return flags;
 }
 
@@ -387,6 +384,10 @@ void HapticLoop::publish_status(const TickFacts& f) noexcept {
   status_.slave_seq_gaps = link.seq_gaps;
   status_.slave_latency_p99_us = link.latency_p99_us;
   status_.flags = status_flags_of(f) | calibration_status(status_);
+  // The period's events are reported once.
+  clock_reset_in_period_ = false;
+  overrun_in_period_ = false;
+  passivity_in_period_ = false;
   status_.oscillation_trips = static_cast<std::int64_t>(oscillation_.trips());
   for (std::size_t j = 0; j < static_cast<std::size_t>(config_.joints); ++j) {
     status_.tau_in[j] = estimates_[j].tau_in;

@@ -192,7 +192,7 @@ class HapticLoop {
   void render(TickFacts& f) noexcept;
   void command_slave(const TickFacts& f) noexcept;
   void append_trace(const TickFacts& f) noexcept;
-  std::int32_t status_flags_of(const TickFacts& f) noexcept;
+  std::int32_t status_flags_of(const TickFacts& f) const noexcept;
   void publish_status(const TickFacts& f) noexcept;
   void estimate() noexcept;                               // a new SLAVE_STATE in state_
   double slave_torque(std::size_t joint) const noexcept;  // what the source renders, slave N m
