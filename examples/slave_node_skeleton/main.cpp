@@ -189,9 +189,7 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
   tsmh::bridge::LinkSecurityOptions link;
-  app.add_option("--key", link.key_file,
-                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
-                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_option("--key", link.key_file, tsmh::bridge::kKeyOptionHelp);
   app.add_flag("--insecure", link.insecure,
                "run without a link key on a network LCM URL: anyone who reaches it can move "
                "the robot (isolated networks only)");

@@ -625,9 +625,7 @@ int main(int argc, char** argv) {
   app.add_flag("--list-devices", o.list_devices,
                "List connected master devices matching known profiles");
   app.add_flag("--quiet", o.quiet, "Only warnings and the exit summary");
-  app.add_option("--key", o.link.key_file,
-                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
-                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_option("--key", o.link.key_file, bridge::kKeyOptionHelp);
   app.add_flag("--insecure", o.link.insecure,
                "Run without a link key on a network LCM URL: anyone who reaches it can "
                "command the robot and the master (isolated networks only)");

@@ -38,6 +38,12 @@ std::optional<std::filesystem::path> find_key_file(std::string_view flag, const 
 /// network.
 bool is_host_local_url(std::string_view url);
 
+/// The --key option's help, the same for every program (the search order
+/// of find_key_file()).
+inline constexpr const char* kKeyOptionHelp =
+    "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
+    "/etc/tsmh/link.key; create one with `tsm keygen`)";
+
 struct LinkSecurityOptions {
   std::string key_file;   ///< --key FILE
   bool insecure = false;  ///< --insecure: allow no key on a network URL

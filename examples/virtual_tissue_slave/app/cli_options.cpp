@@ -1,5 +1,6 @@
 #include "cli_options.hpp"
 
+#include <bridge/link_security.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -64,9 +65,7 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--lcm-url", o.lcm_url,
                  "LCM URL (default: $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0)");
   app.add_option("--prefix", o.prefix, "channel prefix, e.g. ARM1_");
-  app.add_option("--key", o.key_file,
-                 "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
-                 "/etc/tsmh/link.key; create one with `tsm keygen`)");
+  app.add_option("--key", o.key_file, bridge::kKeyOptionHelp);
   app.add_flag("--insecure", o.insecure,
                "run without a link key on a network LCM URL: anyone who reaches it can move "
                "the slave (isolated networks only)");
