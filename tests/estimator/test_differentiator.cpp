@@ -248,5 +248,39 @@ TEST(Differentiator, RejectsNonFiniteAndNonIncreasingTime) {
   EXPECT_NEAR(ok.xd, 1.0, 0.5);  // state survived the bad samples
 }
 
+// Creeping motion: 20 mrad/s, then +0.03 rad/s^2 for 2 s, then 80 mrad/s.
+// Below |xd| = lambda the sign of such accelerations decides which way eq. (4)
+// drives the friction state, and the fast channel's noise (sd about 0.2
+// rad/s^2) buries them; the slow channel resolves them within a few tenths of
+// a second and reads 0 at constant speed.
+TEST(Differentiator, SlowChannelResolvesTheSignOfCreepingAccelerations) {
+  struct Means {
+    double accelerating, cruising_abs;
+  };
+  const auto run_creep = [](double slow_jerk_psd) {
+    Differentiator d(DifferentiatorConfig{.slow_jerk_psd = slow_jerk_psd});
+    double acc = 0.0, cruise = 0.0;
+    int n_acc = 0, n_cruise = 0;
+    for (int i = 0; i < 8000; ++i) {
+      const double t = i * 1e-3;
+      const double ta = std::clamp(t - 3.0, 0.0, 2.0);
+      const double x = 0.02 * t + 0.5 * 0.03 * ta * ta + 0.06 * std::max(0.0, t - 5.0);
+      const auto der = d.update(t, quantise(x));
+      if (t > 3.5 && t < 5.0) acc += der.acc_sign, ++n_acc;
+      if ((t > 1.0 && t < 3.0) || t > 6.0) cruise += std::fabs(der.acc_sign), ++n_cruise;
+    }
+    return Means{acc / n_acc, cruise / n_cruise};
+  };
+  const Means with = run_creep(DifferentiatorConfig{}.slow_jerk_psd);
+  const Means without = run_creep(0.0);
+  RecordProperty("creep_mean_sign_accelerating", std::to_string(with.accelerating));
+  RecordProperty("creep_mean_abs_sign_cruising", std::to_string(with.cruising_abs));
+  RecordProperty("creep_fast_only_mean_sign_accelerating", std::to_string(without.accelerating));
+  RecordProperty("creep_fast_only_mean_abs_sign_cruising", std::to_string(without.cruising_abs));
+  EXPECT_GT(with.accelerating, 0.6);
+  EXPECT_LT(with.cruising_abs, 0.5);
+  EXPECT_GT(with.accelerating - with.cruising_abs, without.accelerating - without.cruising_abs);
+}
+
 }  // namespace
 }  // namespace tsmh::estimator

@@ -30,7 +30,8 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
     : cfg_(config),
       r_(measurement_variance(config)),
       velocity_(config.jerk_psd, r_),
-      acceleration_(config.snap_psd, r_) {
+      acceleration_(config.snap_psd, r_),
+      slow_(config.slow_jerk_psd > 0.0 ? config.slow_jerk_psd : 1.0, r_) {
   if (!config.exact_covariance) build_gain_table();
   reset();
 }
@@ -48,18 +49,29 @@ void Differentiator::build_gain_table() {
   // Each fixed point starts from the previous one: a few hundred steps each.
   const PolyKalman<3>::Mat* warm_v = nullptr;
   const PolyKalman<4>::Mat* warm_a = nullptr;
-  PolyKalman<3>::Mat pv;
+  const PolyKalman<3>::Mat* warm_s = nullptr;
+  PolyKalman<3>::Mat pv, ps;
   PolyKalman<4>::Mat pa;
+  const double slow_psd = cfg_.slow_jerk_psd > 0.0 ? cfg_.slow_jerk_psd : 1.0;
   for (std::size_t k = 0; k < n; ++k) {
     const double dt = grid_dt(k);
     auto [kv, pv_k] = PolyKalman<3>::steady_state(cfg_.jerk_psd, r_, dt, warm_v);
     auto [ka, pa_k] = PolyKalman<4>::steady_state(cfg_.snap_psd, r_, dt, warm_a);
+    auto [ks, ps_k] = PolyKalman<3>::steady_state(slow_psd, r_, dt, warm_s);
     pv = pv_k;
     pa = pa_k;
+    ps = ps_k;
     warm_v = &pv;
     warm_a = &pa;
+    warm_s = &ps;
     const double sd = std::sqrt(pa[2][2]);
-    gains_[k] = {kv, ka, sd, 1.0 / (cfg_.smooth_sigmas * sd)};
+    gains_[k] = {kv,
+                 ka,
+                 ks,
+                 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])),
+                 1.0 / (cfg_.slow_consistency * sd),
+                 sd,
+                 1.0 / (cfg_.smooth_sigmas * sd)};
   }
 }
 
@@ -83,6 +95,10 @@ inline Differentiator::GainEntry Differentiator::gain_for(double dt) const noexc
     g.velocity[i] = a.velocity[i] + w * (b.velocity[i] - a.velocity[i]);
   for (std::size_t i = 0; i < 4; ++i)
     g.acceleration[i] = a.acceleration[i] + w * (b.acceleration[i] - a.acceleration[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    g.slow[i] = a.slow[i] + w * (b.slow[i] - a.slow[i]);
+  g.slow_inv_width = a.slow_inv_width + w * (b.slow_inv_width - a.slow_inv_width);
+  g.inv_consistency = a.inv_consistency + w * (b.inv_consistency - a.inv_consistency);
   g.acc_sd = a.acc_sd + w * (b.acc_sd - a.acc_sd);
   g.inv_width = a.inv_width + w * (b.inv_width - a.inv_width);
   return g;
@@ -100,6 +116,7 @@ void Differentiator::start(double t, double x) noexcept {
   // (rad/s, rad/s^2, rad/s^3), so the first samples dominate.
   velocity_.start(x, {0.0, 10.0, 100.0});
   acceleration_.start(x, {0.0, 10.0, 100.0, 1000.0});
+  slow_.start(x, {0.0, 10.0, 100.0});
   in_band_ = 0.0;
   last_x_ = x;
   still_ = 0.0;
@@ -108,6 +125,7 @@ void Differentiator::start(double t, double x) noexcept {
 }
 
 inline double Differentiator::decide_sign(double xdd, double sd, double inv_width,
+                                          double slow_inv_width, double inv_consistency,
                                           double dt) noexcept {
   // At rest the true acceleration is exactly 0 and the model's state must
   // not move; the acceleration estimate still rings for a while after a stop
@@ -120,7 +138,17 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
     // The expected sign across the estimate's uncertainty, as a ramp: no
     // decision delay at a zero crossing and no chatter. The model is linear
     // in sgn(xdd), so a fraction acts as the expected value of both branches.
-    return std::clamp(xdd * inv_width, -1.0, 1.0);
+    const double fast = std::clamp(xdd * inv_width, -1.0, 1.0);
+    if (cfg_.slow_jerk_psd <= 0.0) return fast;
+    // Where the fast estimate agrees with the slow channel's (within its own
+    // noise), the motion's acceleration varies slowly and the slow channel,
+    // with a fraction of the noise, tells its sign: in creeping motion the
+    // fast channel's noise alone would flip eq. (4)'s drive at random.
+    // Where they disagree (a reversal, a stop) the slow one lags: fast decides.
+    const double slow_xdd = slow_.state()[2];
+    const double d = std::min(1.0, std::fabs(xdd - slow_xdd) * inv_consistency);
+    const double slow = std::clamp(slow_xdd * slow_inv_width, -1.0, 1.0);
+    return d * d * fast + (1.0 - d * d) * slow;
   }
   // Hard: a dead band with hysteresis around zero, scaled by the estimate's
   // own uncertainty; a decided sign is held inside the release band for
@@ -153,26 +181,32 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     return out_;
   }
   t_ = t;
-  double sd, inv_width;
+  double sd, inv_width, slow_inv_width, inv_consistency;
   if (cfg_.exact_covariance || settling_ > 0) {
     // The full recursion: always, or while the filters settle from their
     // start-up prior (the steady-state gains would converge more slowly).
     if (settling_ > 0) --settling_;
     velocity_.update(dt, x);
     acceleration_.update(dt, x);
+    slow_.update(dt, x);
     sd = std::sqrt(acceleration_.covariance()[2][2]);
     inv_width = 1.0 / (cfg_.smooth_sigmas * sd);
+    slow_inv_width = 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2]));
+    inv_consistency = 1.0 / (cfg_.slow_consistency * sd);
   } else {
     const GainEntry g = gain_for(dt);
     velocity_.update_with_gain(dt, x, g.velocity);
     acceleration_.update_with_gain(dt, x, g.acceleration);
+    slow_.update_with_gain(dt, x, g.slow);
     sd = g.acc_sd;
     inv_width = g.inv_width;
+    slow_inv_width = g.slow_inv_width;
+    inv_consistency = g.inv_consistency;
   }
   still_ = x == last_x_ ? still_ + dt : 0.0;
   last_x_ = x;
   const double xdd = acceleration_.state()[2];
-  const double sign = decide_sign(xdd, sd, inv_width, dt);
+  const double sign = decide_sign(xdd, sd, inv_width, slow_inv_width, inv_consistency, dt);
   out_ = {velocity_.state()[0], velocity_.state()[1], xdd, sign, sd, true};
   return out_;
 }

@@ -56,17 +56,19 @@ void normalise_peak(MultiSine& m, double duration, double peak) {
 // Raised-cosine fade-in from rest over `fade` seconds before t = 0, and its
 // derivatives: the joint starts at rest during a pre-roll that is not
 // recorded, so the recording begins in ordinary motion, as a real one does.
+// A quintic smoothstep from 0 at t = -fade to 1 at t = 0: its first and
+// second derivatives vanish at both ends, so the faded motion's acceleration
+// is continuous (a raised cosine left a step of about 3 rad/s^2 at t = 0).
 void envelope(double t, double fade, double& e, double& ed, double& edd) {
   if (t >= 0.0) {
     e = 1.0;
     ed = edd = 0.0;
     return;
   }
-  const double w = std::numbers::pi / fade;
-  const double a = w * (t + fade);
-  e = 0.5 * (1.0 - std::cos(a));
-  ed = 0.5 * w * std::sin(a);
-  edd = 0.5 * w * w * std::cos(a);
+  const double u = std::clamp((t + fade) / fade, 0.0, 1.0);
+  e = u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
+  ed = 30.0 * u * u * (1.0 - u) * (1.0 - u) / fade;
+  edd = 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u) / (fade * fade);
 }
 
 // A velocity profile made of raised-cosine transitions between speed levels:

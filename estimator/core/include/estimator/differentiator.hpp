@@ -40,6 +40,17 @@ struct DifferentiatorConfig {
   /// Acceleration channel (xdd and its uncertainty): spectral density of the
   /// snap, (rad/s^4)^2/Hz.
   double snap_psd = 3200.0;
+  /// Slow acceleration channel (white jerk), (rad/s^3)^2/Hz; 0: off. It
+  /// resolves the small, lasting accelerations of slow motion, which decide
+  /// the direction of eq. (4)'s drive below |xd| = lambda and which the fast
+  /// channel's noise buries (smooth sign only).
+  double slow_jerk_psd = 1e-3;
+  /// Smooth sign: the slow channel decides while the fast estimate lies
+  /// within this many of its standard deviations of the slow one (blended
+  /// quadratically out to that distance); beyond it, the fast channel.
+  double slow_consistency = 3.0;
+  /// Smooth sign from the slow channel: +-1 beyond this many of its sd.
+  double slow_sigmas = 1.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
   double quantum = 2.0 * std::numbers::pi / 40960.0;
@@ -93,17 +104,22 @@ class Differentiator {
 
  private:
   void start(double t, double x) noexcept;
-  double decide_sign(double xdd, double sd, double inv_width, double dt) noexcept;
+  double decide_sign(double xdd, double sd, double inv_width, double slow_inv_width,
+                     double inv_consistency, double dt) noexcept;
 
   DifferentiatorConfig cfg_;
   double r_;  // measurement variance, rad^2
   PolyKalman<3> velocity_;
   PolyKalman<4> acceleration_;
+  PolyKalman<3> slow_;
   // Steady-state gains by interval (exact_covariance false): entry k is for
   // the interval grid_dt(k); see grid_index().
   struct GainEntry {
     PolyKalman<3>::Vec velocity;
     PolyKalman<4>::Vec acceleration;
+    PolyKalman<3>::Vec slow;
+    double slow_inv_width;   // 1 / (slow_sigmas slow sd)
+    double inv_consistency;  // 1 / (slow_consistency acc_sd)
     double acc_sd;
     double inv_width;  // 1 / (smooth_sigmas acc_sd)
   };
