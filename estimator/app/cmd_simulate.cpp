@@ -92,11 +92,14 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "auto: xd_in/xdd_in when present, else the causal estimator haptic-server "
                   "runs (differentiator: always that; exact: xd_in/xdd_in)")
       ->transform(CLI::CheckedTransformer(sources, CLI::ignore_case));
-  const std::map<std::string, estimator::SignMode> signs{{"smooth", estimator::SignMode::kSmooth},
-                                                         {"hard", estimator::SignMode::kHard}};
+  const std::map<std::string, estimator::SignMode> signs{
+      {"smooth", estimator::SignMode::kSmooth},
+      {"smooth-fast", estimator::SignMode::kSmoothFast},
+      {"hard", estimator::SignMode::kHard}};
   cmd->add_option("--sign", opts->sign,
-                  "sgn(xdd) of the causal estimator: smooth (haptic-server's default) or hard "
-                  "(the paper's -1/0/+1 switch)")
+                  "sgn(xdd) of the causal estimator: smooth (haptic-server's default), "
+                  "smooth-fast (without the slow acceleration channel) or hard (the paper's "
+                  "-1/0/+1 switch)")
       ->transform(CLI::CheckedTransformer(signs, CLI::ignore_case));
   const std::map<std::string, estimator::StartState> starts{
       {"free_tip", estimator::StartState::kFreeTip}, {"zero", estimator::StartState::kZero}};

@@ -180,12 +180,18 @@ int main(int argc, char** argv) {
   app.add_option("--sign-sigmas", diff.sign_sigmas, "sgn(xdd) decided beyond this many sd");
   app.add_option("--sign-release", diff.sign_release, "... and released below this many sd");
   std::string sign_mode = "smooth";
-  app.add_option("--sign-mode", sign_mode, "hard or smooth");
+  app.add_option("--sign-mode", sign_mode, "smooth (deployed), smooth-fast or hard");
   app.add_flag("--exact-covariance", diff.exact_covariance, "full Kalman recursion every sample");
   app.add_option("--smooth-sigmas", diff.smooth_sigmas, "smooth sign: width in sd");
   app.add_option("--still-time", diff.still_time, "encoder unchanged this long: rest");
   CLI11_PARSE(app, argc, argv);
-  diff.sign_mode = sign_mode == "hard" ? SignMode::kHard : SignMode::kSmooth;
+  if (sign_mode != "smooth" && sign_mode != "smooth-fast" && sign_mode != "hard") {
+    std::fprintf(stderr, "online_accuracy: --sign-mode must be smooth, smooth-fast or hard\n");
+    return 2;
+  }
+  diff.sign_mode = sign_mode == "hard"          ? SignMode::kHard
+                   : sign_mode == "smooth-fast" ? SignMode::kSmoothFast
+                                                : SignMode::kSmooth;
 
   const std::vector<Case> all{
       {"multisine", MotionKind::kMultisine, 0.2, 1.0, true},

@@ -134,12 +134,12 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
     in_band_ = 0.0;
     return 0.0;
   }
-  if (cfg_.sign_mode == SignMode::kSmooth) {
+  if (cfg_.sign_mode != SignMode::kHard) {
     // The expected sign across the estimate's uncertainty, as a ramp: no
     // decision delay at a zero crossing and no chatter. The model is linear
     // in sgn(xdd), so a fraction acts as the expected value of both branches.
     const double fast = std::clamp(xdd * inv_width, -1.0, 1.0);
-    if (cfg_.slow_jerk_psd <= 0.0) return fast;
+    if (cfg_.sign_mode == SignMode::kSmoothFast || cfg_.slow_jerk_psd <= 0.0) return fast;
     // Where the fast estimate agrees with the slow channel's (within its own
     // noise), the motion's acceleration varies slowly and the slow channel,
     // with a fraction of the noise, tells its sign: in creeping motion the

@@ -29,8 +29,13 @@ enum class SignMode {
   /// The expected sign across the estimate's uncertainty, a ramp
   /// clamp(xdd / (smooth_sigmas sd), -1, 1): no decision delay at a zero
   /// crossing and no chatter; +-1 once the sign is certain. The default: the
-  /// server and `tsm simulate` use it (docs/friction-model.md has both).
+  /// server and `tsm simulate` use it (docs/friction-model.md has all three).
+  /// Where the slow channel agrees with the fast one, its sign (see
+  /// slow_jerk_psd).
   kSmooth,
+  /// kSmooth from the fast channel alone (the default until the slow channel
+  /// was added; for comparison).
+  kSmoothFast,
 };
 
 struct DifferentiatorConfig {
