@@ -89,6 +89,12 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   EXPECT_EQ(c.joints[0].start_state, estimator::StartState::kFreeTip);
   EXPECT_EQ(c.joints[1].sign, estimator::SignMode::kHard);
   EXPECT_EQ(c.joints[1].start_state, estimator::StartState::kZero);
+  EXPECT_EQ(parse_server_config("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: "
+                                "smooth-fast}\n",
+                                "server.yaml", "/cfg")
+                .joints[0]
+                .sign,
+            estimator::SignMode::kSmoothFast);
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: soft}\n")
                 .find("joints[0].sign"),
             std::string::npos);
