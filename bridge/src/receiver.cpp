@@ -9,8 +9,8 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-#include "bridge/clock.hpp"
 #include "bridge/host_only.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::bridge {
 namespace {
@@ -27,7 +27,7 @@ void Receiver::on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string&
                               Route* route) {
   InboxBase* inbox = route->inbox;
   if (inbox->discarding()) return inbox->count_discarded();
-  const std::int64_t receive_ns = monotonic_now_ns();
+  const std::int64_t receive_ns = realtime::monotonic_now_ns();
   const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
   std::size_t size = rbuf->data_size;
   if (route->verifier != nullptr) {

@@ -4,7 +4,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-#include "bridge/clock.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::bridge {
 
@@ -40,7 +40,7 @@ void Sender::stop() noexcept {
 
 void Sender::run() noexcept {
   const std::int64_t period_ns = options_.poll_period.count() * 1000;
-  std::int64_t next_ns = monotonic_now_ns();
+  std::int64_t next_ns = realtime::monotonic_now_ns();
   for (;;) {
     const std::uint32_t seen = signal_.current();
     for (auto& box : outboxes_)
@@ -56,7 +56,7 @@ void Sender::run() noexcept {
     }
     // Polling: absolute deadlines; after a stall, re-base instead of catching up.
     next_ns += period_ns;
-    const std::int64_t now = monotonic_now_ns();
+    const std::int64_t now = realtime::monotonic_now_ns();
     if (next_ns < now) next_ns = now + period_ns;
     const timespec ts{static_cast<time_t>(next_ns / 1'000'000'000),
                       static_cast<long>(next_ns % 1'000'000'000)};

@@ -38,14 +38,9 @@
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
+#include "realtime/clock.hpp"
 
 namespace {
-
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
-}
 
 /// Stand-in for a vendor SDK: a 2-DOF handle (inertia, damping) moved by a
 /// hand that sweeps it slowly, plus whatever torque we command.
@@ -116,7 +111,7 @@ struct ForceInbox {
     for (int j = 0; j < FakeVendorMaster::kDof; ++j)
       torque[j] = msg->torque[static_cast<std::size_t>(j)];
     enable = msg->enable;
-    received_ns = monotonic_ns();
+    received_ns = tsmh::realtime::monotonic_now_ns();
   }
 };
 
@@ -221,21 +216,21 @@ int main(int argc, char** argv) {
   state.q.resize(FakeVendorMaster::kDof);
   state.qd.resize(FakeVendorMaster::kDof);
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
-  const std::int64_t start = monotonic_ns();
+  const std::int64_t start = tsmh::realtime::monotonic_now_ns();
   std::int64_t next = start;
   std::int64_t seq = 0;
   std::int64_t watchdog_trips = 0;
   bool was_fresh = false;
 
   while (!stop_requested(stop_signals) &&
-         (duration_s <= 0.0 || monotonic_ns() - start < duration_s * 1e9)) {
+         (duration_s <= 0.0 || tsmh::realtime::monotonic_now_ns() - start < duration_s * 1e9)) {
     next += period_ns;  // absolute deadlines: no drift
     timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
 
     while (lcm.handleTimeout(0) > 0) {
     }  // drain MASTER_FORCE without blocking
-    const std::int64_t now = monotonic_ns();
+    const std::int64_t now = tsmh::realtime::monotonic_now_ns();
     const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= watchdog_ms * 1e6;
     if (was_fresh && !fresh) ++watchdog_trips;
     was_fresh = fresh;

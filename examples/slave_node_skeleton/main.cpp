@@ -35,6 +35,7 @@
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
+#include "realtime/clock.hpp"
 
 namespace {
 
@@ -99,12 +100,6 @@ class StubRobot final : public RobotIo {
   double ref_[2] = {0.0, 0.0};
 };
 
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
 /// The newest MASTER_COMMAND and when it arrived (this node's clock: the
 /// server's utime is on another host's clock when the nodes are apart).
 struct CommandInbox {
@@ -146,7 +141,7 @@ struct CommandInbox {
     }
     newest = *msg;
     last_seq = msg->seq;
-    received_ns = monotonic_ns();
+    received_ns = tsmh::realtime::monotonic_now_ns();
   }
 };
 
@@ -252,20 +247,20 @@ int main(int argc, char** argv) {
     state.radius_m[static_cast<std::size_t>(j)] = robot.radius_m(j);
   std::vector<JointSample> samples;
 
-  const std::int64_t start = monotonic_ns();
+  const std::int64_t start = tsmh::realtime::monotonic_now_ns();
   std::int64_t next = start;
   std::int64_t seq = 0;
   std::int64_t holds = 0;
   bool was_driving = false;
   while (!stop_requested(stop_signals) &&
-         (duration_s <= 0.0 || monotonic_ns() - start < duration_s * 1e9)) {
+         (duration_s <= 0.0 || tsmh::realtime::monotonic_now_ns() - start < duration_s * 1e9)) {
     next += period_ns;  // absolute deadlines: no drift
     timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
 
     while (lcm.handleTimeout(0) > 0) {
     }  // drain MASTER_COMMAND without blocking
-    const std::int64_t now = monotonic_ns();
+    const std::int64_t now = tsmh::realtime::monotonic_now_ns();
     const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= command_timeout_ms * 1e6;
     const bool driving = fresh && inbox.newest.enable;
     if (driving) {
@@ -280,7 +275,7 @@ int main(int argc, char** argv) {
 
     const bool sensors_ok = robot.read(samples);
     // utime: this node's CLOCK_MONOTONIC at the moment the sensors were read.
-    state.utime = monotonic_ns() / 1000;
+    state.utime = tsmh::realtime::monotonic_utime();
     state.seq = seq++;
     for (std::size_t j = 0; j < un; ++j) {
       state.x_in[j] = samples[j].x_in;

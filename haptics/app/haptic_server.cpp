@@ -22,7 +22,6 @@
 #include <optional>
 #include <stdexcept>
 
-#include "bridge/clock.hpp"
 #include "bridge/host_only.hpp"
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_security.hpp"
@@ -37,6 +36,7 @@
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
+#include "realtime/clock.hpp"
 #include "request_recalibration.hpp"
 #include "tsmh/version.hpp"
 
@@ -106,7 +106,7 @@ class EventLog {
       : events_(events), ctx_(std::move(ctx)), start_ns_(start_ns), slave_seen_ns_(start_ns) {}
 
   void poll() {
-    const std::int64_t now = bridge::monotonic_now_ns();
+    const std::int64_t now = tsmh::realtime::monotonic_now_ns();
     watch_slave(now);  // before the FAULT it causes
     const auto resets = events_.estimator_resets.load(std::memory_order_relaxed);
     if (resets != resets_) {
@@ -239,7 +239,7 @@ int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventL
     const int sig = sigtimedwait(&set, nullptr, &timeout);
     if (sig > 0) return sig;
     log.poll();
-    calibration.poll(bridge::monotonic_now_ns());
+    calibration.poll(tsmh::realtime::monotonic_now_ns());
   }
   return 0;
 }
@@ -549,7 +549,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     link.start();
     haptics::LoopRunner runner(loop, {cfg.loop.rate_hz, cfg.realtime.sched_fifo,
                                       cfg.realtime.priority, cfg.realtime.cpu, cfg.duration_s});
-    const std::int64_t t0 = bridge::monotonic_now_ns();
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
     runner.start();
     const auto& rt = runner.status();
     if (!rt.sched_fifo) std::fprintf(stderr, "haptic-server: warning: %s\n", rt.sched_note.c_str());
@@ -572,11 +572,11 @@ int run(const Options& o, const sigset_t& stop_signals) {
     haptic_server::CalibrationLog calibration(loop.calibration(), t0, live);
     const int sig = wait_for_stop(stop_signals, runner, events, calibration);
     events.poll();  // anything the loop reported in its last ticks
-    calibration.poll(bridge::monotonic_now_ns());
+    calibration.poll(tsmh::realtime::monotonic_now_ns());
     events.clear();
     runner.stop();
     runner.join();  // the loop thread wrote zero torque on its way out
-    const double seconds = static_cast<double>(bridge::monotonic_now_ns() - t0) * 1e-9;
+    const double seconds = static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0) * 1e-9;
     link.stop();
     device->close();
     if (sig)

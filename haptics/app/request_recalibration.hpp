@@ -9,11 +9,11 @@
 #include <string>
 
 #include "bridge/channels.hpp"
-#include "bridge/clock.hpp"
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/sender.hpp"
 #include "haptics/server_config.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::haptic_server {
 
@@ -31,7 +31,7 @@ inline int request_recalibration(const std::string& config_path, const std::stri
   auto& out = tx.outbox<bridge::CalibrationRequestSample>();
   tx.start();
   bridge::CalibrationRequestSample s;
-  s.utime = bridge::monotonic_utime();
+  s.utime = realtime::monotonic_utime();
   s.seq = s.utime;  // advances from one request to the next, as receivers require
   s.num_joints = cfg.loop.joints;
   for (int j = 0; j < cfg.loop.joints; ++j)

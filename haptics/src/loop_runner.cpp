@@ -10,8 +10,8 @@
 #include <cerrno>
 #include <cstring>
 
-#include "bridge/clock.hpp"
 #include "haptics/tick_schedule.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -91,7 +91,7 @@ void LoopRunner::run() noexcept {
   ready_.store(true, std::memory_order_release);
 
   const auto period = static_cast<std::int64_t>(1e9 / options_.rate_hz + 0.5);
-  const std::int64_t start = bridge::monotonic_now_ns() + period;
+  const std::int64_t start = realtime::monotonic_now_ns() + period;
   const std::int64_t end = options_.duration_s > 0
                                ? start + static_cast<std::int64_t>(options_.duration_s * 1e9)
                                : INT64_MAX;
@@ -104,9 +104,9 @@ void LoopRunner::run() noexcept {
   std::int64_t due = start;
   while (!stop_.load(std::memory_order_relaxed) && deadline < end) {
     sleep_until(deadline);
-    const std::int64_t woke = bridge::monotonic_now_ns();
+    const std::int64_t woke = realtime::monotonic_now_ns();
     loop_.tick(woke, woke - due);
-    const std::int64_t done = bridge::monotonic_now_ns();
+    const std::int64_t done = realtime::monotonic_now_ns();
     const NextTick next = next_tick(deadline, done, period);
     loop_.record_compute(done - woke, next.skipped);
     due = next.due_ns;

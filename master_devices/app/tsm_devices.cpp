@@ -18,11 +18,11 @@
 #include <thread>
 
 #include "master_devices/builtin_drivers.hpp"
-#include "master_devices/clock.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/profile.hpp"
 #include "master_devices/profile_dirs.hpp"
 #include "master_devices/registry.hpp"
+#include "realtime/clock.hpp"
 #include "tsmh/version.hpp"
 
 namespace md = tsmh::master_devices;
@@ -95,10 +95,10 @@ int main(int argc, char** argv) {
       std::printf("%s (%s): %u DOF, %.0f Hz\n", spec.model.c_str(), spec.driver.c_str(), spec.dof,
                   spec.nominal_rate_hz);
       const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-      std::int64_t t = md::monotonic_ns();
+      std::int64_t t = tsmh::realtime::monotonic_now_ns();
       while (std::chrono::steady_clock::now() < end) {
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
-        t = device->simulated_time() ? t + 100'000'000 : md::monotonic_ns();
+        t = device->simulated_time() ? t + 100'000'000 : tsmh::realtime::monotonic_now_ns();
         const md::DeviceReading r = device->read(t);
         std::printf("%-12s seq %8llu  q", std::string(md::to_string(r.status)).c_str(),
                     static_cast<unsigned long long>(r.sequence));

@@ -355,12 +355,12 @@ void ConsoleDevice::on_input_report(std::span<const std::uint8_t> report,
 
   send_output(t_ns, dt_s, !late);
   r.tau_commanded = last_sent_;
-  readings_.publish(r);
+  readings_.store(r);
 }
 
 void ConsoleDevice::send_output(std::int64_t t_ns, double dt_s, bool allow_torque) noexcept {
   Command cmd;
-  commands_.fetch(cmd);
+  command_reader_.fetch(cmd);
   const bool fresh_command =
       cmd.valid && t_ns - cmd.t_ns <= settings_.command_timeout_ms * 1'000'000LL;
   const bool drive =
@@ -405,7 +405,7 @@ void ConsoleDevice::on_link_lost(const char* why) noexcept {
 
 DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
   DeviceReading r;
-  r.fresh = readings_.fetch(r);
+  r.fresh = reading_reader_.fetch(r);
   r.status = status();
   r.fault = fault_.load();
   apply_reading_rules(r, now_ns, fresh_bound_ns_.load(std::memory_order_relaxed),
@@ -414,7 +414,7 @@ DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
 }
 
 void ConsoleDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.publish(Command{tau_nm, clock_->now_ns(), true});
+  commands_.store(Command{tau_nm, clock_->now_ns(), true});
 }
 
 void ConsoleDevice::set_enabled(bool on) noexcept {

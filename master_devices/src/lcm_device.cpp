@@ -124,7 +124,7 @@ struct LcmDevice::Impl {
 
     // Answer with the newest torque (zero unless everything is well).
     Command cmd;
-    device.commands_.fetch(cmd);
+    device.command_reader_.fetch(cmd);
     const bool drive = device.enable_requested_ && device.fault_ == FaultCode::kNone && cmd.valid &&
                        now - cmd.t_ns <= device.settings_.command_timeout_ms * 1'000'000LL;
     DeviceReading r;
@@ -144,7 +144,7 @@ struct LcmDevice::Impl {
                         (msg->buttons & 8) != 0};
     r.enabled = drive;
     r.status = DeviceStatus::kOk;
-    device.readings_.publish(r);
+    device.readings_.store(r);
 
     force.utime = now / 1000;
     force.seq = force_seq++;
@@ -233,7 +233,7 @@ bool LcmDevice::clear_fault() {
 
 DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
   DeviceReading r;
-  r.fresh = readings_.fetch(r);
+  r.fresh = reading_reader_.fetch(r);
   r.status = status();
   r.fault = fault_.load();
   apply_reading_rules(r, now_ns, settings_.stale_timeout_ms * 1'000'000LL, enable_requested_);
@@ -241,7 +241,7 @@ DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
 }
 
 void LcmDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.publish(Command{tau_nm, clock_->now_ns(), true});
+  commands_.store(Command{tau_nm, clock_->now_ns(), true});
 }
 
 void LcmDevice::set_enabled(bool on) noexcept {

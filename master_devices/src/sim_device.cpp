@@ -136,7 +136,7 @@ DeviceStatus SimDevice::status() const noexcept {
 
 void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
   Command cmd;
-  commands_.fetch(cmd);
+  command_reader_.fetch(cmd);
   const bool fresh = cmd.valid && (settings_.simulated_time ||
                                    t_ns - cmd.t_ns <= settings_.command_timeout_ms * 1'000'000LL);
   const bool drive = enabled_ && fault_ == FaultCode::kNone && fresh;
@@ -166,13 +166,13 @@ void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
     r.buttons.calibrate = true;
   r.enabled = drive;
   r.status = DeviceStatus::kOk;
-  readings_.publish(r);
+  readings_.store(r);
 }
 
 void SimDevice::run_real_time() {
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / settings_.rate_hz);
   // Paced on CLOCK_MONOTONIC (a thread sleeps in real time), stamped on clock_.
-  std::int64_t next = monotonic_ns();
+  std::int64_t next = realtime::monotonic_now_ns();
   while (!stopping_) {
     next += period_ns;
     timespec ts{static_cast<time_t>(next / 1'000'000'000LL),
@@ -194,7 +194,7 @@ DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
     }
   }
   DeviceReading r;
-  r.fresh = readings_.fetch(r);
+  r.fresh = reading_reader_.fetch(r);
   r.status = status();
   r.fault = fault_.load();
   // In simulated time the world was just advanced to now_ns: never stale.
@@ -207,7 +207,7 @@ DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
 }
 
 void SimDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.publish(Command{tau_nm, settings_.simulated_time ? 0 : clock_->now_ns(), true});
+  commands_.store(Command{tau_nm, settings_.simulated_time ? 0 : clock_->now_ns(), true});
 }
 
 }  // namespace tsmh::master_devices

@@ -17,9 +17,9 @@
 #include <thread>
 #include <vector>
 
-#include "bridge/clock.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
+#include "realtime/clock.hpp"
 
 namespace {
 
@@ -53,7 +53,7 @@ void print_header(const char* title) {
 
 SlaveStateSample sample(std::int64_t seq) {
   SlaveStateSample s;
-  s.utime = monotonic_utime();
+  s.utime = tsmh::realtime::monotonic_utime();
   s.seq = seq;
   s.num_joints = 2;
   for (std::size_t j = 0; j < 2; ++j) {
@@ -90,7 +90,7 @@ class Pacer {
     tx_.start();
     channel_ = channel_name(cfg.prefix, Channel::kSlaveState);
     thread_ = std::thread([this, count] {
-      std::int64_t next = monotonic_now_ns();
+      std::int64_t next = tsmh::realtime::monotonic_now_ns();
       for (int i = 0; i < count && !stop_; ++i) {
         const SlaveStateSample s = sample(i);
         if (direct_)
@@ -132,22 +132,22 @@ void bench_read(const std::string& prefix) {
   std::vector<double> batch_ns;
   volatile std::int64_t sink = 0;
   for (int b = 0; b < 2000; ++b) {
-    const std::int64_t t0 = monotonic_now_ns();
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
     for (int i = 0; i < kBatch; ++i) {
       inbox.latest(s);
       sink = sink + s.seq;
     }
-    batch_ns.push_back(static_cast<double>(monotonic_now_ns() - t0) / kBatch);
+    batch_ns.push_back(static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0) / kBatch);
   }
   // Single reads timed one by one, as the loop does once per tick (includes
   // ~20 ns of clock_gettime; the timer alone is measured for comparison).
   std::vector<double> single_ns, timer_ns;
   for (int i = 0; i < 200'000; ++i) {
-    const std::int64_t t0 = monotonic_now_ns();
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
     inbox.latest(s);
-    const std::int64_t t1 = monotonic_now_ns();
+    const std::int64_t t1 = tsmh::realtime::monotonic_now_ns();
     single_ns.push_back(static_cast<double>(t1 - t0));
-    const std::int64_t t2 = monotonic_now_ns();
+    const std::int64_t t2 = tsmh::realtime::monotonic_now_ns();
     timer_ns.push_back(static_cast<double>(t2 - t1));
   }
   print_header(
@@ -182,14 +182,14 @@ void bench_publish_cost(const std::string& prefix, int count) {
 
   // Interleaved at 1 kHz each so that all three see the same machine load.
   std::vector<double> direct_us, notify_us, poll_us;
-  std::int64_t next = monotonic_now_ns();
+  std::int64_t next = tsmh::realtime::monotonic_now_ns();
   int seq = 0;
   auto timed = [&](std::vector<double>& out, auto&& publish) {
     const SlaveStateSample s = sample(seq / 3);
     ++seq;
-    const std::int64_t t0 = monotonic_now_ns();
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
     publish(s);
-    out.push_back(static_cast<double>(monotonic_now_ns() - t0) * 1e-3);
+    out.push_back(static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0) * 1e-3);
     next += 333'333;
     sleep_until_ns(next);
   };
@@ -225,13 +225,14 @@ void bench_latency(const std::string& prefix, int count, const Mode& mode, const
     // no delay the age it sees would be 500 us.
     SlaveStateSample s;
     std::uint64_t last_version = 0;
-    std::int64_t next = monotonic_now_ns() + 500'000;
+    std::int64_t next = tsmh::realtime::monotonic_now_ns() + 500'000;
     for (int tick = 0; tick < count + 200; ++tick) {
       next += 1'000'000;
       sleep_until_ns(next);
       const std::uint64_t v = inbox.latest(s);
       if (v == 0) continue;
-      const double age = static_cast<double>(monotonic_now_ns() - s.utime * 1000) * 1e-3;
+      const double age =
+          static_cast<double>(tsmh::realtime::monotonic_now_ns() - s.utime * 1000) * 1e-3;
       if (tick < count) age_us.push_back(age);
       if (v != last_version) fresh_us.push_back(age);
       last_version = v;

@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "bridge/clock.hpp"
 #include "bridge/codec.hpp"
 #include "bridge/link_auth.hpp"
+#include "realtime/clock.hpp"
 #include "test_samples.hpp"
 
 namespace {
@@ -59,30 +59,30 @@ void bench(int joints, int count) {
   for (auto& m : messages) {
     m = payload;
     m.resize(n + kAuthTrailerBytes);
-    const std::int64_t t0 = monotonic_now_ns();
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
     signer.sign(channel, m.data(), n, m.data() + n);
-    const std::int64_t t1 = monotonic_now_ns();
+    const std::int64_t t1 = tsmh::realtime::monotonic_now_ns();
     sign_ns.push_back(static_cast<double>(t1 - t0));
-    timer_ns.push_back(static_cast<double>(monotonic_now_ns() - t1));
+    timer_ns.push_back(static_cast<double>(tsmh::realtime::monotonic_now_ns() - t1));
   }
   const std::int64_t now_us = realtime_now_us();
   std::size_t ok = 0;
   for (const auto& m : messages) {
-    const std::int64_t t0 = monotonic_now_ns();
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
     ok += verifier.verify(channel, m.data(), m.size(), now_us).verdict == AuthVerdict::kOk;
-    verify_ns.push_back(static_cast<double>(monotonic_now_ns() - t0));
+    verify_ns.push_back(static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0));
   }
   // Back-to-back means (no timer inside the loop).
   std::vector<std::uint8_t> scratch = messages.front();
-  const std::int64_t s0 = monotonic_now_ns();
+  const std::int64_t s0 = tsmh::realtime::monotonic_now_ns();
   for (int i = 0; i < count; ++i)
     signer.sign(channel, scratch.data(), n, scratch.data() + n);
-  const double sign_mean = static_cast<double>(monotonic_now_ns() - s0) / count;
+  const double sign_mean = static_cast<double>(tsmh::realtime::monotonic_now_ns() - s0) / count;
   MessageVerifier fresh(key);
-  const std::int64_t v0 = monotonic_now_ns();
+  const std::int64_t v0 = tsmh::realtime::monotonic_now_ns();
   for (const auto& m : messages)
     ok += fresh.verify(channel, m.data(), m.size(), now_us).verdict == AuthVerdict::kOk;
-  const double verify_mean = static_cast<double>(monotonic_now_ns() - v0) / count;
+  const double verify_mean = static_cast<double>(tsmh::realtime::monotonic_now_ns() - v0) / count;
 
   std::printf(
       "\nSLAVE_STATE %d joints: payload %zu bytes + %zu trailer; %d messages, %zu verified\n",

@@ -15,10 +15,10 @@
 #include <string>
 #include <thread>
 
-#include "bridge/clock.hpp"
 #include "bridge/codec.hpp"
 #include "bridge/lcm_url.hpp"
 #include "bridge/sender.hpp"
+#include "realtime/clock.hpp"
 #include "test_samples.hpp"
 
 namespace {
@@ -63,7 +63,7 @@ int publish_mode(const std::string& url, const std::string& prefix, long count, 
   clock_gettime(CLOCK_MONOTONIC, &next);
   long errors = 0;
   for (long i = 0; i < count; ++i) {
-    const std::int64_t utime = monotonic_utime();
+    const std::int64_t utime = tsmh::realtime::monotonic_utime();
     if (direct) {
       errors += publish_sample(tx.lcm(), state_channel, test::make_state(i, utime)) != 0;
       if (truth) errors += publish_sample(tx.lcm(), truth_channel, test::make_truth(i, utime)) != 0;

@@ -8,11 +8,11 @@
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 
-#include "bridge/clock.hpp"
 #include "bridge/host_only.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
 #include "process.hpp"
+#include "realtime/clock.hpp"
 #include "test_support.hpp"
 
 namespace tsmh::bridge {
@@ -94,7 +94,7 @@ TEST(HostOnly, DatagramsFromAnotherHostAreDroppedLocalOnesArrive) {
   const std::string prefix = test::unique_prefix();
   const std::string channel = prefix + "SLAVE_STATE";
   std::vector<std::uint8_t> payload;
-  encode_sample(make_state(1, monotonic_utime()), payload);
+  encode_sample(make_state(1, realtime::monotonic_utime()), payload);
 
   // Control: unfiltered LCM on the same URL hears the other host.
   {
@@ -118,7 +118,7 @@ TEST(HostOnly, DatagramsFromAnotherHostAreDroppedLocalOnesArrive) {
   Sender tx({.url = url, .prefix = prefix});
   auto& out = tx.outbox<SlaveStateSample>();
   tx.start();
-  ASSERT_TRUE(out.publish(make_state(2, monotonic_utime())));
+  ASSERT_TRUE(out.publish(make_state(2, realtime::monotonic_utime())));
   ASSERT_TRUE(wait_until([&] { return in.stats().accepted == 1; })) << "local traffic arrives";
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_EQ(in.stats().received, 1U) << "the other host's 20 datagrams were dropped";

@@ -13,11 +13,11 @@
 #include <thread>
 #include <vector>
 
-#include "bridge/clock.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
+#include "realtime/clock.hpp"
 #include "test_support.hpp"
 
 namespace tsmh::bridge {
@@ -407,7 +407,7 @@ class Tap {
 
 MasterCommandSample command(std::int64_t seq, double q) {
   MasterCommandSample c;
-  c.utime = monotonic_utime();
+  c.utime = realtime::monotonic_utime();
   c.seq = seq;
   c.num_joints = 2;
   c.position_ref[0] = q;
@@ -509,8 +509,8 @@ TEST(LinkAuthUdpm, UnkeyedReceiverStillDecodesSignedTraffic) {
   rx.start();
   Sender tx({.url = url, .prefix = prefix, .key = new_key()});
   tx.start();
-  ASSERT_EQ(publish_sample(tx.lcm(), prefix + "SLAVE_STATE", make_state(3, monotonic_utime()),
-                           tx.signer()),
+  ASSERT_EQ(publish_sample(tx.lcm(), prefix + "SLAVE_STATE",
+                           make_state(3, realtime::monotonic_utime()), tx.signer()),
             0);
   ASSERT_TRUE(wait_until([&] { return in.stats().accepted == 1; }));
   SlaveStateSample s;

@@ -9,9 +9,9 @@
 #include <thread>
 #include <vector>
 
-#include "bridge/clock.hpp"
 #include "bridge/codec.hpp"
 #include "bridge/receiver.hpp"
+#include "realtime/clock.hpp"
 #include "test_support.hpp"
 
 namespace tsmh::bridge {
@@ -63,7 +63,7 @@ TEST(LinkStats, InjectedLatencyGapsReorderingAndDuplicatesAreCountedExactly) {
   // Paced at 1 per ms; each utime is rewritten at send time to now - 5 ms,
   // keeping 400 older than 401.
   for (std::size_t k = 0; k < sends.size(); ++k) {
-    std::int64_t u = monotonic_utime() - kLatencyUs;
+    std::int64_t u = realtime::monotonic_utime() - kLatencyUs;
     if (sends[k].seq == 400) u = sends[k - 1].utime - 10;  // older than 401, sent after it
     sends[k].utime = u;
     publish_sample(lcm, inbox.channel(), make_state(sends[k].seq, u));
@@ -103,12 +103,12 @@ TEST(LinkStats, BacklogQueuedBeforeStartIsDiscardedAndCounted) {
   for (std::int64_t seq = 0; seq < 40; ++seq)
     before.push_back({seq, 0});
   for (auto& s : before)
-    s.utime = monotonic_utime() + s.seq;
+    s.utime = realtime::monotonic_utime() + s.seq;
   send_paced(lcm, inbox.channel(), before);
   std::this_thread::sleep_for(300ms);  // the "start-up"
   rx.start();
   for (std::int64_t seq = 1000; seq < 1040; ++seq) {
-    publish_sample(lcm, inbox.channel(), make_state(seq, monotonic_utime()));
+    publish_sample(lcm, inbox.channel(), make_state(seq, realtime::monotonic_utime()));
     std::this_thread::sleep_for(1ms);
   }
   ASSERT_TRUE(wait_until([&] { return inbox.stats().accepted >= 40; }, 10s))

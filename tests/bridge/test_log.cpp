@@ -14,11 +14,11 @@
 #include <sstream>
 #include <thread>
 
-#include "bridge/clock.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/log_reader.hpp"
 #include "bridge/receiver.hpp"
 #include "process.hpp"
+#include "realtime/clock.hpp"
 #include "test_support.hpp"
 
 namespace tsmh::bridge {
@@ -235,7 +235,7 @@ TEST(LcmLog, LoggerRoundTripThroughTsmConvert) {
 void write_replay_log(const fs::path& log, const std::string& channel) {
   lcm::LogFile out(log.string(), "w");
   ASSERT_TRUE(out.good());
-  const std::int64_t t0 = monotonic_utime();
+  const std::int64_t t0 = realtime::monotonic_utime();
   std::vector<std::uint8_t> bytes;
   for (int i = 0; i < 100; ++i) {
     encode_sample(test::make_state(i, t0 + i * 1000), bytes);

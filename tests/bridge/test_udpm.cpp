@@ -7,10 +7,10 @@
 #include <random>
 #include <thread>
 
-#include "bridge/clock.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
 #include "process.hpp"
+#include "realtime/clock.hpp"
 #include "test_support.hpp"
 
 namespace tsmh::bridge {
@@ -31,11 +31,11 @@ TEST(Udpm, LoopSeesNewestSampleAndItsAge) {
 
   constexpr int kCount = 300;
   std::thread slave_node([&] {  // a 1 kHz sender, absolute deadlines
-    std::int64_t next = monotonic_now_ns();
+    std::int64_t next = realtime::monotonic_now_ns();
     for (int i = 0; i < kCount; ++i) {
       // A test sender may wait for ring space (a real-time loop would drop and
       // count): every message must go out even when this machine stalls.
-      while (!out.publish(make_state(i, monotonic_utime())))
+      while (!out.publish(make_state(i, realtime::monotonic_utime())))
         std::this_thread::sleep_for(1ms);
       next += 1'000'000;
       const timespec ts{static_cast<time_t>(next / 1'000'000'000),
@@ -56,7 +56,7 @@ TEST(Udpm, LoopSeesNewestSampleAndItsAge) {
       if (v < last_version) ++version_went_back;
       if (s.seq < last_seq) ++seq_went_back;
       EXPECT_EQ(s.x_in[1], 0.001 * static_cast<double>(s.seq) + 1) << "payload matches its seq";
-      max_age_ns = std::max(max_age_ns, receive_age_ns(s, monotonic_now_ns()));
+      max_age_ns = std::max(max_age_ns, receive_age_ns(s, realtime::monotonic_now_ns()));
       last_version = v;
       last_seq = s.seq;
     }
@@ -73,8 +73,8 @@ TEST(Udpm, LoopSeesNewestSampleAndItsAge) {
   // Nothing new arrives: the age keeps growing, which is how the loop detects a dead slave.
   ASSERT_TRUE(slave.latest(s));
   std::this_thread::sleep_for(30ms);
-  EXPECT_GE(receive_age_ns(s, monotonic_now_ns()), 30'000'000);
-  EXPECT_GE(sample_age_ns(s, monotonic_now_ns()), 30'000'000)
+  EXPECT_GE(receive_age_ns(s, realtime::monotonic_now_ns()), 30'000'000);
+  EXPECT_GE(sample_age_ns(s, realtime::monotonic_now_ns()), 30'000'000)
       << "same host: utime shares the clock";
 
   ASSERT_TRUE(wait_until([&] { return slave.stats().accepted == kCount; }))
@@ -105,7 +105,7 @@ TEST(Udpm, HostileMessagesAreCountedAndNeverReachTheLoop) {
     encode_sample(s, b);
     send_bytes(b);
   };
-  const std::int64_t t0 = monotonic_utime();
+  const std::int64_t t0 = realtime::monotonic_utime();
 
   send(make_state(0, t0));  // valid
   auto nan = make_state(1, t0 + 1);
@@ -218,7 +218,7 @@ TEST(Udpm, MasterSideAndSlaveSideExchangeCommandsAndState) {
 
   for (int i = 0; i < 50; ++i) {
     MasterCommandSample c;
-    c.utime = monotonic_utime();
+    c.utime = realtime::monotonic_utime();
     c.seq = i;
     c.num_joints = 2;
     c.position_ref = {0.01 * i, -0.01 * i};
@@ -227,14 +227,14 @@ TEST(Udpm, MasterSideAndSlaveSideExchangeCommandsAndState) {
     std::this_thread::sleep_for(1ms);
     MasterCommandSample got;
     if (cmd_in.latest(got)) {  // the slave follows the newest command
-      SlaveStateSample s = make_state(i, monotonic_utime());
+      SlaveStateSample s = make_state(i, realtime::monotonic_utime());
       s.x_out[0] = got.position_ref[0];               // what the slave follows
       s.status = static_cast<std::int32_t>(got.seq);  // and which command that was
       state_out.publish(s);
     }
     if (i % 10 == 0) {
       HapticStatusSample h;
-      h.utime = monotonic_utime();
+      h.utime = realtime::monotonic_utime();
       h.seq = i / 10;
       h.num_joints = 2;
       h.rate_hz = 1000.0;
@@ -268,7 +268,7 @@ TEST(Udpm, PrefixesSeparateArms) {
   Sender tx({.url = test::test_url(), .prefix = base + "ARM2_"});
   auto& out = tx.outbox<SlaveStateSample>();
   tx.start();
-  out.publish(make_state(7, monotonic_utime()));
+  out.publish(make_state(7, realtime::monotonic_utime()));
   ASSERT_TRUE(wait_until([&] { return arm2.stats().accepted == 1; }));
   std::this_thread::sleep_for(20ms);
   EXPECT_EQ(arm1.stats().received, 0U);

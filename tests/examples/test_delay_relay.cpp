@@ -15,8 +15,8 @@
 #include <thread>
 #include <vector>
 
-#include "bridge/clock.hpp"
 #include "delay_relay/link_impairment.hpp"
+#include "realtime/clock.hpp"
 
 extern char** environ;
 
@@ -132,7 +132,7 @@ void on_raw(const lcm::ReceiveBuffer* rb, const std::string&, Received* r) {
       return;
     }
   r->ids.push_back(id);
-  r->delays_ns.push_back(bridge::monotonic_now_ns() - sent);
+  r->delays_ns.push_back(realtime::monotonic_now_ns() - sent);
 }
 
 TEST(LcmDelayRelay, DelaysAndDropsEachDirectionAndForwardsBytesUnchanged) {
@@ -184,7 +184,7 @@ TEST(LcmDelayRelay, DelaysAndDropsEachDirectionAndForwardsBytesUnchanged) {
   constexpr int kN = 1000;
   std::uint8_t buf[112];
   for (std::uint32_t id = 0; id < kN; ++id) {
-    const std::int64_t now = bridge::monotonic_now_ns();
+    const std::int64_t now = realtime::monotonic_now_ns();
     std::memcpy(buf, &id, 4);
     std::memcpy(buf + 4, &now, 8);
     for (int i = 0; i < 100; ++i)

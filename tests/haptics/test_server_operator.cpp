@@ -21,8 +21,8 @@
 #include <thread>
 #include <vector>
 
-#include "bridge/clock.hpp"
 #include "bridge/codec.hpp"
+#include "realtime/clock.hpp"
 #include "scratch_dir_fixture.hpp"
 #include "test_link_key.hpp"
 
@@ -128,7 +128,7 @@ class FakeSlave {
           seq += 2;
           gaps_made_.fetch_add(1);
         }
-        s.utime = bridge::monotonic_utime() - age_us;
+        s.utime = realtime::monotonic_utime() - age_us;
         s.seq = seq;
         bridge::publish_sample(lcm, prefix + "SLAVE_STATE", s, signer.get());
         std::this_thread::sleep_for(1ms);

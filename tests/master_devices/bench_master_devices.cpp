@@ -18,12 +18,12 @@
 #include <vector>
 
 #include "master_devices/builtin_drivers.hpp"
-#include "master_devices/clock.hpp"
 #include "master_devices/console_device.hpp"
 #include "master_devices/emulator_bus.hpp"
-#include "master_devices/latest_value.hpp"
 #include "master_devices/protocol.hpp"
 #include "master_devices/sim_device.hpp"
+#include "realtime/clock.hpp"
+#include "realtime/latest_value.hpp"
 
 namespace md = tsmh::master_devices;
 namespace p = tsmh::master_devices::protocol;
@@ -50,10 +50,10 @@ void print(const char* what, const char* unit, const Percentiles& p) {
 
 template <class F>
 double ns_per_op(int n, F&& f) {
-  const std::int64_t t0 = md::monotonic_ns();
+  const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
   for (int i = 0; i < n; ++i)
     f(i);
-  return static_cast<double>(md::monotonic_ns() - t0) / n;
+  return static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0) / n;
 }
 
 void sleep_until(std::int64_t t_ns) {
@@ -84,14 +84,15 @@ int main(int argc, char** argv) {
 
   std::printf("== LatestValue<DeviceReading> (single thread)\n");
   {
-    md::LatestValue<md::DeviceReading> cell;
+    tsmh::realtime::LatestValue<md::DeviceReading> cell;
+    tsmh::realtime::LatestValueReader<md::DeviceReading> reader(cell);
     md::DeviceReading r;
     const double both = ns_per_op(1'000'000, [&](int i) {
       r.sequence = static_cast<std::uint64_t>(i);
-      cell.publish(r);
-      cell.fetch(r);
+      cell.store(r);
+      reader.fetch(r);
     });
-    std::printf("  publish + fetch %.1f ns (sizeof reading %zu bytes)\n", both,
+    std::printf("  store + fetch %.1f ns (sizeof reading %zu bytes)\n", both,
                 sizeof(md::DeviceReading));
   }
 
@@ -113,7 +114,7 @@ int main(int argc, char** argv) {
       if (index < 0 || index >= 1000 || index == *last_index) return;
       *last_index = index;
       const std::int64_t t = (*written_ns)[static_cast<std::size_t>(index)].load();
-      if (t > 0) latency_us->push_back((md::monotonic_ns() - t) * 1e-3);
+      if (t > 0) latency_us->push_back((tsmh::realtime::monotonic_now_ns() - t) * 1e-3);
     };
     auto bus = std::make_shared<md::EmulatorBus>(o);
     md::ConsoleSettings cs;
@@ -133,20 +134,20 @@ int main(int argc, char** argv) {
     int unplug_at = ticks / 2;
     int detected_after = -1;
     int recovered_after = -1;
-    std::int64_t next = md::monotonic_ns();
+    std::int64_t next = tsmh::realtime::monotonic_now_ns();
     for (int k = 0; k < ticks; ++k) {
       next += 1'000'000;
       sleep_until(next);
-      const std::int64_t now = md::monotonic_ns();
+      const std::int64_t now = tsmh::realtime::monotonic_now_ns();
       late_us.push_back((now - next) * 1e-3);
       if (k == unplug_at) bus->unplug();
       if (k == unplug_at + 100) bus->replug();
-      const std::int64_t t0 = md::monotonic_ns();
+      const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
       const md::DeviceReading r = dev.read(now);
-      const std::int64_t t1 = md::monotonic_ns();
-      (*written_ns)[static_cast<std::size_t>(k % 1000)] = md::monotonic_ns();
+      const std::int64_t t1 = tsmh::realtime::monotonic_now_ns();
+      (*written_ns)[static_cast<std::size_t>(k % 1000)] = tsmh::realtime::monotonic_now_ns();
       dev.write_torque(md::JointArray{0.05 * std::sin(k * 0.01), (k % 1000 + 1) * 2e-4});
-      const std::int64_t t2 = md::monotonic_ns();
+      const std::int64_t t2 = tsmh::realtime::monotonic_now_ns();
       read_ns.push_back(static_cast<double>(t1 - t0));
       write_ns.push_back(static_cast<double>(t2 - t1));
       if (k >= unplug_at && detected_after < 0 && r.status == md::DeviceStatus::kDisconnected) {

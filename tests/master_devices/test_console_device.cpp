@@ -502,7 +502,7 @@ TEST(ConsoleDevice, RealTimeEmulatorStreamsToAOneKilohertzLoop) {
   std::uint64_t fresh = 0;
   std::uint64_t last_seq = 0;
   bool monotonic = true;
-  std::int64_t next = monotonic_ns();
+  std::int64_t next = realtime::monotonic_now_ns();
   for (int k = 0; k < 300; ++k) {
     next += 1'000'000;
     timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};

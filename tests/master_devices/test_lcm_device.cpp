@@ -235,12 +235,12 @@ TEST(LcmDevice, WithAuthOnlyVerifiedStateIsUsedAndForceIsSigned) {
   EXPECT_NE(rig.device->last_error().find("MASTER_STATE: not authenticated: no tag"),
             std::string::npos)
       << rig.device->last_error();
-  EXPECT_EQ(rig.device->read(monotonic_ns()).status, DeviceStatus::kDisconnected);
+  EXPECT_EQ(rig.device->read(realtime::monotonic_now_ns()).status, DeviceStatus::kDisconnected);
   EXPECT_EQ(rig.log.count(), 0u) << "no MASTER_FORCE answers a rejected MASTER_STATE";
 
   // Signed: used, and the answer carries the trailer after a decodable payload.
   tsmh::master_state_t m{};
-  m.utime = monotonic_ns() / 1000;
+  m.utime = realtime::monotonic_now_ns() / 1000;
   m.seq = 1;
   m.num_joints = 2;
   m.q = {0.25, -0.5};
@@ -252,7 +252,7 @@ TEST(LcmDevice, WithAuthOnlyVerifiedStateIsUsedAndForceIsSigned) {
   rig.lcm->publish("MASTER_STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
   for (int i = 0; i < 500 && rig.log.count() == 0; ++i)
     std::this_thread::sleep_for(1ms);
-  EXPECT_DOUBLE_EQ(rig.device->read(monotonic_ns()).q[0], 0.25);
+  EXPECT_DOUBLE_EQ(rig.device->read(realtime::monotonic_now_ns()).q[0], 0.25);
   ASSERT_EQ(rig.log.count(), 1u) << "typed decoders ignore the trailer";
   rig.device->close();  // its thread handles the shared LCM: stop it before unsubscribing
   rig.lcm->unsubscribe(sub);

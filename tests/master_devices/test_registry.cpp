@@ -86,7 +86,7 @@ TEST(Registry, EmulatorDriverRunsTheConsoleCodeWithASimulatedOperator) {
   // A real sleep: the registry's emulator is paced in real time by its own
   // thread, and that streaming is what this test checks.
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  const DeviceReading r = dev->read(monotonic_ns());  // the registry's default clock
+  const DeviceReading r = dev->read(realtime::monotonic_now_ns());  // the registry's default clock
   EXPECT_EQ(r.status, DeviceStatus::kOk);
   EXPECT_GT(r.sequence, 100u);
   EXPECT_GT(std::abs(r.q[0]), 0.01) << "the simulated hand moves the emulated handle";

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <numeric>
 
-#include "bridge/latency_histogram.hpp"
 #include "bridge/rejection.hpp"
+#include "realtime/histogram.hpp"
 
 namespace tsmh::bridge {
 
@@ -29,7 +29,8 @@ struct ChannelStats {
   /// in `received`): they were old before anyone looked, and would otherwise
   /// read as a burst of huge latencies and a gap at start.
   std::uint64_t discarded_before_start = 0;
-  LatencySummary latency;            ///< receive time - utime, accepted messages, shared clock only
+  realtime::HistogramSummary
+      latency;                       ///< receive time - utime, accepted messages, shared clock only
   std::int64_t last_receive_ns = 0;  ///< CLOCK_MONOTONIC of the newest accepted message, 0 if none
 
   std::uint64_t rejected(RejectReason r) const noexcept {

@@ -16,11 +16,11 @@
 
 #include "bridge/channel_stats.hpp"
 #include "bridge/codec.hpp"
-#include "bridge/latency_histogram.hpp"
-#include "bridge/latest_value.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/rejection.hpp"
 #include "bridge/sequence_tracker.hpp"
+#include "realtime/histogram.hpp"
+#include "realtime/latest_value.hpp"
 
 namespace tsmh::bridge {
 
@@ -93,8 +93,8 @@ class InboxBase {
   std::atomic<std::uint64_t> discarded_{0};
   bool discarding_ = false;
   std::atomic<std::int64_t> last_receive_ns_{0};
-  LatencyHistogram latency_;
-  LatestValue<Rejection> last_rejection_;
+  realtime::LogHistogram latency_;
+  realtime::LatestValue<Rejection> last_rejection_;
 };
 
 template <class Sample>
@@ -122,7 +122,7 @@ class Inbox final : public InboxBase {
   bool has_accepted_ = false;
   Sample candidate_{};     // the newest sample rejected as Implausible
   int candidate_run_ = 0;  // consecutive Implausible rejections that follow each other plausibly
-  LatestValue<Sample> cell_;
+  realtime::LatestValue<Sample> cell_;
 };
 
 extern template class Inbox<SlaveStateSample>;

@@ -94,7 +94,7 @@ class Outbox final : public OutboxBase {
 
   /// Loop side, one producer thread per outbox. Never blocks or allocates;
   /// false (and counted) when the ring is full. The caller sets utime
-  /// (monotonic_utime()) and seq.
+  /// (realtime::monotonic_utime()) and seq.
   bool publish(const Sample& s) noexcept {
     if (!queue_.push(s)) {
       dropped_full_.fetch_add(1, std::memory_order_relaxed);

@@ -6,7 +6,7 @@
 //   auto& state = tx.outbox<SlaveStateSample>();
 //   auto& truth = tx.outbox<SlaveTruthSample>();
 //   tx.start();
-//   ... each tick: s.utime = monotonic_utime(); s.seq = tick; state.publish(s);
+//   ... each tick: s.utime = realtime::monotonic_utime(); s.seq = tick; state.publish(s);
 
 #include <atomic>
 #include <chrono>

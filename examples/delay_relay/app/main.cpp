@@ -19,13 +19,13 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <bridge/clock.hpp>
 #include <bridge/host_only.hpp>
 #include <bridge/lcm_url.hpp>
 #include <bridge/stop_signals.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
+#include <realtime/clock.hpp>
 #include <string>
 #include <tsmh/version.hpp>
 #include <vector>
@@ -55,14 +55,14 @@ struct Direction {
   void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
     Message m{channel, std::vector<std::uint8_t>(data, data + rbuf->data_size),
-              tsmh::bridge::monotonic_now_ns()};
+              tsmh::realtime::monotonic_now_ns()};
     line.push(m.arrival_ns, std::move(m));
   }
   void release(std::int64_t now_ns) {
     Message m;
     while (line.pop_due(now_ns, m)) {
       to.publish(m.channel, m.bytes.data(), static_cast<unsigned>(m.bytes.size()));
-      delays_ns.push_back(tsmh::bridge::monotonic_now_ns() - m.arrival_ns);
+      delays_ns.push_back(tsmh::realtime::monotonic_now_ns() - m.arrival_ns);
     }
   }
   void summary() {
@@ -167,11 +167,11 @@ int main(int argc, char** argv) {
                  to_server.delay_s * 1e3, to_server.jitter_s * 1e3, to_server.drop_fraction,
                  static_cast<unsigned long long>(seed));
 
-    const std::int64_t start = tsmh::bridge::monotonic_now_ns();
+    const std::int64_t start = tsmh::realtime::monotonic_now_ns();
     const std::int64_t end =
         duration_s > 0 ? start + static_cast<std::int64_t>(duration_s * 1e9) : INT64_MAX;
     while (!tsmh::bridge::terminating_signal_pending(stop_set)) {
-      std::int64_t now = tsmh::bridge::monotonic_now_ns();
+      std::int64_t now = tsmh::realtime::monotonic_now_ns();
       if (now >= end) break;
       down.release(now);
       up.release(now);

@@ -5,8 +5,6 @@
 #include <sys/mman.h>
 
 #include <atomic>
-#include <bridge/clock.hpp>
-#include <bridge/latency_histogram.hpp>
 #include <bridge/link_security.hpp>
 #include <bridge/receiver.hpp>
 #include <bridge/sender.hpp>
@@ -16,6 +14,8 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <realtime/clock.hpp>
+#include <realtime/histogram.hpp>
 #include <thread>
 
 #include "virtual_tissue_slave/command_gate.hpp"
@@ -128,15 +128,15 @@ void take_command(bridge::Inbox<bridge::MasterCommandSample>& commands,
 }
 
 struct LoopTiming {
-  bridge::LatencyHistogram lateness, compute;
+  realtime::LogHistogram lateness, compute;
   std::int64_t overruns = 0;
 };
 
 void print_summary(std::int64_t ticks, const LoopTiming& timing,
                    const bridge::OutboxStats& published,
                    const bridge::Inbox<bridge::MasterCommandSample>& commands) {
-  const bridge::LatencySummary l = timing.lateness.summary();
-  const bridge::LatencySummary c = timing.compute.summary();
+  const realtime::HistogramSummary l = timing.lateness.summary();
+  const realtime::HistogramSummary c = timing.compute.summary();
   std::fprintf(stderr,
                "virtual-slave: %lld ticks, %lld overruns; lateness p50 %.0f us, p99 %.0f us, max "
                "%.0f us; tick compute p99 %.0f us; SLAVE_STATE published %llu, dropped %llu; "
@@ -209,11 +209,11 @@ int run_realtime_mode(const CliOptions& o) {
   const Reroute& rr = setup.reroute;
   bool rerouted = std::isnan(rr.at_s);
 
-  std::int64_t next = bridge::monotonic_now_ns() + period_ns;
+  std::int64_t next = realtime::monotonic_now_ns() + period_ns;
   while (!stop.requested() && (end_ticks < 0 || seq < end_ticks)) {
     const timespec ts = to_timespec(next);
     if (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) continue;
-    const std::int64_t woke = bridge::monotonic_now_ns();
+    const std::int64_t woke = realtime::monotonic_now_ns();
     const std::int64_t late = woke - next;
     timing.lateness.record(late);
     if (late >= period_ns) {
@@ -241,7 +241,7 @@ int run_realtime_mode(const CliOptions& o) {
     state_box.publish(state);
     truth_box.publish(truth);
     ++seq;
-    timing.compute.record(bridge::monotonic_now_ns() - woke);
+    timing.compute.record(realtime::monotonic_now_ns() - woke);
     next += period_ns;
   }
 

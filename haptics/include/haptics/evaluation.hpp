@@ -10,6 +10,7 @@
 #include "haptics/haptic_loop.hpp"
 #include "haptics/server_config.hpp"
 #include "haptics/trace.hpp"
+#include "realtime/histogram.hpp"
 
 namespace tsmh::haptics {
 
@@ -67,8 +68,8 @@ struct CalibrationRecord {
 struct EvaluationReport {
   double rate_hz = 0.0;  ///< measured mean rate
   double nominal_rate_hz = 0.0;
-  TimingSummary jitter;
-  TimingSummary compute;
+  realtime::HistogramSummary jitter;
+  realtime::HistogramSummary compute;
   std::uint64_t overruns = 0;
   double duration_s = 0.0;
   std::string feedback;

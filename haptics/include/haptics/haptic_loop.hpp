@@ -13,7 +13,6 @@
 #include <string_view>
 #include <vector>
 
-#include "bridge/latency_histogram.hpp"
 #include "bridge/samples.hpp"
 #include "estimator/distal_estimator.hpp"
 #include "haptics/force_mapping.hpp"
@@ -25,9 +24,9 @@
 #include "haptics/safety_filter.hpp"
 #include "haptics/safety_state.hpp"
 #include "haptics/slave_link.hpp"
-#include "haptics/timing_histogram.hpp"
 #include "haptics/trace.hpp"
 #include "master_devices/device.hpp"
+#include "realtime/histogram.hpp"
 
 namespace tsmh::haptics {
 
@@ -149,8 +148,8 @@ class HapticLoop {
   const estimator::Estimate& estimate(int joint) const noexcept {
     return estimates_[static_cast<std::size_t>(joint)];
   }
-  const TimingHistogram& lateness() const noexcept { return lateness_; }
-  const TimingHistogram& compute() const noexcept { return compute_; }
+  const realtime::LinearHistogram& lateness() const noexcept { return lateness_; }
+  const realtime::LinearHistogram& compute() const noexcept { return compute_; }
   double rate_hz() const noexcept { return config_.rate_hz; }
   /// Mean tick rate measured over the whole run (ticks / elapsed time).
   double measured_rate_hz() const noexcept;
@@ -249,10 +248,10 @@ class HapticLoop {
   bool device_enabled_ = false;
   bool shut_down_ = false;
   LoopCounters counters_;
-  TimingHistogram lateness_;
-  TimingHistogram compute_;
-  bridge::LatencyHistogram window_lateness_;  // coarse, cheap to summarise at 100 Hz; 1 s windows
-  bridge::LatencyHistogram window_compute_;
+  realtime::LinearHistogram lateness_;
+  realtime::LinearHistogram compute_;
+  realtime::LogHistogram window_lateness_;  // coarse, cheap to summarise at 100 Hz; 1 s windows
+  realtime::LogHistogram window_compute_;
 };
 
 }  // namespace tsmh::haptics

@@ -2,27 +2,20 @@
 // The host's time as the drivers read it: CLOCK_MONOTONIC in nanoseconds, the
 // time base of every DeviceReading.
 //
-// Drivers and transports do not call monotonic_ns() themselves: they read a
+// Drivers and transports do not call realtime::monotonic_now_ns() themselves
+// (the one CLOCK_MONOTONIC reading of the project, realtime/clock.hpp): they read a
 // Clock given to their constructor (MonotonicClock by default), so a test can
 // give them a ManualClock and let time pass by advancing it instead of
 // sleeping. Both the driver's I/O thread and the real-time loop read it:
 // now_ns() is lock-free and never blocks.
 
-#include <time.h>
-
 #include <atomic>
 #include <cstdint>
 #include <memory>
 
-namespace tsmh::master_devices {
+#include "realtime/clock.hpp"
 
-/// CLOCK_MONOTONIC, ns. clock_gettime() on it is a vDSO call: no syscall, no
-/// lock, safe in the loop.
-inline std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
-}
+namespace tsmh::master_devices {
 
 /// Where a driver reads the host's time. Implementations are thread-safe
 /// and never block: the I/O thread and the loop read them concurrently.
@@ -36,7 +29,7 @@ class Clock {
 /// The real host clock (CLOCK_MONOTONIC): what every driver uses unless told otherwise.
 class MonotonicClock final : public Clock {
  public:
-  std::int64_t now_ns() const noexcept override { return monotonic_ns(); }
+  std::int64_t now_ns() const noexcept override { return realtime::monotonic_now_ns(); }
 };
 
 /// Simulated time for tests: stands still until advanced. Any thread may

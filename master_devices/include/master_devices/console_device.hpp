@@ -34,11 +34,11 @@
 #include "master_devices/device.hpp"
 #include "master_devices/device_clock.hpp"
 #include "master_devices/joint_calibration.hpp"
-#include "master_devices/latest_value.hpp"
 #include "master_devices/profile.hpp"
 #include "master_devices/protocol.hpp"
 #include "master_devices/settings.hpp"
 #include "master_devices/transport.hpp"
+#include "realtime/latest_value.hpp"
 
 namespace tsmh::master_devices {
 
@@ -131,8 +131,10 @@ class ConsoleDevice final : public Device, private TransportListener {
   DeviceSpec spec_;
 
   // Loop <-> I/O thread.
-  LatestValue<DeviceReading> readings_;
-  LatestValue<Command> commands_;
+  realtime::LatestValue<DeviceReading> readings_;                         // I/O thread -> loop
+  realtime::LatestValue<Command> commands_;                               // loop -> I/O thread
+  realtime::LatestValueReader<DeviceReading> reading_reader_{readings_};  // the loop's
+  realtime::LatestValueReader<Command> command_reader_{commands_};        // the I/O thread's
   std::atomic<bool> enable_requested_{false};
   std::atomic<bool> link_up_{false};
   std::atomic<bool> opened_{false};

@@ -19,10 +19,10 @@
 
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
-#include "master_devices/latest_value.hpp"
 #include "master_devices/lcm_message_auth.hpp"
 #include "master_devices/registry.hpp"
 #include "master_devices/settings.hpp"
+#include "realtime/latest_value.hpp"
 
 namespace lcm {
 class LCM;
@@ -94,8 +94,10 @@ class LcmDevice final : public Device {
   std::shared_ptr<const Clock> clock_;
   std::unique_ptr<Impl> impl_;
 
-  LatestValue<DeviceReading> readings_;
-  LatestValue<Command> commands_;
+  realtime::LatestValue<DeviceReading> readings_;                         // I/O thread -> loop
+  realtime::LatestValue<Command> commands_;                               // loop -> I/O thread
+  realtime::LatestValueReader<DeviceReading> reading_reader_{readings_};  // the loop's
+  realtime::LatestValueReader<Command> command_reader_{commands_};        // the I/O thread's
   std::atomic<bool> enable_requested_{false};
   std::atomic<bool> opened_{false};
   std::atomic<FaultCode> fault_{FaultCode::kNone};

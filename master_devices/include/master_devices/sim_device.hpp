@@ -23,9 +23,9 @@
 
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
-#include "master_devices/latest_value.hpp"
 #include "master_devices/settings.hpp"
 #include "master_devices/simulated_operator.hpp"
+#include "realtime/latest_value.hpp"
 
 namespace tsmh::master_devices {
 
@@ -86,8 +86,10 @@ class SimDevice final : public Device {
   std::shared_ptr<const Clock> clock_;  // real-time mode: stamps readings and commands
   DeviceSpec spec_;
   SimulatedOperator operator_;
-  LatestValue<DeviceReading> readings_;
-  LatestValue<Command> commands_;
+  realtime::LatestValue<DeviceReading> readings_;                         // I/O thread -> loop
+  realtime::LatestValue<Command> commands_;                               // loop -> I/O thread
+  realtime::LatestValueReader<DeviceReading> reading_reader_{readings_};  // the loop's
+  realtime::LatestValueReader<Command> command_reader_{commands_};        // the I/O thread's
   std::atomic<bool> enabled_{false};
   std::atomic<bool> opened_{false};
   std::atomic<FaultCode> fault_{FaultCode::kNone};

@@ -6,7 +6,13 @@
 #include "haptics/server_config.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/protocol.hpp"
+#include "realtime/clock.hpp"
+#include "realtime/histogram.hpp"
+#include "realtime/latest_value.hpp"
 
 int main() {
-  return 0;
+  tsmh::realtime::LatestValue<int> cell;
+  cell.store(tsmh::realtime::monotonic_now_ns() > 0 ? 1 : 0);
+  int v = 0;
+  return cell.load(v) == 1 && v == 1 ? 0 : 1;
 }

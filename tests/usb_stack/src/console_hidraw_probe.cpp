@@ -28,12 +28,11 @@
 #include <vector>
 
 #include "guest_report.hpp"
-#include "master_devices/clock.hpp"
 #include "master_devices/protocol.hpp"
+#include "realtime/clock.hpp"
 #include "stats.hpp"
 
 namespace protocol = tsmh::master_devices::protocol;
-using tsmh::master_devices::monotonic_ns;
 using tsmh::usb_stack::metric;
 using tsmh::usb_stack::result;
 using tsmh::usb_stack::Verdict;
@@ -198,7 +197,7 @@ int main(int argc, char** argv) {
   for (int k = 0; k < count; ++k) {
     std::array<std::uint8_t, 64> in{};
     const ssize_t n = read_report(fd, in, 1000);
-    const std::int64_t t = monotonic_ns();
+    const std::int64_t t = tsmh::realtime::monotonic_now_ns();
     if (n <= 0) {
       ++timeouts;
       if (first_problem.empty())
@@ -228,7 +227,7 @@ int main(int argc, char** argv) {
       o.sequence = ++out_seq;
       std::array<std::uint8_t, protocol::kOutputReportSize> ob{};
       protocol::encode(o, ob);
-      pending_t = monotonic_ns();
+      pending_t = tsmh::realtime::monotonic_now_ns();
       pending_seq = o.sequence;
       if (::write(fd, ob.data(), ob.size()) != static_cast<ssize_t>(ob.size())) {
         if (first_problem.empty()) first_problem = std::string("write: ") + std::strerror(errno);

@@ -50,15 +50,14 @@
 #include "guest_report.hpp"
 #include "loop_clock.hpp"
 #include "master_devices/builtin_drivers.hpp"
-#include "master_devices/clock.hpp"
 #include "master_devices/console_device.hpp"
 #include "master_devices/profile.hpp"
 #include "master_devices/registry.hpp"
+#include "realtime/clock.hpp"
 #include "stats.hpp"
 #include "unplug.hpp"
 
 namespace md = tsmh::master_devices;
-using md::monotonic_ns;
 using tsmh::usb_stack::exists;
 using tsmh::usb_stack::LoopClock;
 using tsmh::usb_stack::MailboxMap;
@@ -129,11 +128,12 @@ class Host {
     try {
       device_ = registry_.create(o_.driver, settings);
       console_ = dynamic_cast<md::ConsoleDevice*>(device_.get());
-      const std::int64_t t0 = monotonic_ns();
+      const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
       device_->open();
       result(name("open"), console_ != nullptr,
              fmt("%s opened in %.1f ms (DEVICE_INFO read, CALIBRATION written and read back)",
-                 console_ ? console_->connected_path().c_str() : "?", ms(monotonic_ns() - t0)));
+                 console_ ? console_->connected_path().c_str() : "?",
+                 ms(tsmh::realtime::monotonic_now_ns() - t0)));
       return console_ != nullptr;
     } catch (const std::exception& e) {
       result(name("open"), false, e.what());
@@ -151,7 +151,7 @@ class Host {
     // stream then goes on (up to 10 s more) until torque has flowed on
     // kTorqueTicks ticks, so that the judged torque path is exercised.
     constexpr int kTorqueTicks = 20;
-    const std::int64_t t_start = monotonic_ns();
+    const std::int64_t t_start = tsmh::realtime::monotonic_now_ns();
     const std::int64_t t_end = t_start + static_cast<std::int64_t>(o_.seconds * 1e9);
     const std::int64_t t_limit = t_end + 10'000'000'000LL;
     std::vector<double> lateness_us, age_us;
@@ -266,7 +266,7 @@ class Host {
     }
     // Continued: the driver must be back to OK with fresh samples (stale
     // samples from the stop are not OK), torque enabled again when asked.
-    const std::int64_t t0 = monotonic_ns();
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
     clock.rebase();
     std::int64_t ok_at = 0, enabled_at = 0;
     for (int k = 0; k < 2000 && enabled_at == 0; ++k) {
@@ -325,7 +325,7 @@ class Host {
     std::int64_t newest_sample_ns = 0;
     const std::int64_t bound_ns = console_->freshness_bound_ns();
     const md::ConsoleStats before = console_->stats();
-    const std::int64_t t_start = monotonic_ns();
+    const std::int64_t t_start = tsmh::realtime::monotonic_now_ns();
     std::int64_t hup_ns = 0, gone_ns = 0, link_ns = 0;
     std::string link_why;
     {
@@ -341,9 +341,9 @@ class Host {
         // The kernel first, then the driver: the same tick counts as in time.
         if (hup_tick < 0 && watch.hung_up()) {
           hup_tick = ticks;
-          hup_ns = monotonic_ns();
+          hup_ns = tsmh::realtime::monotonic_now_ns();
         }
-        if (gone_ns == 0 && !exists(sysfs)) gone_ns = monotonic_ns();
+        if (gone_ns == 0 && !exists(sysfs)) gone_ns = tsmh::realtime::monotonic_now_ns();
         const md::DeviceReading r = device_->read(now);
         tick_ns[static_cast<std::size_t>(ticks)] = now;
         tick_ok[static_cast<std::size_t>(ticks)] = r.status == md::DeviceStatus::kOk;
@@ -357,7 +357,7 @@ class Host {
         }
         if (link_tick < 0 && device_->status() != md::DeviceStatus::kOk) {
           link_tick = ticks;
-          link_ns = monotonic_ns();
+          link_ns = tsmh::realtime::monotonic_now_ns();
           link_why = device_->last_error();
         }
         device_->write_torque(render(now, r));  // the loop keeps asking for torque
@@ -411,7 +411,7 @@ class Host {
     metric(name(tag + "_link_loss_after_hangup"), ms(link_ns - hup_ns), "ms");
 
     // Rebind: the supervisor must find the device again by itself.
-    const std::int64_t t_bind = monotonic_ns();
+    const std::int64_t t_bind = tsmh::realtime::monotonic_now_ns();
     std::int64_t ok_at = 0;
     int enabled_while_not_asked = 0;
     {
@@ -530,7 +530,7 @@ int main(int argc, char** argv) {
   Host host(o, registry);
   const auto phase = [&](const char* what) {
     std::printf("USB_STACK_PHASE %s_%s t=%.3f\n", o.prefix.c_str(), what,
-                ms(monotonic_ns()) * 1e-3);
+                ms(tsmh::realtime::monotonic_now_ns()) * 1e-3);
     std::fflush(stdout);
   };
   phase("list");

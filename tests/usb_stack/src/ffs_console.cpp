@@ -30,9 +30,9 @@
 #include "ffs_descriptors.hpp"
 #include "firmware_host.hpp"
 #include "guest_report.hpp"
-#include "master_devices/clock.hpp"
 #include "master_devices/firmware.hpp"
 #include "master_devices/protocol.hpp"
+#include "realtime/clock.hpp"
 
 namespace md = tsmh::master_devices;
 namespace protocol = tsmh::master_devices::protocol;
@@ -96,7 +96,7 @@ class Ep0 {
       case FUNCTIONFS_SUSPEND:
         if (enabled_.exchange(false)) {
           fw_.on_link_lost();
-          if (mailbox_ != nullptr) mailbox_->link_lost_ns = md::monotonic_ns();
+          if (mailbox_ != nullptr) mailbox_->link_lost_ns = tsmh::realtime::monotonic_now_ns();
         }
         break;
       case FUNCTIONFS_SETUP:
@@ -284,7 +284,7 @@ int main(int argc, char** argv) {
       if (::write(ep_in, report.data(), n) < 0) {
         if (enabled) ++in_errors;
       } else if (box != nullptr) {
-        box->last_in_ns = md::monotonic_ns();  // the host controller has taken it
+        box->last_in_ns = tsmh::realtime::monotonic_now_ns();  // the host controller has taken it
         ++box->in_reports;
       }
     }

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "master_devices/clock.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::usb_stack {
 
@@ -29,7 +29,7 @@ double max_abs_current_ma(const md::Firmware& f) {
 }
 
 FirmwareHost::FirmwareHost(const md::FirmwareConfig& config)
-    : firmware_(config), stepped_to_ns_(md::monotonic_ns()) {}
+    : firmware_(config), stepped_to_ns_(realtime::monotonic_now_ns()) {}
 
 FirmwareHost::~FirmwareHost() {
   running_ = false;
@@ -59,12 +59,12 @@ void FirmwareHost::advance_locked(std::int64_t now) {
 }
 
 void FirmwareHost::run_clock() {
-  std::int64_t deadline = md::monotonic_ns();
+  std::int64_t deadline = realtime::monotonic_now_ns();
   while (running_) {
     deadline += kPeriodNs;
     const timespec ts = to_timespec(deadline);
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-    const std::int64_t now = md::monotonic_ns();
+    const std::int64_t now = realtime::monotonic_now_ns();
     {
       std::lock_guard lock(mutex_);
       if (now - deadline > kPeriodNs) ++stats_.late_ticks;
@@ -74,7 +74,8 @@ void FirmwareHost::run_clock() {
     }
     new_report_.notify_all();
     // Re-base after a long stall instead of bursting to catch up.
-    if (md::monotonic_ns() - deadline > 10 * kPeriodNs) deadline = md::monotonic_ns();
+    if (realtime::monotonic_now_ns() - deadline > 10 * kPeriodNs)
+      deadline = realtime::monotonic_now_ns();
   }
 }
 
@@ -92,13 +93,13 @@ std::size_t FirmwareHost::wait_input_report(std::span<std::uint8_t> out, std::ui
 
 std::size_t FirmwareHost::make_input_report(std::span<std::uint8_t> out) {
   std::lock_guard lock(mutex_);
-  advance_locked(md::monotonic_ns());
+  advance_locked(realtime::monotonic_now_ns());
   return firmware_.make_input_report(out);
 }
 
 protocol::Error FirmwareHost::on_output_report(std::span<const std::uint8_t> bytes) {
   std::lock_guard lock(mutex_);
-  advance_locked(md::monotonic_ns());
+  advance_locked(realtime::monotonic_now_ns());
   const protocol::Error e = firmware_.on_output_report(bytes);
   if (!e) {
     last_output_ns_ = stepped_to_ns_;
@@ -121,13 +122,13 @@ std::size_t FirmwareHost::get_feature(std::uint8_t report_id, std::span<std::uin
 
 protocol::Error FirmwareHost::set_feature(std::span<const std::uint8_t> bytes) {
   std::lock_guard lock(mutex_);
-  advance_locked(md::monotonic_ns());
+  advance_locked(realtime::monotonic_now_ns());
   return firmware_.set_feature(bytes);
 }
 
 void FirmwareHost::on_link_lost() {
   std::lock_guard lock(mutex_);
-  advance_locked(md::monotonic_ns());
+  advance_locked(realtime::monotonic_now_ns());
   firmware_.on_link_lost();
   ++stats_.link_losses;
   // A new connection starts a new output sequence.

@@ -7,7 +7,7 @@
 
 #include <cstdint>
 
-#include "master_devices/clock.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::usb_stack {
 
@@ -16,7 +16,7 @@ class LoopClock {
   explicit LoopClock(std::int64_t period_ns) : period_ns_(period_ns) { rebase(); }
 
   /// Next deadline starts one period from now (after a phase change or a stall).
-  void rebase() { deadline_ = master_devices::monotonic_ns(); }
+  void rebase() { deadline_ = realtime::monotonic_now_ns(); }
 
   /// Sleeps until the next deadline; returns the wake-up time. A tick more
   /// than ten periods late re-bases instead of bursting to catch up.
@@ -25,7 +25,7 @@ class LoopClock {
     const timespec ts{static_cast<time_t>(deadline_ / 1'000'000'000),
                       static_cast<long>(deadline_ % 1'000'000'000)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-    const std::int64_t now = master_devices::monotonic_ns();
+    const std::int64_t now = realtime::monotonic_now_ns();
     lateness_ns_ = now - deadline_;
     if (lateness_ns_ > 10 * period_ns_) deadline_ = now;
     return now;

@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "master_devices/clock.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::usb_stack {
 
@@ -73,7 +73,7 @@ class UdcWriter {
           f << value << '\n';
           f.flush();
           ok_ = static_cast<bool>(f);
-          done_ns_ = master_devices::monotonic_ns();
+          done_ns_ = realtime::monotonic_now_ns();
         }) {}
   ~UdcWriter() { thread_.join(); }
   std::int64_t done_ns() const { return done_ns_; }

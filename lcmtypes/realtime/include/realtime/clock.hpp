@@ -1,12 +1,14 @@
 #pragma once
-// The bridge's clock: CLOCK_MONOTONIC, the clock every message's utime is
-// stamped with (docs/lcm-messages.md). clock_gettime goes through the vDSO, so
-// these are safe to call from the real-time loop (no system call, no lock).
+// The host's clock for everything that runs in real time: CLOCK_MONOTONIC,
+// the clock every message's utime is stamped with (docs/lcm-messages.md) and
+// the time base of every master reading. clock_gettime goes through the vDSO,
+// so these are safe to call from the 1 kHz loop (no system call, no lock).
+
+#include <time.h>
 
 #include <cstdint>
-#include <ctime>
 
-namespace tsmh::bridge {
+namespace tsmh::realtime {
 
 /// CLOCK_MONOTONIC now, nanoseconds.
 inline std::int64_t monotonic_now_ns() noexcept {
@@ -20,4 +22,4 @@ inline std::int64_t monotonic_utime() noexcept {
   return monotonic_now_ns() / 1000;
 }
 
-}  // namespace tsmh::bridge
+}  // namespace tsmh::realtime

@@ -11,11 +11,18 @@
 #include <thread>
 #include <utility>
 
-#include "bridge/latest_value.hpp"
-#include "bridge/samples.hpp"
+#include "realtime/latest_value.hpp"
 
-namespace tsmh::bridge {
+namespace tsmh::realtime {
 namespace {
+
+// The shape of what the cells carry (a SLAVE_STATE sample, a device reading).
+struct SlaveStateSample {
+  std::int64_t utime = 0;
+  std::int64_t seq = 0;
+  std::int32_t num_joints = 0;
+  std::array<double, 4> x_in{};
+};
 
 TEST(LatestValue, EmptyUntilFirstStore) {
   LatestValue<SlaveStateSample> cell;
@@ -227,5 +234,83 @@ TEST(LatestValue, ARealTimeReaderNeverWaitsForAWriterItPreempted) {
   EXPECT_LT(worst_ns, 2'000'000) << "a load waited for the writer";
 }
 
+// ---- LatestValueReader: a value on every fetch, and whether it is new ----
+
+TEST(LatestValueReader, FetchBeforeStoreIsDefaultAndNotFresh) {
+  LatestValue<int> cell;
+  LatestValueReader<int> reader(cell);
+  int v = 7;
+  EXPECT_FALSE(reader.fetch(v));
+  EXPECT_EQ(v, 0) << "T{} before the first store";
+}
+
+TEST(LatestValueReader, FreshOncePerStoreAndNewestWins) {
+  LatestValue<int> cell;
+  LatestValueReader<int> reader(cell);
+  int v = 0;
+  cell.store(1);
+  cell.store(2);
+  cell.store(3);
+  EXPECT_TRUE(reader.fetch(v));
+  EXPECT_EQ(v, 3);
+  EXPECT_FALSE(reader.fetch(v));
+  EXPECT_EQ(v, 3) << "the same value again";
+  cell.store(4);
+  EXPECT_TRUE(reader.fetch(v));
+  EXPECT_EQ(v, 4);
+}
+
+TEST(LatestValueReader, ReadersOfOneCellAreIndependent) {
+  LatestValue<int> cell;
+  LatestValueReader<int> a(cell), b(cell);
+  int v = 0;
+  cell.store(5);
+  EXPECT_TRUE(a.fetch(v));
+  EXPECT_TRUE(b.fetch(v)) << "a's fetch does not consume b's news";
+  EXPECT_FALSE(a.fetch(v));
+}
+
+struct Pair {
+  std::uint64_t seq = 0;
+  std::uint64_t twice = 0;  // always 2 * seq: a torn copy breaks it
+  double filler[8] = {};
+};
+
+TEST(LatestValueReader, ConcurrentReaderNeverSeesTornOrOlderValues) {
+  LatestValue<Pair> cell;
+  LatestValueReader<Pair> reader(cell);
+  constexpr std::uint64_t kCount = 200000;
+  std::thread writer([&] {
+    for (std::uint64_t i = 1; i <= kCount; ++i) {
+      Pair s;
+      s.seq = i;
+      s.twice = 2 * i;
+      cell.store(s);
+    }
+  });
+  std::uint64_t last = 0;
+  std::uint64_t fresh = 0;
+  bool consistent = true;
+  bool monotonic = true;
+  bool fresh_means_newer = true;
+  while (last < kCount) {
+    Pair s;
+    const bool is_fresh = reader.fetch(s);
+    if (is_fresh) ++fresh;
+    consistent = consistent && s.twice == 2 * s.seq;
+    monotonic = monotonic && s.seq >= last;
+    fresh_means_newer = fresh_means_newer && (!is_fresh || s.seq > last);
+    last = s.seq;
+  }
+  writer.join();
+  Pair final_value;
+  reader.fetch(final_value);
+  EXPECT_TRUE(consistent);
+  EXPECT_TRUE(monotonic);
+  EXPECT_TRUE(fresh_means_newer);
+  EXPECT_EQ(final_value.seq, kCount);
+  EXPECT_GT(fresh, 0u);
+}
+
 }  // namespace
-}  // namespace tsmh::bridge
+}  // namespace tsmh::realtime
