@@ -18,10 +18,6 @@ std::string_view base_name(Channel channel) noexcept {
       return "MASTER_COMMAND";
     case Channel::kHapticStatus:
       return "HAPTIC_STATUS";
-    case Channel::kMasterState:
-      return "MASTER_STATE";
-    case Channel::kMasterForce:
-      return "MASTER_FORCE";
     case Channel::kCalibrationRequest:
       return "CALIBRATION_REQUEST";
   }

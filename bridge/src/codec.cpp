@@ -108,16 +108,6 @@ void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m) {
   put(s.drift_scale, s.num_joints, m.drift_scale);
 }
 
-void to_message(const MasterStateSample& s, tsmh::master_state_t& m) {
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_joints = s.num_joints;
-  put(s.q, s.num_joints, m.q);
-  put(s.qd, s.num_joints, m.qd);
-  m.buttons = s.buttons;
-  m.status = s.status;
-}
-
 void to_message(const CalibrationRequestSample& s, tsmh::calibration_request_t& m) {
   m.utime = s.utime;
   m.seq = s.seq;
@@ -133,14 +123,6 @@ void from_message(const tsmh::calibration_request_t& m, CalibrationRequestSample
   s.recalibrate = {};
   for (std::size_t j = 0; j < m.recalibrate.size() && j < kMaxJoints; ++j)
     s.recalibrate[j] = m.recalibrate[j] != 0;
-}
-
-void to_message(const MasterForceSample& s, tsmh::master_force_t& m) {
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_joints = s.num_joints;
-  put(s.torque, s.num_joints, m.torque);
-  m.enable = s.enable;
 }
 
 void from_message(const tsmh::slave_state_t& m, SlaveStateSample& s) noexcept {
@@ -207,24 +189,6 @@ void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcep
   s.calibration_joint = m.calibration_joint;
   get(m.friction_scale, m.num_joints, s.friction_scale);
   get(m.drift_scale, m.num_joints, s.drift_scale);
-}
-
-void from_message(const tsmh::master_state_t& m, MasterStateSample& s) noexcept {
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.num_joints = m.num_joints;
-  get(m.q, m.num_joints, s.q);
-  get(m.qd, m.num_joints, s.qd);
-  s.buttons = m.buttons;
-  s.status = m.status;
-}
-
-void from_message(const tsmh::master_force_t& m, MasterForceSample& s) noexcept {
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.num_joints = m.num_joints;
-  get(m.torque, m.num_joints, s.torque);
-  s.enable = m.enable != 0;
 }
 
 bool peek_header(const void* data, std::size_t size, RawHeader& out) noexcept {
@@ -315,8 +279,6 @@ TSMH_BRIDGE_INSTANTIATE(SlaveStateSample)
 TSMH_BRIDGE_INSTANTIATE(SlaveTruthSample)
 TSMH_BRIDGE_INSTANTIATE(MasterCommandSample)
 TSMH_BRIDGE_INSTANTIATE(HapticStatusSample)
-TSMH_BRIDGE_INSTANTIATE(MasterStateSample)
-TSMH_BRIDGE_INSTANTIATE(MasterForceSample)
 TSMH_BRIDGE_INSTANTIATE(CalibrationRequestSample)
 #undef TSMH_BRIDGE_INSTANTIATE
 

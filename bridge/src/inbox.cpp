@@ -184,8 +184,6 @@ template class Inbox<SlaveStateSample>;
 template class Inbox<SlaveTruthSample>;
 template class Inbox<MasterCommandSample>;
 template class Inbox<HapticStatusSample>;
-template class Inbox<MasterStateSample>;
-template class Inbox<MasterForceSample>;
 template class Inbox<CalibrationRequestSample>;
 
 }  // namespace tsmh::bridge

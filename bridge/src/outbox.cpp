@@ -49,8 +49,6 @@ template class Outbox<SlaveStateSample>;
 template class Outbox<SlaveTruthSample>;
 template class Outbox<MasterCommandSample>;
 template class Outbox<HapticStatusSample>;
-template class Outbox<MasterStateSample>;
-template class Outbox<MasterForceSample>;
 template class Outbox<CalibrationRequestSample>;
 
 }  // namespace tsmh::bridge

@@ -82,15 +82,6 @@ std::optional<Rejection> validate(const MasterCommandSample& s,
   return check("position_ref", s.position_ref, s.num_joints, l.position_ref);
 }
 
-std::optional<Rejection> validate(const MasterStateSample& s, const MasterStateLimits& l) noexcept {
-  if (auto r = check("q", s.q, s.num_joints, l.q)) return r;
-  return check("qd", s.qd, s.num_joints, l.qd);
-}
-
-std::optional<Rejection> validate(const MasterForceSample& s, const MasterForceLimits& l) noexcept {
-  return check("torque", s.torque, s.num_joints, l.torque);
-}
-
 std::optional<Rejection> validate(const HapticStatusSample& /*s*/,
                                   const HapticStatusLimits& /*l*/) noexcept {
   return std::nullopt;

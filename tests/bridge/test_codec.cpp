@@ -90,23 +90,6 @@ TEST(Codec, EveryTypeRoundTrips) {
   EXPECT_EQ(h2.torque_cmd[1], 0.4);
   EXPECT_EQ(h2.flags, 0b10101 | (1 << 8) | (1 << 9) | (1 << 12) | (1 << 13));
 
-  MasterStateSample ms;
-  ms.num_joints = 2;
-  ms.q = {0.5, 0.6};
-  ms.qd = {1.0, 2.0};
-  ms.buttons = 5;
-  const auto ms2 = round_trip(ms);
-  EXPECT_EQ(ms2.qd[1], 2.0);
-  EXPECT_EQ(ms2.buttons, 5);
-
-  MasterForceSample f;
-  f.num_joints = 1;
-  f.torque = {0.25};
-  f.enable = true;
-  const auto f2 = round_trip(f);
-  EXPECT_EQ(f2.torque[0], 0.25);
-  EXPECT_TRUE(f2.enable);
-
   CalibrationRequestSample r;
   r.num_joints = 3;
   r.recalibrate = {true, false, true, true};  // the 4th is beyond num_joints
@@ -143,8 +126,6 @@ TEST(Codec, EveryMessageLeadsWithUtimeSeqNumJoints) {
   expect_header_invariant<SlaveTruthSample>();
   expect_header_invariant<MasterCommandSample>();
   expect_header_invariant<HapticStatusSample>();
-  expect_header_invariant<MasterStateSample>();
-  expect_header_invariant<MasterForceSample>();
   expect_header_invariant<CalibrationRequestSample>();
 }
 
@@ -242,13 +223,6 @@ TEST(Validation, RejectsNonFiniteAndOutOfRangeNamingTheField) {
   s = make_state(3, 4, 1);
   s.x_in[1] = std::nan("");
   EXPECT_FALSE(validate(s, limits).has_value());
-
-  MasterForceSample f;
-  f.num_joints = 1;
-  f.torque[0] = 150.0;
-  r = validate(f, MasterForceLimits{});
-  ASSERT_TRUE(r.has_value());
-  EXPECT_EQ(r->reason, RejectReason::kOutOfRange);
 }
 
 TEST(Validation, JointCount) {
@@ -261,7 +235,7 @@ TEST(Validation, JointCount) {
 
 TEST(Channels, NamesAndRegexEscape) {
   EXPECT_EQ(channel_name("ARM1_", Channel::kSlaveState), "ARM1_SLAVE_STATE");
-  EXPECT_EQ(channel_name("", Channel::kMasterForce), "MASTER_FORCE");
+  EXPECT_EQ(channel_name("", Channel::kHapticStatus), "HAPTIC_STATUS");
   EXPECT_EQ(regex_escape("A.B+C"), "A\\.B\\+C");
   EXPECT_NO_THROW(check_channel_name(std::string(63, 'C')));
   EXPECT_THROW(check_channel_name(std::string(64, 'C')), std::invalid_argument);

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <mutex>
 #include <thread>
 #include <tsmh/master_force_t.hpp>
@@ -126,6 +127,26 @@ TEST(LcmDevice, RejectsMalformedStateMessages) {
   EXPECT_EQ(rig.device->rejected_messages(), 3u);
   EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kDisconnected)
       << "nothing valid received yet";
+}
+
+// The lcm driver is the one place MASTER_STATE is checked (the bridge has no
+// codec for it): bytes that are no master_state_t, and non-finite angles or
+// velocities, are counted, named in last_error() and never answered.
+TEST(LcmDevice, RejectsUndecodableAndNonFiniteStateAndNamesWhy) {
+  Rig rig;
+  const std::uint8_t garbage[5] = {1, 2, 3, 4, 5};
+  rig.lcm->publish(rig.device_state_channel, garbage, sizeof garbage);
+  for (int i = 0; i < 500 && rig.device->rejected_messages() == 0; ++i)
+    std::this_thread::sleep_for(1ms);
+  EXPECT_EQ(rig.device->rejected_messages(), 1u);
+  EXPECT_NE(rig.device->last_error().find("MASTER_STATE: cannot decode"), std::string::npos)
+      << rig.device->last_error();
+
+  rig.send_state(0.1, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(rig.device->rejected_messages(), 2u);
+  EXPECT_NE(rig.device->last_error().find("q[1] or qd[1] is not finite"), std::string::npos)
+      << rig.device->last_error();
+  EXPECT_EQ(rig.log.count(), 0u) << "a rejected MASTER_STATE is never answered";
 }
 
 TEST(LcmDevice, ExternalFaultLatchesAndStaleStateDisconnects) {

@@ -14,15 +14,12 @@ enum class Channel {
   kSlaveTruth,     ///< virtual slave -> evaluation: true distal torque, friction
   kMasterCommand,  ///< haptic server -> slave, per haptic tick
   kHapticStatus,   ///< haptic server -> monitors, 100 Hz
-  kMasterState,    ///< external master driver -> haptic server
-  kMasterForce,    ///< haptic server -> external master driver
 
   kCalibrationRequest,  ///< external console -> haptic server: recalibrate (issue 17)
 };
 
-inline constexpr std::array<Channel, 7> kAllChannels = {
-    Channel::kSlaveState,        Channel::kSlaveTruth,  Channel::kMasterCommand,
-    Channel::kHapticStatus,      Channel::kMasterState, Channel::kMasterForce,
+inline constexpr std::array<Channel, 5> kAllChannels = {
+    Channel::kSlaveState, Channel::kSlaveTruth, Channel::kMasterCommand, Channel::kHapticStatus,
     Channel::kCalibrationRequest};
 
 /// "SLAVE_STATE", "SLAVE_TRUTH", ...

@@ -16,8 +16,6 @@
 #include <tsmh/calibration_request_t.hpp>
 #include <tsmh/haptic_status_t.hpp>
 #include <tsmh/master_command_t.hpp>
-#include <tsmh/master_force_t.hpp>
-#include <tsmh/master_state_t.hpp>
 #include <tsmh/slave_state_t.hpp>
 #include <tsmh/slave_truth_t.hpp>
 #include <vector>
@@ -64,18 +62,6 @@ struct SampleTraits<HapticStatusSample> {
   static constexpr Channel channel = Channel::kHapticStatus;
 };
 template <>
-struct SampleTraits<MasterStateSample> {
-  using Message = tsmh::master_state_t;
-  using Limits = MasterStateLimits;
-  static constexpr Channel channel = Channel::kMasterState;
-};
-template <>
-struct SampleTraits<MasterForceSample> {
-  using Message = tsmh::master_force_t;
-  using Limits = MasterForceLimits;
-  static constexpr Channel channel = Channel::kMasterForce;
-};
-template <>
 struct SampleTraits<CalibrationRequestSample> {
   using Message = tsmh::calibration_request_t;
   using Limits = CalibrationRequestLimits;
@@ -87,8 +73,6 @@ void to_message(const SlaveStateSample& s, tsmh::slave_state_t& m);
 void to_message(const SlaveTruthSample& s, tsmh::slave_truth_t& m);
 void to_message(const MasterCommandSample& s, tsmh::master_command_t& m);
 void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m);
-void to_message(const MasterStateSample& s, tsmh::master_state_t& m);
-void to_message(const MasterForceSample& s, tsmh::master_force_t& m);
 void to_message(const CalibrationRequestSample& s, tsmh::calibration_request_t& m);
 
 // Message -> sample. Precondition: 0 <= m.num_joints <= kMaxJoints and the
@@ -97,8 +81,6 @@ void from_message(const tsmh::slave_state_t& m, SlaveStateSample& s) noexcept;
 void from_message(const tsmh::slave_truth_t& m, SlaveTruthSample& s) noexcept;
 void from_message(const tsmh::master_command_t& m, MasterCommandSample& s) noexcept;
 void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcept;
-void from_message(const tsmh::master_state_t& m, MasterStateSample& s) noexcept;
-void from_message(const tsmh::master_force_t& m, MasterForceSample& s) noexcept;
 void from_message(const tsmh::calibration_request_t& m, CalibrationRequestSample& s) noexcept;
 
 /// The fields every message of ours starts with, read from raw bytes.

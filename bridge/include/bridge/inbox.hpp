@@ -129,8 +129,6 @@ extern template class Inbox<SlaveStateSample>;
 extern template class Inbox<SlaveTruthSample>;
 extern template class Inbox<MasterCommandSample>;
 extern template class Inbox<HapticStatusSample>;
-extern template class Inbox<MasterStateSample>;
-extern template class Inbox<MasterForceSample>;
 extern template class Inbox<CalibrationRequestSample>;
 
 }  // namespace tsmh::bridge

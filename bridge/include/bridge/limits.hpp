@@ -43,15 +43,6 @@ struct MasterCommandLimits {
   Range position_ref{-10.0, 10.0};  ///< rad
 };
 
-struct MasterStateLimits {
-  Range q{-10.0, 10.0};       ///< rad
-  Range qd{-1000.0, 1000.0};  ///< rad/s
-};
-
-struct MasterForceLimits {
-  Range torque{-100.0, 100.0};  ///< N m
-};
-
 /// HAPTIC_STATUS is informational and may carry NaN (e.g. no estimate yet):
 /// only its structure (decode, joint count) and ordering are checked.
 struct HapticStatusLimits {};

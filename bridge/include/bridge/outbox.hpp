@@ -118,8 +118,6 @@ extern template class Outbox<SlaveStateSample>;
 extern template class Outbox<SlaveTruthSample>;
 extern template class Outbox<MasterCommandSample>;
 extern template class Outbox<HapticStatusSample>;
-extern template class Outbox<MasterStateSample>;
-extern template class Outbox<MasterForceSample>;
 extern template class Outbox<CalibrationRequestSample>;
 
 }  // namespace tsmh::bridge

@@ -1,7 +1,9 @@
 #pragma once
-// Fixed-size, trivially copyable snapshots of the six messages. The loop and
-// the transport threads exchange these (LatestValue, SpscQueue) instead of the
-// generated LCM classes, whose std::vector fields would allocate. Field names
+// Fixed-size, trivially copyable snapshots of the five messages the bridge
+// carries (MASTER_STATE and MASTER_FORCE are the lcm device driver's, which
+// decodes and checks them itself: master_devices/lcm_device.hpp). The loop and
+// the transport threads exchange these (realtime::LatestValue, SpscQueue)
+// instead of the generated LCM classes, whose std::vector fields would allocate. Field names
 // follow lcmtypes/*.lcm; the first num_joints entries of each array are valid.
 
 #include <array>
@@ -55,26 +57,6 @@ struct MasterCommandSample {
   bool enable = false;        ///< false: slave holds position, motors safe
   bool clutch = false;        ///< operator re-indexing: reference frozen
   JointArray position_ref{};  ///< slave joint position reference, rad
-};
-
-struct MasterStateSample {
-  std::int64_t utime = 0;
-  std::int64_t seq = 0;
-  std::int64_t receive_ns = 0;
-  std::int32_t num_joints = 0;
-  std::int32_t buttons = 0;  ///< bit 0 dead-man, 1 e-stop, 2 clutch
-  std::int32_t status = 0;   ///< bit 0 fault
-  JointArray q{};            ///< joint angle, rad
-  JointArray qd{};           ///< joint velocity, rad/s
-};
-
-struct MasterForceSample {
-  std::int64_t utime = 0;
-  std::int64_t seq = 0;
-  std::int64_t receive_ns = 0;
-  std::int32_t num_joints = 0;
-  bool enable = false;
-  JointArray torque{};  ///< joint torque command after safety, N m
 };
 
 /// CALIBRATION_REQUEST: recalibrate the joints marked (issue 17).

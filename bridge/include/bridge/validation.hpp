@@ -17,8 +17,6 @@ std::optional<Rejection> validate(const SlaveStateSample& s, const SlaveStateLim
 std::optional<Rejection> validate(const SlaveTruthSample& s, const SlaveTruthLimits& l) noexcept;
 std::optional<Rejection> validate(const MasterCommandSample& s,
                                   const MasterCommandLimits& l) noexcept;
-std::optional<Rejection> validate(const MasterStateSample& s, const MasterStateLimits& l) noexcept;
-std::optional<Rejection> validate(const MasterForceSample& s, const MasterForceLimits& l) noexcept;
 std::optional<Rejection> validate(const HapticStatusSample& s,
                                   const HapticStatusLimits& l) noexcept;
 std::optional<Rejection> validate(const CalibrationRequestSample& s,
