@@ -4,6 +4,11 @@
 //   "profile.yaml: joints[1].counts_per_rad: must be > 0 (line 14)".
 // Unknown keys are errors too: a misspelt limit must not silently fall back
 // to its default.
+//
+// Public API of master_devices, not only the drivers' helper: haptic-server
+// reads its own configuration with it too (haptics/src/server_config.cpp),
+// so every configuration error of the project reads the same way
+// (docs/architecture.md "Defined once").
 
 #include <yaml-cpp/yaml.h>
 

@@ -8,6 +8,11 @@
 // /dev/full), a FIFO or a socket is written through, never renamed over; a
 // symbolic link is followed and its target written atomically beside the
 // target, so the link stays a link (a dangling link's target is created).
+//
+// Public API of estimator::core: haptics writes its trace and evaluation
+// report with it (it links estimator::core for the estimator anyway), so no
+// output of the project is ever half written (docs/architecture.md
+// "Defined once").
 
 #include <filesystem>
 #include <functional>
