@@ -21,6 +21,7 @@
 
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
+#include "realtime/clock.hpp"
 
 namespace {
 
@@ -53,9 +54,7 @@ void publish(lcm::LCM& lcm, const std::string& channel, const std::vector<std::u
 }
 
 double monotonic_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  return 1e-9 * static_cast<double>(tsmh::realtime::monotonic_now_ns());
 }
 
 struct Listener {
