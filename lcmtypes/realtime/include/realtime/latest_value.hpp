@@ -59,10 +59,15 @@ class LatestValue {
     slot.seq.store(2 * v - 1, std::memory_order_relaxed);  // odd: a store is in progress
     std::atomic_thread_fence(std::memory_order_release);
     const auto* src = reinterpret_cast<const unsigned char*>(&value);
-    for (std::size_t i = 0; i < kWords; ++i) {
-      std::uint64_t w = 0;
-      std::memcpy(&w, src + i * 8, bytes_in_word(i));
+    for (std::size_t i = 0; i < kFullWords; ++i) {
+      std::uint64_t w;
+      std::memcpy(&w, src + i * 8, 8);
       slot.words[i].store(w, std::memory_order_relaxed);
+    }
+    if constexpr (kTailBytes != 0) {
+      std::uint64_t w = 0;
+      std::memcpy(&w, src + kFullWords * 8, kTailBytes);
+      slot.words[kFullWords].store(w, std::memory_order_relaxed);
     }
     slot.seq.store(2 * v, std::memory_order_release);  // even: stable again
     latest_.store(v, std::memory_order_release);       // readers now go to this slot
@@ -101,9 +106,10 @@ class LatestValue {
   }
 
   static constexpr std::size_t kWords = (sizeof(T) + 7) / 8;
-  static constexpr std::size_t bytes_in_word(std::size_t i) noexcept {
-    return (i + 1 < kWords || sizeof(T) % 8 == 0) ? 8 : sizeof(T) % 8;
-  }
+  // Whole words, then the tail of a size that is not a multiple of 8: the
+  // copies have constant sizes, so each word is one move.
+  static constexpr std::size_t kFullWords = sizeof(T) / 8;
+  static constexpr std::size_t kTailBytes = sizeof(T) % 8;
 
   // The version copied into `out`, or 0 (out untouched unless kScratch).
   template <Output kOut = Output::kUntouchedOnFailure>
@@ -115,9 +121,13 @@ class LatestValue {
     if (s0 != 2 * v) return 0;  // the writer has moved on to version v + 2 in this slot
     if constexpr (kOut == Output::kScratch) {
       auto* dst = reinterpret_cast<unsigned char*>(&out);
-      for (std::size_t i = 0; i < kWords; ++i) {
+      for (std::size_t i = 0; i < kFullWords; ++i) {
         const std::uint64_t w = slot.words[i].load(std::memory_order_relaxed);
-        std::memcpy(dst + i * 8, &w, bytes_in_word(i));
+        std::memcpy(dst + i * 8, &w, 8);
+      }
+      if constexpr (kTailBytes != 0) {
+        const std::uint64_t w = slot.words[kFullWords].load(std::memory_order_relaxed);
+        std::memcpy(dst + kFullWords * 8, &w, kTailBytes);
       }
     } else {
       std::array<std::uint64_t, kWords> buf;
