@@ -23,8 +23,11 @@ void DriftMonitor::update(double t, const estimator::Estimate& e, double radius_
   const double f = radius_m * e.friction;  // the model's friction torque, N m
   const double r = e.tau_in - f;           // = the estimated distal torque
   const bool sliding = std::fabs(e.xd) > config_.min_speed_rad_s;
-  if (sliding && std::fabs(r) <= config_.contact_gate_ratio * std::fabs(f) && std::isfinite(f) &&
-      std::isfinite(r)) {
+  // NaN level (a model without one) compares false: no saturation gate.
+  const bool in_transition =
+      std::fabs(e.friction) < config_.min_saturation * std::fabs(e.friction_level);
+  if (sliding && !in_transition && std::fabs(r) <= config_.contact_gate_ratio * std::fabs(f) &&
+      std::isfinite(f) && std::isfinite(r)) {
     s0_ += 1.0, sf_ += f, sff_ += f * f, sr_ += r, srf_ += r * f;
     (e.xd > 0.0 ? w_pos_ : w_neg_) += 1.0;
   }

@@ -75,6 +75,7 @@ void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Est
   if (!e.valid) return;
   const double raw = e.friction;
   e.friction = applied_[j] * raw;
+  e.friction_level = applied_[j] * e.friction_level;
   e.tau_out_est = e.tau_in - radius_m * e.friction;
   drift_[j].update(t, e, radius_m);
   drift_scale_[j].store(drift_[j].judged() ? drift_[j].scale() * applied_[j] : std::nan(""),

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -64,6 +65,36 @@ TEST(DistalEstimator, RefusesBadConfiguration) {
   EXPECT_THROW(
       DistalTorqueEstimator(std::make_unique<TsmFrictionModel>(paper_spec()), std::nan("")),
       std::invalid_argument);
+}
+
+TEST(DistalEstimator, ReportsTheSlidingLevelAndHowFarTheFrictionIsFromIt) {
+  // The level the friction tends to (gamma Ff) comes with every estimate:
+  // the drift monitor tells a saturated friction from one still in its
+  // transition by it. At rest (xd = 0, xdd = 0) Ff = rho1 + mu1.
+  auto est = paper_estimator();
+  const double rest_level = 9.5651 * (1.038 + 1.0978);
+  EXPECT_NEAR(est.update(0.0, 0.0, 0.0).friction_level, rest_level, 1e-9);
+  // A long stroke one way: |F| climbs to the level and stays there.
+  const double v = 0.5;  // rad/s
+  Estimate e;
+  double min_ratio_late = 1e9, max_ratio_early = 0.0;
+  for (int i = 1; i <= 3000; ++i) {
+    e = est.update(i * 1e-3, v * i * 1e-3, 0.0);
+    ASSERT_TRUE(std::isfinite(e.friction_level));
+    ASSERT_GT(e.friction_level, 0.0);
+    const double ratio = std::fabs(e.friction) / e.friction_level;
+    if (i <= 20) max_ratio_early = std::max(max_ratio_early, ratio);
+    if (i >= 2000) min_ratio_late = std::min(min_ratio_late, ratio);
+  }
+  EXPECT_LT(max_ratio_early, 0.5);  // 10 mrad past the start: still in the transition
+  EXPECT_GT(min_ratio_late, 0.95);
+  // Models without a level (the baselines) report NaN.
+  struct NoLevel final : FrictionDynamics {
+    void reset() noexcept override {}
+    double step(const Motion&, double) noexcept override { return 0.0; }
+    double friction() const noexcept override { return 0.0; }
+  };
+  EXPECT_TRUE(std::isnan(NoLevel{}.sliding_friction()));
 }
 
 }  // namespace

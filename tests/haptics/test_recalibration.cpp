@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include "estimator/tsm_model.hpp"
@@ -26,6 +27,11 @@ class Sweep {
  public:
   Sweep(double k, double amp = 0.6, double hz = 0.5, std::uint64_t seed = 1)
       : k_(k), amp_(amp), w_(2.0 * std::numbers::pi * hz), rng_(seed) {}
+  // The plant's friction from `plant` instead of the model's (a transition
+  // the model does not match), times k.
+  Sweep(double k, double amp, double hz, const estimator::TsmModelSpec& plant) : Sweep(k, amp, hz) {
+    plant_.emplace(plant);
+  }
   // `load`: a distal torque added to tau_in (contact), N m.
   estimator::Estimate next(double load = 0.0) {
     t_ += 1e-3;
@@ -36,12 +42,14 @@ class Sweep {
     m.xdd = -amp_ * w_ * w_ * std::sin(w_ * t_);
     m.acc_sign = estimator::sign_of(m.xdd);
     const double f = model_.step(m, 1e-3);
+    const double f_plant = plant_ ? plant_->step(m, 1e-3) : f;
     estimator::Estimate e;
     e.valid = true;
     e.xd = m.xd;
     e.xdd = m.xdd;
     e.friction = f;
-    e.tau_in = k_ * kR * f + load + noise_(rng_);
+    e.friction_level = model_.sliding_friction();
+    e.tau_in = k_ * kR * f_plant + load + noise_(rng_);
     e.tau_out_est = e.tau_in - kR * f;
     x_ = m.x;
     return e;
@@ -56,6 +64,7 @@ class Sweep {
   std::mt19937_64 rng_;
   std::normal_distribution<double> noise_{0.0, 0.003};
   estimator::TsmFrictionModel model_{estimator::paper_spec()};
+  std::optional<estimator::TsmFrictionModel> plant_;
 };
 
 TEST(DriftMonitor, NoAlarmWhileTheModelFitsEvenWithOneSidedContact) {
@@ -90,6 +99,76 @@ TEST(DriftMonitor, AlarmsWithinSecondsOfARerouteAndClearsAfterTheFix) {
   for (int i = 0; i < 15'000; ++i)
     d.update(s.t() + 1e-3, s.next(), kR);
   EXPECT_FALSE(d.alarm());
+}
+
+// A plant whose friction transition after a reversal is twice as long as
+// the model's (theta halved): its levels match, so long strokes see no drift.
+estimator::TsmModelSpec slow_transition_plant() {
+  auto spec = estimator::paper_spec();
+  spec.theta *= 0.5;
+  return spec;
+}
+
+// The largest |scale - 1| while judged, and whether the alarm rose, over
+// `seconds` of a sweep.
+struct Judged {
+  double max_off = 0.0;
+  bool alarm = false;
+  bool judged = false;
+};
+Judged run_monitor(DriftMonitor& d, Sweep& s, double seconds) {
+  Judged j;
+  for (int i = 0; i < static_cast<int>(seconds * 1000.0); ++i) {
+    d.update(s.t() + 1e-3, s.next(), kR);
+    if (d.judged()) j.max_off = std::max(j.max_off, std::fabs(d.scale() - 1.0));
+    j.judged = j.judged || d.judged();
+    j.alarm = j.alarm || d.alarm();
+  }
+  return j;
+}
+
+TEST(DriftMonitor, ASwayThatNeverLeavesTheTransitionRaisesNoAlarm) {
+  // Strokes of 0.08 rad p-p at 1.2 Hz: sliding (|xd| up to 0.3 rad/s) but
+  // the friction never reaches its level. Unsaturated samples would give
+  // the transition's mismatch as a scale (the live false alarm: joint 1
+  // swaying 0.05 rad raised the alarm once at scale 1.26).
+  DriftConfig no_gate;
+  no_gate.min_saturation = 0.0;
+  DriftMonitor ungated(no_gate);
+  Sweep s1(1.0, 0.04, 1.2, slow_transition_plant());
+  const Judged before = run_monitor(ungated, s1, 60.0);
+  ASSERT_TRUE(before.judged);
+  EXPECT_GT(before.max_off, 0.25) << "the test's sway must mislead an ungated monitor";
+
+  DriftMonitor gated;
+  Sweep s2(1.0, 0.04, 1.2, slow_transition_plant());
+  const Judged after = run_monitor(gated, s2, 60.0);
+  EXPECT_FALSE(after.alarm);
+  EXPECT_LT(after.max_off, 0.125) << "judged " << after.judged;
+}
+
+TEST(DriftMonitor, TheSaturationGateKeepsLongStrokesAndDrift) {
+  // The same plant on 0.6 rad strokes: judged, no alarm on unchanged
+  // routing (less scale error than without the gate), and a 1.5x re-route
+  // still found.
+  DriftConfig no_gate;
+  no_gate.min_saturation = 0.0;
+  DriftMonitor ungated(no_gate);
+  Sweep s0(1.0, 0.6, 0.5, slow_transition_plant());
+  const Judged reference = run_monitor(ungated, s0, 30.0);
+  DriftMonitor d;
+  Sweep s(1.0, 0.6, 0.5, slow_transition_plant());
+  const Judged unchanged = run_monitor(d, s, 30.0);
+  ASSERT_TRUE(unchanged.judged);
+  EXPECT_FALSE(unchanged.alarm);
+  // The transition's mismatch reads as scale on unsaturated samples even on
+  // long strokes (0.25 ungated, at the threshold): the gate removes part of it.
+  EXPECT_LT(unchanged.max_off, 0.2);
+  EXPECT_LT(unchanged.max_off, reference.max_off - 0.05);
+  s.set_k(1.5);
+  const Judged rerouted = run_monitor(d, s, 5.0);
+  EXPECT_TRUE(rerouted.alarm);
+  EXPECT_NEAR(d.scale(), 1.5, 0.15);
 }
 
 // Drives a Recalibration like the loop does: on_tick each ms, on_estimate

@@ -45,7 +45,7 @@ Estimate DistalTorqueEstimator::finish(double t, double x, double xd, double xdd
   started_ = true;
   t_prev_ = t;
   const double f = dt > 0.0 ? model_->step(m, dt) : model_->friction();
-  return {xd, xdd, acc_sign, tau_in, f, tau_in - radius_ * f, true};
+  return {xd, xdd, acc_sign, tau_in, f, tau_in - radius_ * f, true, model_->sliding_friction()};
 }
 
 }  // namespace tsmh::estimator

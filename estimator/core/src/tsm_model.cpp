@@ -149,6 +149,7 @@ void TsmFrictionModel::set_values(std::span<const double> v) {
 
 void TsmFrictionModel::reset() noexcept {
   z_ = 0.0;
+  level_ = std::numeric_limits<double>::quiet_NaN();
   xd_prev_ = 0.0;
   started_ = false;
 }
@@ -171,14 +172,15 @@ double TsmFrictionModel::step(const Motion& m, double dt) noexcept {
   xd_prev_ = m.xd;
   started_ = true;
   const double g = drive(xd_mid, m.acc_sign);
-  z_ = advance_bouc_wen_state(z_, sliding_level(m), g, dt, shape_);
+  level_ = sliding_level(m);
+  z_ = advance_bouc_wen_state(z_, level_, g, dt, shape_);
   return friction();
 }
 
 void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {
   if (!std::isfinite(friction)) return;
-  const double level = sliding_level(m);
-  z_ = std::clamp(friction / spec_.gamma, -level, level);
+  level_ = sliding_level(m);
+  z_ = std::clamp(friction / spec_.gamma, -level_, level_);
 }
 
 std::unique_ptr<FrictionModel> TsmFrictionModel::clone() const {

@@ -8,7 +8,9 @@
 // samples; c estimates the scale error (k - 1), the intercept a absorbs a
 // one-sided load (contact on one side, a tare offset) so that it does not
 // read as drift, and samples whose estimated distal torque is larger than the
-// model's friction torque (clear contact) are left out. The alarm rises when |c| stays above
+// model's friction torque (clear contact) are left out, and so are samples
+// still in the friction's transition after a reversal (|F| below 0.8 of the
+// model's sliding level). The alarm rises when |c| stays above
 // `threshold` for `hold_s` with both directions in the window, and clears below half of it
 // (hysteresis). A pure value type: no allocation, no clock, no I/O.
 
@@ -25,6 +27,16 @@ struct DriftConfig {
   /// (so are samples near reversals, where |F| is small and the model is
   /// least sure). A drift up to twice the friction still passes.
   double contact_gate_ratio = 1.0;
+  /// Only samples whose friction has come within this fraction of the
+  /// model's sliding level count (|F| >= min_saturation x gamma Ff; not
+  /// applied when the model has no level). Within the friction's transition
+  /// after a reversal the residual's slope against F reflects the
+  /// transition's shape, not a scale: a joint that only sways (strokes
+  /// shorter than the transition, backlash compensation jumping the motor
+  /// across the dead zone) would otherwise be judged on such samples. The
+  /// gate depends on the model's state only, so contact samples are not
+  /// favoured over free ones.
+  double min_saturation = 0.8;
   double threshold = 0.25;  ///< |scale - 1| beyond this is drift
   double hold_s = 1.0;      ///< for this long (and as long below threshold / 2 to clear)
   /// Each direction must carry this much weight in the window (samples x

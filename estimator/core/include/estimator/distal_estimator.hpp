@@ -5,6 +5,7 @@
 //   F      = friction model         (eqs. 4-12), driven by the differentiated angle
 //   tau_out_est = tau_in - R F      (eq. 3)
 
+#include <limits>
 #include <memory>
 
 #include "estimator/differentiator.hpp"
@@ -20,6 +21,10 @@ struct Estimate {
   double friction = 0.0;     ///< N, total sheath friction F
   double tau_out_est = 0.0;  ///< N m, estimated distal torque; NaN when !valid
   bool valid = false;        ///< false: the sample was rejected (non-finite, time not increasing)
+  /// N, the model's sliding friction level at this sample (|friction| tends
+  /// to it while sliding one way; FrictionDynamics::sliding_friction). NaN
+  /// when the model has none.
+  double friction_level = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The friction state the estimator starts from (and restarts from after

@@ -7,6 +7,7 @@
 // - FrictionModel, what identification and the params files add: the
 //   model's family, its parameters and how to set them, copies.
 
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -48,6 +49,14 @@ class FrictionDynamics {
   /// (N) as the model allows at rest at `m` (e.g. within +-gamma Ff). Models
   /// without a settable state ignore it. Never allocates or throws.
   virtual void preset(double /*friction*/, const Motion& /*m*/) noexcept {}
+
+  /// The sliding friction level at the last step's motion, N (> 0): what
+  /// |F| tends to while the input slides one way. Past a reversal |F| climbs
+  /// to it over the friction's transition; a sample still far below it has
+  /// not left the transition. NaN for models without such a level.
+  virtual double sliding_friction() const noexcept {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
 };
 
 /// The identification face: what a fit searches and a params file holds.

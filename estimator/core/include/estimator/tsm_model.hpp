@@ -3,6 +3,7 @@
 // (eqs. 4-12), with the sliding level Ff composed from named terms
 // (sliding_terms.hpp). F = gamma z.
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,8 @@ class TsmFrictionModel final : public FrictionModel {
   double step(const Motion& m, double dt) noexcept override;
   double friction() const noexcept override { return spec_.gamma * z_; }
   void preset(double friction, const Motion& m) noexcept override;
+  /// gamma Ff at the last step's (or preset's) motion; NaN before either.
+  double sliding_friction() const noexcept override { return spec_.gamma * level_; }
   std::unique_ptr<FrictionModel> clone() const override;
 
   const TsmModelSpec& spec() const { return spec_; }
@@ -73,6 +76,7 @@ class TsmFrictionModel final : public FrictionModel {
   bool asymmetric_ = false;
   double lambda_ = 0.0;
   double z_ = 0.0;
+  double level_ = std::numeric_limits<double>::quiet_NaN();  // Ff of the last step
   double xd_prev_ = 0.0;
   bool started_ = false;
 };
