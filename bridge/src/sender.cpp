@@ -58,9 +58,7 @@ void Sender::run() noexcept {
     next_ns += period_ns;
     const std::int64_t now = realtime::monotonic_now_ns();
     if (next_ns < now) next_ns = now + period_ns;
-    const timespec ts{static_cast<time_t>(next_ns / 1'000'000'000),
-                      static_cast<long>(next_ns % 1'000'000'000)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    realtime::sleep_until_ns(next_ns);
   }
 }
 

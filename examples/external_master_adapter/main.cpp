@@ -225,8 +225,7 @@ int main(int argc, char** argv) {
   while (!stop_requested(stop_signals) &&
          (duration_s <= 0.0 || tsmh::realtime::monotonic_now_ns() - start < duration_s * 1e9)) {
     next += period_ns;  // absolute deadlines: no drift
-    timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    tsmh::realtime::sleep_until_ns(next);
 
     while (lcm.handleTimeout(0) > 0) {
     }  // drain MASTER_FORCE without blocking

@@ -16,11 +16,10 @@
 namespace tsmh::haptics {
 namespace {
 
+// The loop's stop flag is checked once per tick, so a signal only ends the
+// sleep early for nothing: sleep on to the deadline.
 void sleep_until(std::int64_t deadline_ns) noexcept {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(deadline_ns / 1'000'000'000);
-  ts.tv_nsec = static_cast<long>(deadline_ns % 1'000'000'000);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  while (!realtime::sleep_until_ns(deadline_ns)) {
   }
 }
 

@@ -5,6 +5,7 @@
 #include <array>
 
 #include "master_devices/clock.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::master_devices {
 
@@ -204,16 +205,10 @@ void EmulatorBus::tick_once() {
 void EmulatorBus::run_real_time() {
   // Real-time pacing is real by definition: CLOCK_MONOTONIC, whatever
   // Options::clock stamps the reports with.
-  timespec next{};
-  clock_gettime(CLOCK_MONOTONIC, &next);
+  std::int64_t next = realtime::monotonic_now_ns();
   while (!stopping_) {
-    // Absolute deadlines: a late tick does not shift every later one.
-    next.tv_nsec += period_ns_;
-    while (next.tv_nsec >= 1'000'000'000L) {
-      next.tv_nsec -= 1'000'000'000L;
-      ++next.tv_sec;
-    }
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+    next += period_ns_;
+    realtime::sleep_until_ns(next);
     tick_once();
   }
 }

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "master_devices/clock.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::master_devices {
 SimSettings parse_sim_settings(FieldReader& r) {
@@ -175,9 +176,7 @@ void SimDevice::run_real_time() {
   std::int64_t next = realtime::monotonic_now_ns();
   while (!stopping_) {
     next += period_ns;
-    timespec ts{static_cast<time_t>(next / 1'000'000'000LL),
-                static_cast<long>(next % 1'000'000'000LL)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    realtime::sleep_until_ns(next);
     advance(static_cast<double>(period_ns) * 1e-9, clock_->now_ns());
   }
 }

@@ -67,8 +67,7 @@ SlaveStateSample sample(std::int64_t seq) {
 }
 
 void sleep_until_ns(std::int64_t t) {
-  const timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
-  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+  tsmh::realtime::sleep_until_ns(t);
 }
 
 // How the sending thread publishes.

@@ -8,6 +8,7 @@
 //   bridge_test_peer publish-direct URL PREFIX COUNT RATE_HZ [truth]
 //       the same with synchronous publishes and, after a stall, a re-based
 //       schedule: no bursts (lcm-logger's 30-message queue drops bursts).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -34,19 +35,10 @@ int open_mode(const std::string& url) {
   }
 }
 
-timespec next_tick(timespec next, std::int64_t period_ns, bool rebase_when_late) {
-  next.tv_nsec += period_ns;
-  while (next.tv_nsec >= 1'000'000'000) {
-    next.tv_nsec -= 1'000'000'000;
-    ++next.tv_sec;
-  }
-  if (rebase_when_late) {
-    timespec now{};
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    if (now.tv_sec > next.tv_sec || (now.tv_sec == next.tv_sec && now.tv_nsec > next.tv_nsec))
-      next = now;
-  }
-  return next;
+std::int64_t next_tick(std::int64_t next_ns, std::int64_t period_ns, bool rebase_when_late) {
+  next_ns += period_ns;
+  if (rebase_when_late) next_ns = std::max(next_ns, tsmh::realtime::monotonic_now_ns());
+  return next_ns;
 }
 
 int publish_mode(const std::string& url, const std::string& prefix, long count, double rate_hz,
@@ -59,8 +51,7 @@ int publish_mode(const std::string& url, const std::string& prefix, long count, 
   const std::string state_channel = channel_name(prefix, Channel::kSlaveState);
   const std::string truth_channel = channel_name(prefix, Channel::kSlaveTruth);
   const auto period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
-  timespec next{};
-  clock_gettime(CLOCK_MONOTONIC, &next);
+  std::int64_t next = tsmh::realtime::monotonic_now_ns();
   long errors = 0;
   for (long i = 0; i < count; ++i) {
     const std::int64_t utime = tsmh::realtime::monotonic_utime();
@@ -76,7 +67,7 @@ int publish_mode(const std::string& url, const std::string& prefix, long count, 
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     next = next_tick(next, period_ns, direct);
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+    tsmh::realtime::sleep_until_ns(next);
   }
   tx.stop();
   const auto s = states.stats();

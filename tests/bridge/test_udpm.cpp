@@ -38,9 +38,7 @@ TEST(Udpm, LoopSeesNewestSampleAndItsAge) {
       while (!out.publish(make_state(i, realtime::monotonic_utime())))
         std::this_thread::sleep_for(1ms);
       next += 1'000'000;
-      const timespec ts{static_cast<time_t>(next / 1'000'000'000),
-                        static_cast<long>(next % 1'000'000'000)};
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+      realtime::sleep_until_ns(next);
     }
   });
 

@@ -57,8 +57,7 @@ double ns_per_op(int n, F&& f) {
 }
 
 void sleep_until(std::int64_t t_ns) {
-  timespec ts{static_cast<time_t>(t_ns / 1'000'000'000), static_cast<long>(t_ns % 1'000'000'000)};
-  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+  tsmh::realtime::sleep_until_ns(t_ns);
 }
 
 }  // namespace

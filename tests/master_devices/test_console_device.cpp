@@ -505,8 +505,7 @@ TEST(ConsoleDevice, RealTimeEmulatorStreamsToAOneKilohertzLoop) {
   std::int64_t next = realtime::monotonic_now_ns();
   for (int k = 0; k < 300; ++k) {
     next += 1'000'000;
-    timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    realtime::sleep_until_ns(next);
     const DeviceReading r = rig.device->read(rig.now());
     fresh += r.fresh ? 1 : 0;
     monotonic = monotonic && r.sequence >= last_seq;

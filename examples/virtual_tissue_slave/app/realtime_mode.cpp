@@ -51,13 +51,6 @@ class StopOnSignal {
   std::thread watcher_;
 };
 
-timespec to_timespec(std::int64_t ns) {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(ns / 1'000'000'000);
-  ts.tv_nsec = static_cast<long>(ns % 1'000'000'000);
-  return ts;
-}
-
 void try_realtime_priority(int priority) {
   if (priority <= 0) return;
   if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
@@ -211,8 +204,7 @@ int run_realtime_mode(const CliOptions& o) {
 
   std::int64_t next = realtime::monotonic_now_ns() + period_ns;
   while (!stop.requested() && (end_ticks < 0 || seq < end_ticks)) {
-    const timespec ts = to_timespec(next);
-    if (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) continue;
+    if (!realtime::sleep_until_ns(next)) continue;  // a signal: check the stop request
     const std::int64_t woke = realtime::monotonic_now_ns();
     const std::int64_t late = woke - next;
     timing.lateness.record(late);

@@ -15,10 +15,6 @@ namespace protocol = tsmh::master_devices::protocol;
 
 namespace {
 constexpr std::int64_t kPeriodNs = 1'000'000;  // the console's nominal 1 kHz
-
-timespec to_timespec(std::int64_t ns) {
-  return timespec{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
-}
 }  // namespace
 
 double max_abs_current_ma(const md::Firmware& f) {
@@ -62,8 +58,7 @@ void FirmwareHost::run_clock() {
   std::int64_t deadline = realtime::monotonic_now_ns();
   while (running_) {
     deadline += kPeriodNs;
-    const timespec ts = to_timespec(deadline);
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    realtime::sleep_until_ns(deadline);
     const std::int64_t now = realtime::monotonic_now_ns();
     {
       std::lock_guard lock(mutex_);

@@ -22,9 +22,7 @@ class LoopClock {
   /// than ten periods late re-bases instead of bursting to catch up.
   std::int64_t wait() {
     deadline_ += period_ns_;
-    const timespec ts{static_cast<time_t>(deadline_ / 1'000'000'000),
-                      static_cast<long>(deadline_ % 1'000'000'000)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    realtime::sleep_until_ns(deadline_);
     const std::int64_t now = realtime::monotonic_now_ns();
     lateness_ns_ = now - deadline_;
     if (lateness_ns_ > 10 * period_ns_) deadline_ = now;
