@@ -19,16 +19,15 @@ double h(double u, const BoucWenShape& s) noexcept {
   return u >= 0.0 ? 1.0 - p : 1.0 + (2.0 * s.sigma - 1.0) * p;
 }
 
-// Largest RK4 step: 0.1 in normalised travel (error about 1e-7 per step), and
-// less where the state is far beyond Ff so that the local stiffness
-// |dh/du| * step stays <= 0.5, far inside RK4's stability region.
+// Largest RK4 step: kMaxRk4Travel in normalised travel, and less where the state is far beyond Ff
+// so that the local stiffness |dh/du| * step stays <= 0.5, far inside RK4's stability region.
 double max_step(double u, const BoucWenShape& s) noexcept {
   if (s.n == 2.0 && s.sigma == 1.0 && std::fabs(u) <= 1.0)
-    return 0.1;  // the paper's shape, fast path
+    return kMaxRk4Travel;  // the paper's shape
   const double a = std::max(1.0, std::fabs(u));
   const double stiffness = s.n * std::max(1.0, std::fabs(2.0 * s.sigma - 1.0)) *
                            (s.n == 1.0 ? 1.0 : abs_pow(a, s.n - 1.0));
-  return std::min(0.1, 0.5 / stiffness);
+  return std::min(kMaxRk4Travel, 0.5 / stiffness);
 }
 
 constexpr int kMaxSubsteps = 256;
@@ -90,8 +89,8 @@ double bouc_wen_rate(double z, double ff, double g, const BoucWenShape& s) noexc
   return s.theta * g * (1.0 - std::pow(aw, s.n) + s.sigma * pn1 * (sgn(w) - sgn(g)) * w);
 }
 
-double advance_bouc_wen_state(double z, double ff, double g, double dt,
-                              const BoucWenShape& s) noexcept {
+double advance_bouc_wen_state_general(double z, double ff, double g, double dt,
+                                      const BoucWenShape& s) noexcept {
   if (g == 0.0 || !(dt > 0.0) || !(ff > 0.0)) return z;
   const double dir = g > 0.0 ? 1.0 : -1.0;
   const double u0 = dir * z / ff;

@@ -105,22 +105,9 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
     case TermKind::kDirectionAsymmetry:
       return negative ? p[0] : 0.0;
     case TermKind::kStribeck:
-      return p[0] * std::exp(-p[1] * speed);
-    case TermKind::kAccelerationDependence: {
-      if (!negative) {
-        // eqs. (6)/(7): + when accelerating (xdd > 0), - when decelerating;
-        // at xdd = 0 both give 0, so the shared boundary is consistent.
-        const double mag = p[0] * (1.0 - std::exp(-std::fabs(p[1] * m.xdd)));
-        return m.acc_sign * mag;
-      }
-      // eqs. (9)-(11). Eq. (8)'s compact form writes "+ sgn(xdd) mu3 e^-f2",
-      // which contradicts its own sub-cases: (9) has +mu3 for xdd < 0 and (10)
-      // has -mu3 for xdd > 0. We follow (9)-(11): s = -sgn(xdd).
-      const double s = -m.acc_sign;
-      if (s == 0.0) return 0.0;
-      const double f2 = p[3] * speed / (std::fabs(m.xdd) + p[4]);
-      return s * p[2] * std::exp(-f2);
-    }
+      return stribeck_level(p[0], p[1], speed);
+    case TermKind::kAccelerationDependence:
+      return acceleration_level(p, m, negative, speed);
     case TermKind::kReversalOffset:
       return 0.0;  // acts on g, not on Ff
     case TermKind::kViscous:
@@ -141,6 +128,13 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
       return p[0] * p[1] * std::tanh(m.load / p[1]);
   }
   return 0.0;
+}
+
+double sum_of_term_levels(std::span<const Term> terms, const Motion& m, bool asymmetric) noexcept {
+  double level = 0.0;
+  for (const auto& t : terms)
+    level += term_level(t, m, asymmetric);
+  return level;
 }
 
 }  // namespace tsmh::estimator

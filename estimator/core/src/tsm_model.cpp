@@ -98,6 +98,41 @@ void TsmFrictionModel::refresh_cache() {
   for (const auto& t : spec_.terms) {
     if (t.kind == TermKind::kReversalOffset) lambda_ = t.p[0];
   }
+
+  flat_ = {};
+  flat_.enabled = true;
+  int previous = -1;
+  for (const auto& t : spec_.terms) {
+    const int order = static_cast<int>(t.kind);
+    if (order <= previous || t.kind > TermKind::kReversalOffset) {
+      flat_ = {};  // another term, or another order: the general sum
+      return;
+    }
+    previous = order;
+    switch (t.kind) {
+      // The partial sums of the first terms per branch, as the general sum
+      // forms them (the terms' contributions are constant in each branch).
+      case TermKind::kCoulomb:
+        flat_.rho_positive += t.p[0];
+        flat_.rho_negative += asymmetric_ ? 0.0 : t.p[0];
+        break;
+      case TermKind::kDirectionAsymmetry:
+        flat_.rho_positive += 0.0;
+        flat_.rho_negative += t.p[0];
+        break;
+      case TermKind::kStribeck:
+        flat_.stribeck = true;
+        flat_.mu1 = t.p[0];
+        flat_.kappa1 = t.p[1];
+        break;
+      case TermKind::kAccelerationDependence:
+        flat_.acceleration = true;
+        flat_.acceleration_p = t.p;
+        break;
+      default:
+        break;  // reversal_offset adds 0 to Ff
+    }
+  }
 }
 
 std::vector<Parameter> TsmFrictionModel::parameters() const {
@@ -155,9 +190,13 @@ void TsmFrictionModel::reset() noexcept {
 }
 
 double TsmFrictionModel::sliding_level(const Motion& m) const noexcept {
-  double level = 0.0;
-  for (const auto& t : spec_.terms)
-    level += term_level(t, m, asymmetric_);
+  if (!flat_.enabled)
+    return std::max(sum_of_term_levels(spec_.terms, m, asymmetric_), kMinSlidingLevel);
+  const bool negative = negative_branch(m.xd);
+  const double speed = std::fabs(m.xd);
+  double level = negative ? flat_.rho_negative : flat_.rho_positive;
+  if (flat_.stribeck) level += stribeck_level(flat_.mu1, flat_.kappa1, speed);
+  if (flat_.acceleration) level += acceleration_level(flat_.acceleration_p, m, negative, speed);
   return std::max(level, kMinSlidingLevel);
 }
 

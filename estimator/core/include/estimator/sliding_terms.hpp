@@ -10,6 +10,7 @@
 // negative one (S-v). Tests pin this down.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -78,9 +79,40 @@ struct Term {
 /// so rho1 only applies to the positive branch.
 double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept;
 
+/// The sum of the terms' contributions, in their order: Ff before the floor.
+/// The reference for TsmFrictionModel's flat evaluation of the paper's terms.
+double sum_of_term_levels(std::span<const Term> terms, const Motion& m, bool asymmetric) noexcept;
+
 /// True when xd takes the negative-velocity branch (xd < 0; xd = 0 is positive).
 constexpr bool negative_branch(double xd) {
   return xd < 0.0;
+}
+
+// The two formulas of the paper's Ff that need exp(), shared by term_level()
+// and TsmFrictionModel's flat evaluation so that both compute the same
+// operations in the same order (bit-identical results).
+
+/// stribeck: mu1 e^(-kappa1 |xd|); `speed` is |xd|.
+inline double stribeck_level(double mu1, double kappa1, double speed) noexcept {
+  return mu1 * std::exp(-kappa1 * speed);
+}
+
+/// acceleration_dependence (eqs. 6-11) with p = {mu2, kappa2, mu3, kappa3, kappa4}.
+inline double acceleration_level(const std::array<double, kMaxTermParams>& p, const Motion& m,
+                                 bool negative, double speed) noexcept {
+  if (!negative) {
+    // eqs. (6)/(7): + when accelerating (xdd > 0), - when decelerating;
+    // at xdd = 0 both give 0, so the shared boundary is consistent.
+    const double mag = p[0] * (1.0 - std::exp(-std::fabs(p[1] * m.xdd)));
+    return m.acc_sign * mag;
+  }
+  // eqs. (9)-(11). Eq. (8)'s compact form writes "+ sgn(xdd) mu3 e^-f2",
+  // which contradicts its own sub-cases: (9) has +mu3 for xdd < 0 and (10)
+  // has -mu3 for xdd > 0. We follow (9)-(11): s = -sgn(xdd).
+  const double s = -m.acc_sign;
+  if (s == 0.0) return 0.0;
+  const double f2 = p[3] * speed / (std::fabs(m.xdd) + p[4]);
+  return s * p[2] * std::exp(-f2);
 }
 
 }  // namespace tsmh::estimator

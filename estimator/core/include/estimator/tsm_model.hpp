@@ -3,6 +3,7 @@
 // (eqs. 4-12), with the sliding level Ff composed from named terms
 // (sliding_terms.hpp). F = gamma z.
 
+#include <array>
 #include <limits>
 #include <string>
 #include <vector>
@@ -67,12 +68,35 @@ class TsmFrictionModel final : public FrictionModel {
   /// g of eq. (4).
   double drive(double xd, double acc_sign) const noexcept { return xd + lambda_ * acc_sign; }
   double state() const noexcept { return z_; }
+  /// True when sliding_level() takes the flat evaluation of the paper's
+  /// terms instead of the general sum (see FlatLevel).
+  bool uses_flat_level() const noexcept { return flat_.enabled; }
 
  private:
   void refresh_cache();
 
+  // Ff of the paper's terms without the loop over the term list: when the
+  // spec has only coulomb, direction_asymmetry, stribeck,
+  // acceleration_dependence and reversal_offset (each optional, in catalog
+  // order, as the presets and tsm fit write them), Ff is the branch's
+  // constant partial sum of coulomb and direction_asymmetry, plus the
+  // stribeck and acceleration terms (reversal_offset adds 0), added in the
+  // list's order: the same sum as sum_of_term_levels(), bit for bit
+  // (test_model_fast_path.cpp).
+  struct FlatLevel {
+    bool enabled = false;
+    double rho_positive = 0.0;  // coulomb + direction_asymmetry for xd >= 0
+    double rho_negative = 0.0;  // ... for xd < 0
+    bool stribeck = false;
+    double mu1 = 0.0;
+    double kappa1 = 0.0;
+    bool acceleration = false;
+    std::array<double, kMaxTermParams> acceleration_p{};
+  };
+
   TsmModelSpec spec_;
   BoucWenShape shape_;
+  FlatLevel flat_;
   bool asymmetric_ = false;
   double lambda_ = 0.0;
   double z_ = 0.0;
