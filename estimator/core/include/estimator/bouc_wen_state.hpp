@@ -55,8 +55,12 @@ inline double advance_bouc_wen_state(double z, double ff, double g, double dt,
       const double k3 = h(u0 + 0.5 * da * k2);
       const double k4 = h(u0 + da * k3);
       const double u = u0 + da / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-      // Between the start and the fixed point 1, as in the general path.
-      return dir * (u0 <= 1.0 ? std::clamp(u, u0, 1.0) : std::clamp(u, 1.0, u0)) * ff;
+      // Between the start and the fixed point 1, as the general path's
+      // std::clamp (min(max(u, lo), hi)), on values and without a branch:
+      // u0 falls on either side of 1 at random from tick to tick in
+      // sliding, and std::clamp's reference result stays in memory.
+      const double lo = std::min(u0, 1.0), hi = std::max(u0, 1.0);
+      return dir * std::min(std::max(u, lo), hi) * ff;
     }
   }
   return advance_bouc_wen_state_general(z, ff, g, dt, shape);
