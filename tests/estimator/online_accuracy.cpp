@@ -2,11 +2,13 @@
 // estimator (the DistalTorqueEstimator haptic-server and `tsm simulate` run,
 // differentiator included) gets to the true friction, on paper-model data
 // with realistic sensors, over many seeds and several motion kinds. Beside
-// each figure, its limit: the same model and parameters given the exact
-// derivatives at the same samples.
+// each figure, its limits: the same model and parameters given the exact
+// derivatives at the same samples, the same with accelerations below a
+// resolution unresolved (an oracle), and the offline smoother's derivatives.
 //
 // Run: build/bin/online_accuracy [--seeds N] [--first-seed S] [--kinds a,b]
-//      [--jitter S] [--drops F] [--markdown] [--dump FILE.csv]
+//      [--jitter S] [--drops F] [--resolution A] [--sign-mode M] [--markdown]
+//      [--dump FILE.csv]
 // Figures are % of the peak |true friction| of each recording; the verdict
 // line holds every seed to the target, not the mean.
 #include <CLI/CLI.hpp>
