@@ -3,16 +3,19 @@
 // acceleration and the sign of the acceleration, causally (the haptic loop
 // and `tsm simulate` run exactly this, sample by sample).
 //
-// Two polynomial Kalman filters on the same samples, each discretised for the
-// actual interval (uneven time stamps and dropped samples are exact):
-// - the velocity channel (white jerk, fast: about 12 Hz) gives x and xd;
-// - the acceleration channel (white snap, slow: a few Hz, zero lag on
-//   constant jerk) gives xdd with little noise, and its own uncertainty.
-// sgn(xdd), on which eq. (4) and the branches of eqs. (5)-(10) switch, is
-// decided against that uncertainty: +-1 beyond `sign_sigmas` standard
-// deviations, 0 inside (where the sign is not known, and where the true
-// acceleration is zero: at rest and at constant speed). Delay and noise are
-// measured in docs/friction-model.md.
+// Three polynomial Kalman filters on the same samples, each discretised for
+// the actual interval (uneven time stamps and dropped samples are exact):
+// - the velocity channel (white jerk, about 12 Hz) gives x and xd;
+// - the acceleration channel (white snap, a few Hz, zero lag on constant
+//   jerk) gives xdd and its own uncertainty;
+// - the slow acceleration channel (white jerk of tiny density: nearly
+//   constant acceleration) resolves the small, lasting accelerations of slow
+//   motion that the acceleration channel's noise buries.
+// sgn(xdd), on which eq. (4) and the branches of eqs. (5)-(10) switch, is by
+// default the expected sign across the estimate's uncertainty (SignMode), from
+// the slow channel where the two acceleration estimates agree, else from the
+// fast one; exactly 0 once the encoder has been still for `still_time`. Delay,
+// noise and accuracy are measured in docs/friction-model.md.
 
 #include <numbers>
 #include <vector>
