@@ -22,11 +22,7 @@ struct Bench {
     config.recalibration.capacity = capacity;
     for (int j = 0; j < 2; ++j)
       config.limits[j] = {0.8, 100.0};
-    std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> est;
-    for (int j = 0; j < 2; ++j)
-      est.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
-          std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), 0.01));
-    loop = std::make_unique<HapticLoop>(config, device, link, std::move(est));
+    loop = std::make_unique<HapticLoop>(config, device, link, testing::paper_estimators());
   }
   void tick() {
     const double t = static_cast<double>(now) * 1e-9;
@@ -69,11 +65,8 @@ void BM_IdentifyFiveSeconds(benchmark::State& state) {
     Bench real(20'000);
     LoopConfig c = real.config;
     c.recalibration.collect_s = 5.0;
-    std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> est;
-    for (int j = 0; j < 2; ++j)
-      est.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
-          std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), 0.01));
-    real.loop = std::make_unique<HapticLoop>(c, real.device, real.link, std::move(est));
+    real.loop =
+        std::make_unique<HapticLoop>(c, real.device, real.link, testing::paper_estimators());
     for (int i = 0; i < 1000; ++i)
       real.tick();
     real.loop->calibration().request(3);

@@ -2,8 +2,11 @@
 // In-memory stand-ins for the master device and the network, so the loop
 // runs in deterministic simulated time.
 
+#include <memory>
 #include <vector>
 
+#include "estimator/distal_estimator.hpp"
+#include "estimator/tsm_model.hpp"
 #include "haptics/slave_link.hpp"
 #include "master_devices/device.hpp"
 
@@ -93,5 +96,16 @@ class FakeLink final : public SlaveLink {
   std::vector<bridge::MasterCommandSample> commands;
   std::vector<bridge::HapticStatusSample> statuses;
 };
+
+/// One estimator per joint with the paper's model, R = 0.01 m: what the
+/// loop tests run unless they test the estimator itself.
+inline std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> paper_estimators(
+    int joints = 2) {
+  std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> v;
+  for (int j = 0; j < joints; ++j)
+    v.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
+        std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), 0.01));
+  return v;
+}
 
 }  // namespace tsmh::haptics::testing

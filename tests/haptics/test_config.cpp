@@ -346,5 +346,38 @@ TEST(TraceSpool, StreamsRowsToDiskAndMapsThemBackExactly) {
   std::filesystem::remove_all(dir);
 }
 
+// The delay stages' keys (issue 21).
+TEST(ServerConfigDelay, OscillationOnAndPassivityOffByDefault) {
+  const auto c = parse_server_config(kJoint, "server.yaml", "/cfg");
+  EXPECT_TRUE(c.loop.oscillation.enabled);
+  EXPECT_DOUBLE_EQ(c.loop.oscillation.threshold_nm, 0.03);
+  EXPECT_FALSE(c.loop.passivity.enabled);
+}
+
+TEST(ServerConfigDelay, KeysAreReadAndBadOnesNamed) {
+  const auto c = parse_server_config(
+      kJoint +
+          "safety:\n  oscillation: {threshold_nm: 0.05, window_ms: 400, hold_ms: 2000}\n"
+          "passivity: {enabled: true, max_damping_nms_per_rad: 0.5}\n",
+      "server.yaml", "/cfg");
+  EXPECT_DOUBLE_EQ(c.loop.oscillation.threshold_nm, 0.05);
+  EXPECT_DOUBLE_EQ(c.loop.oscillation.window_s, 0.4);
+  EXPECT_DOUBLE_EQ(c.loop.oscillation.hold_s, 2.0);
+  EXPECT_TRUE(c.loop.passivity.enabled);
+  EXPECT_DOUBLE_EQ(c.loop.passivity.max_damping_nms_per_rad, 0.5);
+  EXPECT_NE(error_of(kJoint + "safety: {oscillation: {band_high_hz: 900}}\n")
+                .find("server.yaml: safety.oscillation.band_high_hz: must be within"),
+            std::string::npos);
+  EXPECT_NE(error_of(kJoint + "safety: {oscillation: {band_low_hz: 50, band_high_hz: 40}}\n")
+                .find("band_high_hz: must be above band_low_hz"),
+            std::string::npos);
+  EXPECT_NE(error_of(kJoint + "passivity: {max_damping_nms_per_rad: 0}\n")
+                .find("passivity.max_damping_nms_per_rad"),
+            std::string::npos);
+  EXPECT_NE(error_of(kJoint + "passivity: {enable: true}\n").find("passivity.enable"),
+            std::string::npos)
+      << "a misspelt key is an error, never a silently disabled controller";
+}
+
 }  // namespace
 }  // namespace tsmh::haptics

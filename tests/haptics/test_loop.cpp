@@ -28,17 +28,9 @@ LoopConfig config(FeedbackSource source = FeedbackSource::kEstimated) {
   return c;
 }
 
-std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators() {
-  std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> v;
-  for (int j = 0; j < 2; ++j)
-    v.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
-        std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), 0.01));
-  return v;
-}
-
 struct Rig {
   explicit Rig(FeedbackSource s = FeedbackSource::kEstimated, Trace* trace = nullptr)
-      : loop(config(s), device, link, estimators(), trace) {}
+      : loop(config(s), device, link, testing::paper_estimators(), trace) {}
   // Runs `ms` ticks; the slave sends a sample every tick while `alive`,
   // stamped with its own clock: now + slave_clock_offset.
   void run(int ms, bool alive = true, double t1 = 30.0, double t3 = 20.0) {

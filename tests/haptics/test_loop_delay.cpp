@@ -6,10 +6,8 @@
 
 #include <cmath>
 
-#include "estimator/tsm_model.hpp"
 #include "fakes.hpp"
 #include "haptics/haptic_loop.hpp"
-#include "haptics/server_config.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -32,16 +30,9 @@ LoopConfig config(bool passivity) {
   return c;
 }
 
-std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators() {
-  std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> v;
-  for (int j = 0; j < 2; ++j)
-    v.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
-        std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()), 0.01));
-  return v;
-}
-
 struct Rig {
-  explicit Rig(bool passivity = false) : loop(config(passivity), device, link, estimators()) {}
+  explicit Rig(bool passivity = false)
+      : loop(config(passivity), device, link, testing::paper_estimators()) {}
   FakeDevice device;
   FakeLink link;
   HapticLoop loop;
@@ -139,49 +130,6 @@ TEST(HapticLoopDelay, PassivityOnKeepsTheObservedEnergyAtZeroAndSaysSo) {
   EXPECT_GT(rig.loop.counters().passivity_ticks, 1000U);
   // Joint 1 does not move: untouched.
   EXPECT_NEAR(rig.device.torque[1], 0.2, 1e-6);
-}
-
-const std::string kJoint = "device: {driver: sim}\njoints:\n  - {name: a, max_torque_nm: 0.3}\n";
-
-std::string error_of(const std::string& yaml) {
-  try {
-    parse_server_config(yaml, "server.yaml", "/cfg");
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-TEST(ServerConfigDelay, OscillationOnAndPassivityOffByDefault) {
-  const auto c = parse_server_config(kJoint, "server.yaml", "/cfg");
-  EXPECT_TRUE(c.loop.oscillation.enabled);
-  EXPECT_DOUBLE_EQ(c.loop.oscillation.threshold_nm, 0.03);
-  EXPECT_FALSE(c.loop.passivity.enabled);
-}
-
-TEST(ServerConfigDelay, KeysAreReadAndBadOnesNamed) {
-  const auto c = parse_server_config(
-      kJoint +
-          "safety:\n  oscillation: {threshold_nm: 0.05, window_ms: 400, hold_ms: 2000}\n"
-          "passivity: {enabled: true, max_damping_nms_per_rad: 0.5}\n",
-      "server.yaml", "/cfg");
-  EXPECT_DOUBLE_EQ(c.loop.oscillation.threshold_nm, 0.05);
-  EXPECT_DOUBLE_EQ(c.loop.oscillation.window_s, 0.4);
-  EXPECT_DOUBLE_EQ(c.loop.oscillation.hold_s, 2.0);
-  EXPECT_TRUE(c.loop.passivity.enabled);
-  EXPECT_DOUBLE_EQ(c.loop.passivity.max_damping_nms_per_rad, 0.5);
-  EXPECT_NE(error_of(kJoint + "safety: {oscillation: {band_high_hz: 900}}\n")
-                .find("server.yaml: safety.oscillation.band_high_hz: must be within"),
-            std::string::npos);
-  EXPECT_NE(error_of(kJoint + "safety: {oscillation: {band_low_hz: 50, band_high_hz: 40}}\n")
-                .find("band_high_hz: must be above band_low_hz"),
-            std::string::npos);
-  EXPECT_NE(error_of(kJoint + "passivity: {max_damping_nms_per_rad: 0}\n")
-                .find("passivity.max_damping_nms_per_rad"),
-            std::string::npos);
-  EXPECT_NE(error_of(kJoint + "passivity: {enable: true}\n").find("passivity.enable"),
-            std::string::npos)
-      << "a misspelt key is an error, never a silently disabled controller";
 }
 
 }  // namespace
