@@ -34,6 +34,7 @@
 #include "realtime/clock.hpp"
 #include "realtime/latest_value.hpp"
 #include "scratch_dir_fixture.hpp"
+#include "slave_samples.hpp"
 #include "test_link_key.hpp"
 
 namespace tsmh::haptics {
@@ -257,14 +258,7 @@ class Peer {
     m.q.assign(2, 0.0);
     m.qd.assign(2, 0.0);
     m.buttons = 1;  // dead-man
-    bridge::SlaveStateSample s;
-    s.num_joints = 2;
-    s.status = 1;
-    for (std::size_t j = 0; j < 2; ++j) {
-      s.T1[j] = 30.0;
-      s.T3[j] = 20.0;
-      s.radius_m[j] = 0.01;
-    }
+    bridge::SlaveStateSample s = test::constant_tension_state(30.0, 20.0);
     std::int64_t seq = 0, mseq = 0;
     std::uint64_t last_status = 0;
     auto next = Clock::now();
@@ -562,14 +556,7 @@ TEST_F(ServerFaults, RogueSlaveStateBesideTheRealSlaveChangesNothing) {
     lcm::LCM lcm(url());
     const bridge::MessageSigner wrong_key(
         std::make_shared<const bridge::LinkKey>(bridge::LinkKey::generate()));
-    bridge::SlaveStateSample s;
-    s.num_joints = 2;
-    s.status = 1;
-    for (std::size_t j = 0; j < 2; ++j) {
-      s.T1[j] = 80.0;
-      s.T3[j] = 20.0;
-      s.radius_m[j] = 0.01;
-    }
+    bridge::SlaveStateSample s = test::constant_tension_state(80.0, 20.0);
     for (std::int64_t seq = 1'000'000; rogue_running; ++seq) {
       s.utime = now_us() + 1000;
       s.seq = seq;

@@ -24,6 +24,7 @@
 #include "bridge/codec.hpp"
 #include "realtime/clock.hpp"
 #include "scratch_dir_fixture.hpp"
+#include "slave_samples.hpp"
 #include "test_link_key.hpp"
 
 namespace tsmh::haptics {
@@ -113,14 +114,7 @@ class FakeSlave {
     thread_ = std::thread([this, prefix, seconds, age_us, skip_every] {
       lcm::LCM lcm(url());
       const auto signer = test::test_signer();  // a legitimate slave holds the link key
-      bridge::SlaveStateSample s;
-      s.num_joints = 2;
-      s.status = 1;
-      for (std::size_t j = 0; j < 2; ++j) {
-        s.T1[j] = 30.0;
-        s.T3[j] = 29.0;
-        s.radius_m[j] = 0.01;
-      }
+      bridge::SlaveStateSample s = test::constant_tension_state(30.0, 29.0);
       const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
       std::int64_t sent = 0;
       for (std::int64_t seq = 0; running_ && std::chrono::steady_clock::now() < end; ++seq) {
