@@ -31,7 +31,8 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
       r_(measurement_variance(config)),
       velocity_(config.jerk_psd, r_),
       acceleration_(config.snap_psd, r_),
-      slow_(config.slow_jerk_psd > 0.0 ? config.slow_jerk_psd : 1.0, r_) {
+      slow_(config.slow_jerk_psd > 0.0 ? config.slow_jerk_psd : 1.0, r_),
+      use_slow_(config.sign_mode == SignMode::kSmooth && config.slow_jerk_psd > 0.0) {
   if (!config.exact_covariance) build_gain_table();
   reset();
 }
@@ -52,12 +53,12 @@ void Differentiator::build_gain_table() {
   const PolyKalman<3>::Mat* warm_s = nullptr;
   PolyKalman<3>::Mat pv, ps;
   PolyKalman<4>::Mat pa;
-  const double slow_psd = cfg_.slow_jerk_psd > 0.0 ? cfg_.slow_jerk_psd : 1.0;
   for (std::size_t k = 0; k < n; ++k) {
     const double dt = grid_dt(k);
     auto [kv, pv_k] = PolyKalman<3>::steady_state(cfg_.jerk_psd, r_, dt, warm_v);
     auto [ka, pa_k] = PolyKalman<4>::steady_state(cfg_.snap_psd, r_, dt, warm_a);
-    auto [ks, ps_k] = PolyKalman<3>::steady_state(slow_psd, r_, dt, warm_s);
+    auto [ks, ps_k] = use_slow_ ? PolyKalman<3>::steady_state(cfg_.slow_jerk_psd, r_, dt, warm_s)
+                                : std::pair<PolyKalman<3>::Vec, PolyKalman<3>::Mat>{{}, {}};
     pv = pv_k;
     pa = pa_k;
     ps = ps_k;
@@ -68,7 +69,7 @@ void Differentiator::build_gain_table() {
     gains_[k] = {kv,
                  ka,
                  ks,
-                 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])),
+                 use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])) : 0.0,
                  1.0 / (cfg_.slow_consistency * sd),
                  sd,
                  1.0 / (cfg_.smooth_sigmas * sd)};
@@ -139,7 +140,7 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
     // decision delay at a zero crossing and no chatter. The model is linear
     // in sgn(xdd), so a fraction acts as the expected value of both branches.
     const double fast = std::clamp(xdd * inv_width, -1.0, 1.0);
-    if (cfg_.sign_mode == SignMode::kSmoothFast || cfg_.slow_jerk_psd <= 0.0) return fast;
+    if (!use_slow_) return fast;
     // Where the fast estimate agrees with the slow channel's (within its own
     // noise), the motion's acceleration varies slowly and the slow channel,
     // with a fraction of the noise, tells its sign: in creeping motion the
@@ -188,16 +189,17 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     if (settling_ > 0) --settling_;
     velocity_.update(dt, x);
     acceleration_.update(dt, x);
-    slow_.update(dt, x);
     sd = std::sqrt(acceleration_.covariance()[2][2]);
     inv_width = 1.0 / (cfg_.smooth_sigmas * sd);
-    slow_inv_width = 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2]));
+    if (use_slow_) slow_.update(dt, x);
+    slow_inv_width =
+        use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
     inv_consistency = 1.0 / (cfg_.slow_consistency * sd);
   } else {
     const GainEntry g = gain_for(dt);
     velocity_.update_with_gain(dt, x, g.velocity);
     acceleration_.update_with_gain(dt, x, g.acceleration);
-    slow_.update_with_gain(dt, x, g.slow);
+    if (use_slow_) slow_.update_with_gain(dt, x, g.slow);
     sd = g.acc_sd;
     inv_width = g.inv_width;
     slow_inv_width = g.slow_inv_width;

@@ -120,6 +120,9 @@ class Differentiator {
   PolyKalman<3> velocity_;
   PolyKalman<4> acceleration_;
   PolyKalman<3> slow_;
+  // The slow channel runs only where it decides something: the smooth sign
+  // with slow_jerk_psd > 0.
+  bool use_slow_;
   // Steady-state gains by interval (exact_covariance false): entry k is for
   // the interval grid_dt(k); see grid_index().
   struct GainEntry {
