@@ -92,10 +92,9 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "auto: xd_in/xdd_in when present, else the causal estimator haptic-server "
                   "runs (differentiator: always that; exact: xd_in/xdd_in)")
       ->transform(CLI::CheckedTransformer(sources, CLI::ignore_case));
-  const std::map<std::string, estimator::SignMode> signs{
-      {"smooth", estimator::SignMode::kSmooth},
-      {"smooth-fast", estimator::SignMode::kSmoothFast},
-      {"hard", estimator::SignMode::kHard}};
+  std::map<std::string, estimator::SignMode> signs;
+  for (const char* name : {"smooth", "smooth-fast", "hard"})
+    signs[name] = *estimator::sign_mode_from_name(name);
   cmd->add_option("--sign", opts->sign,
                   "sgn(xdd) of the causal estimator: smooth (haptic-server's default), "
                   "smooth-fast (without the slow acceleration channel) or hard (the paper's "

@@ -165,12 +165,9 @@ void parse_joint(FieldReader& j, std::size_t i, const std::filesystem::path& bas
       jc.params.ends_with(".yml"))
     jc.params = resolve(base_dir, jc.params);
   jc.radius_m = in_range(j, "radius_m", 0.01, 0.0, 1.0, true);
-  const std::string sign = j.get_string("sign", "smooth");
-  if (sign != "smooth" && sign != "smooth-fast" && sign != "hard")
-    j.fail("sign", "must be smooth, smooth-fast or hard");
-  jc.sign = sign == "hard"          ? estimator::SignMode::kHard
-            : sign == "smooth-fast" ? estimator::SignMode::kSmoothFast
-                                    : estimator::SignMode::kSmooth;
+  const auto sign = estimator::sign_mode_from_name(j.get_string("sign", "smooth"));
+  if (!sign) j.fail("sign", "must be smooth, smooth-fast or hard");
+  jc.sign = *sign;
   const std::string start = j.get_string("start_state", "free_tip");
   if (start != "free_tip" && start != "zero") j.fail("start_state", "must be free_tip or zero");
   jc.start_state = start == "zero" ? estimator::StartState::kZero : estimator::StartState::kFreeTip;

@@ -187,13 +187,12 @@ int main(int argc, char** argv) {
   app.add_option("--smooth-sigmas", diff.smooth_sigmas, "smooth sign: width in sd");
   app.add_option("--still-time", diff.still_time, "encoder unchanged this long: rest");
   CLI11_PARSE(app, argc, argv);
-  if (sign_mode != "smooth" && sign_mode != "smooth-fast" && sign_mode != "hard") {
+  const auto mode = sign_mode_from_name(sign_mode);
+  if (!mode) {
     std::fprintf(stderr, "online_accuracy: --sign-mode must be smooth, smooth-fast or hard\n");
     return 2;
   }
-  diff.sign_mode = sign_mode == "hard"          ? SignMode::kHard
-                   : sign_mode == "smooth-fast" ? SignMode::kSmoothFast
-                                                : SignMode::kSmooth;
+  diff.sign_mode = *mode;
 
   const std::vector<Case> all{
       {"multisine", MotionKind::kMultisine, 0.2, 1.0, true},

@@ -18,6 +18,8 @@
 // noise and accuracy are measured in docs/friction-model.md.
 
 #include <numbers>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 #include "estimator/poly_kalman.hpp"
@@ -40,6 +42,15 @@ enum class SignMode {
   /// was added; for comparison).
   kSmoothFast,
 };
+
+/// "smooth", "smooth-fast" or "hard" (the server config's `sign`, `tsm
+/// simulate --sign`); nullopt for anything else.
+inline std::optional<SignMode> sign_mode_from_name(std::string_view name) {
+  if (name == "smooth") return SignMode::kSmooth;
+  if (name == "smooth-fast") return SignMode::kSmoothFast;
+  if (name == "hard") return SignMode::kHard;
+  return std::nullopt;
+}
 
 struct DifferentiatorConfig {
   /// Velocity channel (x, xd): spectral density of the jerk, (rad/s^3)^2/Hz.
