@@ -68,12 +68,19 @@ TEST(SlidingLevel, FlooredAtMinimum) {
 }
 
 TEST(SlidingTerms, CatalogNamesAreStableAndUnique) {
-  const char* expected[] = {"coulomb",         "direction_asymmetry",
-                            "stribeck",        "acceleration_dependence",
-                            "reversal_offset", "viscous",
-                            "load_dependent",  "position_dependent",
-                            "time_varying",    "position_ripple",
-                            "position_bump",   "load_saturating"};
+  const char* expected[] = {"coulomb",
+                            "direction_asymmetry",
+                            "stribeck",
+                            "acceleration_dependence",
+                            "reversal_offset",
+                            "viscous",
+                            "load_dependent",
+                            "position_dependent",
+                            "time_varying",
+                            "position_ripple",
+                            "position_bump",
+                            "load_saturating",
+                            "hysteresis_elements"};
   ASSERT_EQ(term_catalog().size(), std::size(expected));
   for (std::size_t i = 0; i < std::size(expected); ++i) {
     EXPECT_EQ(term_catalog()[i].name, expected[i]);

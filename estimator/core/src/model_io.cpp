@@ -130,7 +130,7 @@ std::unique_ptr<FrictionModel> parse_baseline(const YAML::Node& root, const std:
 }  // namespace
 
 std::vector<std::string> preset_names() {
-  return {"paper", "dahl", "dahl_classic", "lugre", "coulomb_capstan"};
+  return {"paper", "paper_memory", "dahl", "dahl_classic", "lugre", "coulomb_capstan"};
 }
 
 std::unique_ptr<FrictionModel> parse_model(const std::string& text, const std::string& origin) {
@@ -154,6 +154,7 @@ std::unique_ptr<FrictionModel> parse_model(const std::string& text, const std::s
 
 std::unique_ptr<FrictionModel> load_model(const std::string& name) {
   if (name == "paper") return std::make_unique<TsmFrictionModel>(paper_spec());
+  if (name == "paper_memory") return std::make_unique<TsmFrictionModel>(paper_memory_spec());
   if (name == "dahl") return std::make_unique<TsmFrictionModel>(dahl_spec());
   if (name == "dahl_classic") return std::make_unique<DahlModel>();
   if (name == "lugre") return std::make_unique<LuGreModel>();

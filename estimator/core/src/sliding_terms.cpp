@@ -35,6 +35,8 @@ constexpr ParamSpec kBump[] = {{"amp", 0.0, -10.0, 10.0, "level"},
 constexpr ParamSpec kLoadSat[] = {{"c_sat", 0.0, -1.0, 5.0, "level/N"},
                                   {"l_sat", 10.0, 0.1, 1000.0, "N"}};
 
+constexpr ParamSpec kElements[] = {{"w2", 0.2, 0.0, 0.9, ""}, {"r2", 10.0, 0.05, 200.0, ""}};
+
 constexpr TermInfo kCatalog[] = {
     {TermKind::kCoulomb, "coulomb", "Coulomb sliding level rho1 (eqs. 6, 7)",
      "everywhere in sliding", kCoulomb},
@@ -71,6 +73,10 @@ constexpr TermInfo kCatalog[] = {
     {TermKind::kLoadSaturating, "load_saturating",
      "capstan effect that levels off: friction grows with the load up to a limit",
      "high |tau_in|, in contact", kLoadSat, "load_dependent"},
+    {TermKind::kHysteresisElements, "hysteresis_elements",
+     "hysteresis with memory: a second element of eq. (4)'s state, share w2 at rate r2 theta; "
+     "after a small reversal the friction returns along a stiffer path than one state allows",
+     "after small reversals, around each reversal's transition", kElements},
 };
 
 }  // namespace
@@ -126,6 +132,8 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
     }
     case TermKind::kLoadSaturating:
       return p[0] * p[1] * std::tanh(m.load / p[1]);
+    case TermKind::kHysteresisElements:
+      return 0.0;  // acts on the state, not on Ff
   }
   return 0.0;
 }

@@ -40,6 +40,12 @@ TsmModelSpec paper_spec() {
   return s;
 }
 
+TsmModelSpec paper_memory_spec() {
+  TsmModelSpec s = paper_spec();
+  s.add(TermKind::kHysteresisElements);
+  return s;
+}
+
 TsmModelSpec dahl_spec() {
   TsmModelSpec s;
   s.theta = 15.5181;
@@ -93,6 +99,15 @@ TsmFrictionModel::TsmFrictionModel(TsmModelSpec spec) : spec_(std::move(spec)) {
 
 void TsmFrictionModel::refresh_cache() {
   shape_ = {spec_.theta, spec_.n, spec_.sigma};
+  two_elements_ = false;
+  w2_ = 0.0;
+  shape2_ = shape_;
+  for (const auto& t : spec_.terms) {
+    if (t.kind != TermKind::kHysteresisElements) continue;
+    two_elements_ = true;
+    w2_ = t.p[0];
+    shape2_.theta = spec_.theta * t.p[1];
+  }
   asymmetric_ = spec_.has(TermKind::kDirectionAsymmetry);
   lambda_ = 0.0;
   for (const auto& t : spec_.terms) {
@@ -184,6 +199,7 @@ void TsmFrictionModel::set_values(std::span<const double> v) {
 
 void TsmFrictionModel::reset() noexcept {
   z_ = 0.0;
+  z1_ = z2_ = 0.0;
   level_ = std::numeric_limits<double>::quiet_NaN();
   xd_prev_ = 0.0;
   started_ = false;
@@ -212,7 +228,13 @@ double TsmFrictionModel::step(const Motion& m, double dt) noexcept {
   started_ = true;
   const double g = drive(xd_mid, m.acc_sign);
   level_ = sliding_level(m);
-  z_ = advance_bouc_wen_state(z_, level_, g, dt, shape_);
+  if (!two_elements_) {
+    z_ = advance_bouc_wen_state(z_, level_, g, dt, shape_);
+    return friction();
+  }
+  z1_ = advance_bouc_wen_state(z1_, level_, g, dt, shape_);
+  z2_ = advance_bouc_wen_state(z2_, level_, g, dt, shape2_);
+  z_ = (1.0 - w2_) * z1_ + w2_ * z2_;
   return friction();
 }
 
@@ -220,6 +242,7 @@ void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {
   if (!std::isfinite(friction)) return;
   level_ = sliding_level(m);
   z_ = std::clamp(friction / spec_.gamma, -level_, level_);
+  z1_ = z2_ = z_;
 }
 
 std::unique_ptr<FrictionModel> TsmFrictionModel::clone() const {

@@ -37,6 +37,11 @@ enum class TermKind : std::uint8_t {
                     ///< position)
   kPositionBump,    ///< amp exp(-((x - center)/width)^2 / 2): a local kink in the sheath
   kLoadSaturating,  ///< c_sat l_sat tanh(load / l_sat): capstan growth that levels off
+  /// A second element of eq. (4)'s state with rate r2 theta and share w2 of
+  /// the friction (the first: rate theta, share 1 - w2); adds nothing to Ff.
+  /// Memory: after a small reversal the stiff element returns at once while
+  /// the other keeps its state, as a capstan's stuck sheath segments do.
+  kHysteresisElements,
 };
 
 inline constexpr int kMaxTermParams = 5;

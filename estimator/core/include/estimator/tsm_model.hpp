@@ -38,6 +38,11 @@ struct TsmModelSpec {
 /// The built-in `paper` preset: the parameters identified in the paper
 /// (docs/friction-model.md), rho1 1.038 ... sigma 1.
 TsmModelSpec paper_spec();
+/// The `paper_memory` preset: the paper's parameters plus the
+/// hysteresis_elements term at its catalog start (w2 0.2, r2 10): a starting
+/// point for identifying a sheath whose hysteresis has memory (a capstan
+/// whose stuck segments hold their tension), docs/friction-model.md.
+TsmModelSpec paper_memory_spec();
 /// A Dahl-like base (`dahl` preset): n = 1, one Coulomb level, no offset.
 /// With these, eq. (4) reduces exactly to Dahl's model with sigma0 = gamma
 /// theta and Fc = gamma rho1.
@@ -96,6 +101,12 @@ class TsmFrictionModel final : public FrictionModel {
 
   TsmModelSpec spec_;
   BoucWenShape shape_;
+  // hysteresis_elements: z = (1 - w2) z1 + w2 z2, each element following
+  // eq. (4) with its own rate; off, the paper's single state (z_).
+  bool two_elements_ = false;
+  double w2_ = 0.0;
+  BoucWenShape shape2_;
+  double z1_ = 0.0, z2_ = 0.0;
   FlatLevel flat_;
   bool asymmetric_ = false;
   double lambda_ = 0.0;
