@@ -77,6 +77,35 @@ TEST(Offline, EveryScenarioRunsAndPalpateReachesTheInclusion) {
   EXPECT_THROW(vts::make_scenario("waltz"), std::invalid_argument);
 }
 
+TEST(Offline, IdentifyIsFreeMotionThenPressesUnderLoad) {
+  vts::OfflineOptions o;
+  o.scenario = vts::make_scenario("identify");  // its own tissue: the nodule at 0.85 rad
+  o.duration_s = o.scenario.default_duration_s;
+  double depth_free = 0.0, depth_pressed = 0.0, load_pressed = 0.0;
+  const auto stats = vts::run_offline(vts::paper_slave(), o, [&](const vts::SlaveSample& s) {
+    const double d = s.truth[0].contact.indentation_m;
+    if (s.t < 40.0) {
+      depth_free = std::max(depth_free, d);
+    } else {
+      depth_pressed = std::max(depth_pressed, d);
+      load_pressed = std::max(load_pressed, std::abs(s.truth[0].tau_out));
+    }
+  });
+  EXPECT_EQ(stats.fallback_solves, 0);
+  EXPECT_EQ(depth_free, 0.0) << "the first 40 s are free motion";
+  const auto t = vts::tissue_truth(vts::tissue_preset("nodule"));
+  EXPECT_GT(depth_pressed, 1.3 * t.inclusion_depth_m) << "the deep press reaches the nodule";
+  EXPECT_GT(load_pressed, 0.1) << "N m at the tip: a load the fit can see";
+  // Where free motion hands over to the presses the reference stays smooth:
+  // no faster than excite's own top speed (2.3 rad/s); a seam would be a
+  // step of tenths of a radian.
+  double worst_step = 0.0;
+  for (double tt = 39.0; tt < 42.0; tt += 1e-3)
+    worst_step = std::max(
+        worst_step, std::abs(o.scenario.reference(tt + 1e-3, 0) - o.scenario.reference(tt, 0)));
+  EXPECT_LT(worst_step, 2.5e-3) << "rad per ms";
+}
+
 TEST(Offline, RerouteRaisesFrictionAtTheGivenTime) {
   vts::OfflineOptions o;
   o.duration_s = 12.0;

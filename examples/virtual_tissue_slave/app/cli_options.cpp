@@ -17,7 +17,7 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "seconds to run (offline: default per scenario; real time: 0 = until SIGINT)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--scenario", o.scenario,
-                 "offline scenario: sine, multisine, palpate, chirp, excite");
+                 "offline scenario: sine, multisine, palpate, chirp, excite, identify");
   app.add_option("--output", o.output,
                  "offline: CSV file to write (data contract: docs/data-formats.md)");
   app.add_option(

@@ -31,10 +31,27 @@ double palpation(double t, double surface) {
   return target + (kRest - target) * smoothstep((u - kMove - kHold) / kMove);
 }
 
+// The excite scenario's reference: a three-sine mix whose amplitude steps
+// through 0.05, 0.15, 0.4 and 0.8 rad every 10 s.
+double excitation(double t, int joint) {
+  // Small strokes matter as much as large ones: a surgeon's gentle motion
+  // never leaves the pre-sliding part of the hysteresis.
+  constexpr double kLevels[] = {0.05, 0.15, 0.4, 0.8};
+  constexpr double kSegment = 10.0;
+  const double u = std::fmod(t, 4.0 * kSegment);
+  const auto k = static_cast<int>(u / kSegment);
+  const double blend = smoothstep((u - k * kSegment) / 1.0);
+  const double a = kLevels[(k + 3) % 4] + (kLevels[k] - kLevels[(k + 3) % 4]) * blend;
+  const double phase = joint == 0 ? 0.0 : 0.9;
+  return a * (0.6 * std::sin(kTwoPi * 0.23 * t + phase) +
+              0.3 * std::sin(kTwoPi * 0.61 * t + 1.0 + phase) +
+              0.1 * std::sin(kTwoPi * 1.37 * t + 2.0 + phase));
+}
+
 }  // namespace
 
 std::vector<std::string> scenario_names() {
-  return {"sine", "multisine", "palpate", "chirp", "excite"};
+  return {"sine", "multisine", "palpate", "chirp", "excite", "identify"};
 }
 
 Scenario make_scenario(std::string_view name) {
@@ -78,9 +95,18 @@ Scenario make_scenario(std::string_view name) {
     s.default_duration_s = 40.0;
     s.tissue = "none";
     s.surface_rad = 0.6;
+  } else if (name == "identify") {
+    s.kind = ScenarioKind::kIdentify;
+    s.description =
+        "identification on a bench with a tip load cell: 40 s of excite (free motion), then 20 s "
+        "of presses into the nodule tissue (surface 0.85 rad, beyond excite's reach), gentle and "
+        "deep, so fits see the friction under load";
+    s.default_duration_s = 60.0;
+    s.tissue = "nodule";
+    s.surface_rad = 0.85;
   } else {
     throw std::invalid_argument("unknown scenario '" + std::string(name) +
-                                "' (known: sine, multisine, palpate, chirp, excite)");
+                                "' (known: sine, multisine, palpate, chirp, excite, identify)");
   }
   return s;
 }
@@ -107,19 +133,16 @@ double Scenario::reference(double t, int joint) const {
       const double ramp = smoothstep(u) * smoothstep((kSweep - u) / 1.0);
       return 0.5 * ramp * std::sin(phase);
     }
-    case ScenarioKind::kExcite: {
-      // Small strokes matter as much as large ones: a surgeon's gentle motion
-      // never leaves the pre-sliding part of the hysteresis.
-      constexpr double kLevels[] = {0.05, 0.15, 0.4, 0.8};
-      constexpr double kSegment = 10.0;
-      const double u = std::fmod(t, 4.0 * kSegment);
-      const auto k = static_cast<int>(u / kSegment);
-      const double blend = smoothstep((u - k * kSegment) / 1.0);
-      const double a = kLevels[(k + 3) % 4] + (kLevels[k] - kLevels[(k + 3) % 4]) * blend;
-      const double phase = joint == 0 ? 0.0 : 0.9;
-      return a * (0.6 * std::sin(kTwoPi * 0.23 * t + phase) +
-                  0.3 * std::sin(kTwoPi * 0.61 * t + 1.0 + phase) +
-                  0.1 * std::sin(kTwoPi * 1.37 * t + 2.0 + phase));
+    case ScenarioKind::kExcite:
+      return excitation(t, joint);
+    case ScenarioKind::kIdentify: {
+      // Excite, then palpation from its rest phase, blended over 1 s so the
+      // reference stays smooth where the two meet.
+      constexpr double kFree = 40.0;
+      const double press = palpation(t - kFree + 4.0, surface_rad);
+      if (t < kFree) return excitation(t, joint);
+      const double s = smoothstep(t - kFree);
+      return (1.0 - s) * excitation(t, joint) + s * press;
     }
   }
   return 0.0;

@@ -8,7 +8,7 @@
 
 namespace tsmh::virtual_tissue_slave {
 
-enum class ScenarioKind { kSine, kMultisine, kPalpate, kChirp, kExcite };
+enum class ScenarioKind { kSine, kMultisine, kPalpate, kChirp, kExcite, kIdentify };
 
 struct Scenario {
   ScenarioKind kind = ScenarioKind::kSine;
