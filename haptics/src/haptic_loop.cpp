@@ -19,6 +19,23 @@ std::string_view to_string(FeedbackSource s) noexcept {
   return "?";
 }
 
+namespace {
+
+// The recalibration worker's own copies of the joints' models (allocated
+// here, at construction, never in the loop); none for a model that is only
+// a FrictionDynamics.
+std::vector<std::unique_ptr<estimator::FrictionModel>> model_replicas(
+    const std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>>& estimators) {
+  std::vector<std::unique_ptr<estimator::FrictionModel>> out;
+  for (const auto& e : estimators) {
+    const auto* m = e ? dynamic_cast<const estimator::FrictionModel*>(&e->model()) : nullptr;
+    out.push_back(m ? m->clone() : nullptr);
+  }
+  return out;
+}
+
+}  // namespace
+
 HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device, SlaveLink& link,
                        std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators,
                        TraceSink* trace)
@@ -27,7 +44,7 @@ HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device,
       link_(link),
       estimators_(std::move(estimators)),
       trace_(trace),
-      calibration_(config.joints, config.recalibration, config.drift),
+      calibration_(config.joints, config.recalibration, config.drift, model_replicas(estimators_)),
       safety_(config.joints, config.limits, config.timing),
       oscillation_(config.joints, config.oscillation, config.rate_hz) {
   if (static_cast<int>(estimators_.size()) != config_.joints)
@@ -299,6 +316,8 @@ void HapticLoop::estimate() noexcept {
   const bool joints_ok = state_.num_joints >= config_.joints;
   for (std::size_t j = 0; j < n; ++j) {
     auto& e = estimates_[j];
+    if (calibration_.scales_levels(static_cast<int>(j)))
+      estimators_[j]->set_level_scale(calibration_.applied_scale(static_cast<int>(j)));
     e = joints_ok ? estimators_[j]->update_tensions(static_cast<double>(state_.utime) * 1e-6,
                                                     state_.x_in[j], state_.T1[j], state_.T3[j])
                   : estimator::Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};

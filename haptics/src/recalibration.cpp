@@ -48,8 +48,9 @@ std::string_view to_string(CalibrationReason r) noexcept {
 }
 
 Recalibration::Recalibration(int joints, const RecalibrationConfig& config,
-                             const DriftConfig& drift)
-    : joints_(joints), config_(config) {
+                             const DriftConfig& drift,
+                             std::vector<std::unique_ptr<estimator::FrictionModel>> replicas)
+    : joints_(joints), config_(config), replicas_(std::move(replicas)) {
   if (joints < 1 || joints > static_cast<int>(kMaxJoints))
     throw std::invalid_argument("recalibration: joints must be 1..kMaxJoints");
   if (!(config.collect_s > 0.0) || config.capacity < 100 || !(config.ramp_per_s > 0.0) ||
@@ -61,6 +62,8 @@ Recalibration::Recalibration(int joints, const RecalibrationConfig& config,
     target_[j].store(1.0, std::memory_order_relaxed);
     drift_scale_[j].store(std::nan(""), std::memory_order_relaxed);
     if (static_cast<int>(j) < joints) buffer_[j].resize(config.capacity);
+    level_mode_[j] = config.scale == RecalibrationScale::kLevels && j < replicas_.size() &&
+                     replicas_[j] && replicas_[j]->set_level_scale(1.0);
   }
 }
 
@@ -73,10 +76,13 @@ void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Est
                                 double radius_m) noexcept {
   const std::size_t j = idx(joint);
   if (!e.valid) return;
+  radius_[j] = radius_m;
   const double raw = e.friction;
-  e.friction = applied_[j] * raw;
-  e.friction_level = applied_[j] * e.friction_level;
-  e.tau_out_est = e.tau_in - radius_m * e.friction;
+  if (!level_mode_[j]) {  // kLevels: the model already runs at the applied scale
+    e.friction = applied_[j] * raw;
+    e.friction_level = applied_[j] * e.friction_level;
+    e.tau_out_est = e.tau_in - radius_m * e.friction;
+  }
   drift_[j].update(t, e, radius_m);
   drift_scale_[j].store(drift_[j].judged() ? drift_[j].scale() * applied_[j] : std::nan(""),
                         std::memory_order_relaxed);
@@ -88,7 +94,7 @@ void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Est
   if (phase_.load(std::memory_order_relaxed) ==
           static_cast<std::int32_t>(CalibrationState::kCollecting) &&
       (mask_.load(std::memory_order_relaxed) & bit) != 0 && count_[j] < buffer_[j].size())
-    buffer_[j][count_[j]++] = Sample{t, x_in, e.xd, e.tau_in, radius_m * raw};
+    buffer_[j][count_[j]++] = Sample{t, x_in, e.xd, e.xdd, e.acc_sign, e.tau_in, radius_m * raw};
 }
 
 void Recalibration::on_tick(double now_s, double dt, bool button) noexcept {
@@ -142,8 +148,7 @@ CalibrationFigures Recalibration::figures(int joint) const noexcept {
   return figures_[idx(joint)];
 }
 
-void Recalibration::identify_joint(int joint, CalibrationReason& why,
-                                   CalibrationFigures& fig) const {
+void Recalibration::identify_joint(int joint, CalibrationReason& why, CalibrationFigures& fig) {
   const std::size_t j = idx(joint);
   const std::size_t n = count_[j];
   fig = CalibrationFigures{};
@@ -180,6 +185,19 @@ void Recalibration::identify_joint(int joint, CalibrationReason& why,
     why = CalibrationReason::kNotFree;
     return;
   }
+  if (level_mode_[j]) {
+    fit_level_scale(joint, fig);
+    if (!(fig.scale >= config_.min_scale && fig.scale <= config_.max_scale)) {
+      why = CalibrationReason::kImplausible;
+      return;
+    }
+    if (!(fig.rms_new <= (1.0 - config_.min_improvement) * fig.rms_old)) {
+      why = CalibrationReason::kNotBetter;
+      return;
+    }
+    why = CalibrationReason::kNone;
+    return;
+  }
   // tau_in = k R F over the sliding samples (free motion: the distal torque
   // is the joint's small inertia/damping torque, taken as zero).
   double sff = 0.0, stf = 0.0;
@@ -210,6 +228,70 @@ void Recalibration::identify_joint(int joint, CalibrationReason& why,
     return;
   }
   why = CalibrationReason::kNone;
+}
+
+void Recalibration::fit_level_scale(int joint, CalibrationFigures& fig) {
+  const std::size_t j = idx(joint);
+  const std::size_t n = count_[j];
+  const auto& b = buffer_[j];
+  estimator::FrictionModel& model = *replicas_[j];
+  const double r = radius_[j];
+  // The first samples replay the model's start from the first sample's
+  // friction (free motion: tau_in / R), not the routing: left out.
+  constexpr double kSettle = 0.3;  // s
+  const auto motion = [&](const Sample& s) {
+    return estimator::Motion{s.t, s.x, s.xd, s.xdd, s.acc_sign, std::fabs(s.tau_in) / r};
+  };
+  std::size_t scored = 0;
+  const auto sse_at = [&](double k) {
+    model.reset();
+    model.set_level_scale(k);
+    model.preset(b[0].tau_in / r, motion(b[0]));
+    double sse = 0.0;
+    scored = 0;
+    for (std::size_t i = 1; i < n; ++i) {
+      const double dt = b[i].t - b[i - 1].t;
+      const double f = dt > 0.0 ? model.step(motion(b[i]), dt) : model.friction();
+      if (b[i].t - b[0].t < kSettle) continue;
+      const double e = b[i].tau_in - r * f;
+      sse += e * e;
+      ++scored;
+    }
+    return sse;
+  };
+  // The replay's error is smooth in k with one valley: a log-spaced scan
+  // over the plausible range, then golden-section search around its best.
+  constexpr int kScan = 33;
+  const double lo = std::log(config_.min_scale), hi = std::log(config_.max_scale);
+  const double step = (hi - lo) / (kScan - 1);
+  int best = 0;
+  double best_sse = INFINITY;
+  for (int i = 0; i < kScan; ++i) {
+    const double v = sse_at(std::exp(lo + step * i));
+    if (v < best_sse) best_sse = v, best = i;
+  }
+  double a = lo + step * std::max(best - 1, 0), c = lo + step * std::min(best + 1, kScan - 1);
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = c - golden * (c - a), x2 = a + golden * (c - a);
+  double f1 = sse_at(std::exp(x1)), f2 = sse_at(std::exp(x2));
+  for (int i = 0; i < 30; ++i) {
+    if (f1 < f2) {
+      c = x2, x2 = x1, f2 = f1;
+      x1 = c - golden * (c - a);
+      f1 = sse_at(std::exp(x1));
+    } else {
+      a = x1, x1 = x2, f1 = f2;
+      x2 = a + golden * (c - a);
+      f2 = sse_at(std::exp(x2));
+    }
+  }
+  fig.scale = std::exp(f1 < f2 ? x1 : x2);
+  const double sse_new = std::min({f1, f2, best_sse});
+  if (best_sse < std::min(f1, f2)) fig.scale = std::exp(lo + step * best);
+  const double sse_old = sse_at(scale_at_collect_[j]);
+  const double m = static_cast<double>(std::max<std::size_t>(scored, 1));
+  fig.rms_old = std::sqrt(sse_old / m);
+  fig.rms_new = std::sqrt(sse_new / m);
 }
 
 bool Recalibration::identify_pending() {

@@ -141,6 +141,13 @@ void parse_calibration(FieldReader& drift, FieldReader& recal, LoopConfig& loop)
   rc.min_span_rad = in_range(recal, "min_span_rad", rc.min_span_rad, 0.0, 10.0);
   rc.min_improvement = in_range(recal, "min_improvement", rc.min_improvement, 0.0, 0.99);
   rc.ramp_per_s = in_range(recal, "ramp_per_s", rc.ramp_per_s, 0.0, 100.0, true);
+  const std::string scale = recal.get_string("scale", "levels");
+  if (scale == "levels")
+    rc.scale = RecalibrationScale::kLevels;
+  else if (scale == "output")
+    rc.scale = RecalibrationScale::kOutput;
+  else
+    recal.fail("scale", "must be levels or output, got '" + scale + "'");
   // Two slave samples per loop tick at most, for the whole collection.
   rc.capacity = static_cast<std::size_t>(rc.collect_s * 2.0 * 4000.0) + 100;
   recal.reject_unknown();

@@ -67,6 +67,23 @@ TEST(SlidingLevel, FlooredAtMinimum) {
   EXPECT_DOUBLE_EQ(model.sliding_level(Motion{.xd = 1.0, .load = 100.0}), kMinSlidingLevel);
 }
 
+TEST(SlidingLevel, LevelScaleMultipliesFfAndLeavesTheState) {
+  TsmFrictionModel model(paper_spec());
+  const Motion m{.t = 0.0, .x = 0.0, .xd = 0.5, .xdd = 0.0, .acc_sign = 0.0, .load = 0.0};
+  const double ff = model.sliding_level(m);
+  for (int i = 0; i < 100; ++i)
+    model.step(m, 1e-3);
+  const double f = model.friction();
+  ASSERT_TRUE(model.set_level_scale(1.5));
+  EXPECT_EQ(model.friction(), f);  // the state stays: no jump
+  EXPECT_DOUBLE_EQ(model.sliding_level(m), 1.5 * ff);
+  model.reset();
+  EXPECT_DOUBLE_EQ(model.sliding_level(m), 1.5 * ff);  // configuration, kept by reset()
+  for (double bad : {0.0, -1.0, std::nan(""), static_cast<double>(INFINITY)})
+    EXPECT_FALSE(model.set_level_scale(bad)) << bad;
+  EXPECT_DOUBLE_EQ(model.level_scale(), 1.5);
+}
+
 TEST(SlidingTerms, CatalogNamesAreStableAndUnique) {
   const char* expected[] = {"coulomb",
                             "direction_asymmetry",

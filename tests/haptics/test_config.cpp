@@ -120,6 +120,12 @@ TEST(ServerConfig, DriftAndRecalibrationKeys) {
   EXPECT_DOUBLE_EQ(c.loop.recalibration.ramp_per_s, 0.25);
   // Enough room for the whole collection even at 2 slave samples per tick at 4 kHz.
   EXPECT_GE(c.loop.recalibration.capacity, 4u * 2u * 4000u);
+  EXPECT_EQ(c.loop.recalibration.scale, RecalibrationScale::kLevels);  // the default
+  EXPECT_EQ(parse_server_config(kJoint + "recalibration: {scale: output}\n", "server.yaml", "/cfg")
+                .loop.recalibration.scale,
+            RecalibrationScale::kOutput);
+  EXPECT_NE(error_of(kJoint + "recalibration: {scale: theta}\n").find("recalibration.scale"),
+            std::string::npos);
   EXPECT_NE(error_of(kJoint + "recalibration: {collect_s: 0.1}\n").find("recalibration.collect_s"),
             std::string::npos);
   EXPECT_NE(error_of(kJoint + "drift: {threshold: 0}\n").find("drift.threshold"),

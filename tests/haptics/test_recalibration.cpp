@@ -47,6 +47,7 @@ class Sweep {
     e.valid = true;
     e.xd = m.xd;
     e.xdd = m.xdd;
+    e.acc_sign = m.acc_sign;
     e.friction = f;
     e.friction_level = model_.sliding_friction();
     e.tau_in = k_ * kR * f_plant + load + noise_(rng_);
@@ -57,6 +58,9 @@ class Sweep {
   double t() const { return t_; }
   double x() const { return x_; }
   void set_k(double k) { k_ = k; }
+  // What the loop does in RecalibrationScale::kLevels: the estimator's model
+  // runs at the applied scale.
+  void set_model_level_scale(double k) { model_.set_level_scale(k); }
 
  private:
   double k_, amp_, w_;
@@ -173,27 +177,63 @@ TEST(DriftMonitor, TheSaturationGateKeepsLongStrokesAndDrift) {
 
 // Drives a Recalibration like the loop does: on_tick each ms, on_estimate
 // per sample; the identification runs synchronously where the server's main
-// thread would run it.
+// thread would run it. Without a replica of the model the scale goes to the
+// model's output (kOutput); `CalibRig::levels` gives it one (kLevels).
 struct CalibRig {
-  explicit CalibRig(double k, double amp = 0.6) : sweep(k, amp) {}
+  explicit CalibRig(double k, double amp = 0.6)
+      : sweep(k, amp), calib(1, RecalibrationConfig{}, DriftConfig{}) {}
+  CalibRig(Sweep s, std::vector<std::unique_ptr<estimator::FrictionModel>> replicas)
+      : sweep(std::move(s)), calib(1, RecalibrationConfig{}, DriftConfig{}, std::move(replicas)) {}
+  static CalibRig levels(Sweep s) {
+    std::vector<std::unique_ptr<estimator::FrictionModel>> r;
+    r.push_back(std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()));
+    return CalibRig(std::move(s), std::move(r));
+  }
   void run(double seconds, double load_per_rad_beyond = 0.0, bool button = false) {
     const int n = static_cast<int>(seconds * 1000.0);
     for (int i = 0; i < n; ++i) {
       calib.on_tick(sweep.t(), 1e-3, button && i < 100);
+      if (calib.scales_levels(0)) sweep.set_model_level_scale(calib.applied_scale(0));
       const double x = sweep.x();
       auto e = sweep.next(x > 0.3 ? load_per_rad_beyond * (x - 0.3) : 0.0);
       const double raw_f = e.friction;
       calib.on_estimate(0, sweep.t(), sweep.x(), e, kR);
-      // The scale reaches the estimate exactly: F x applied scale.
-      ASSERT_DOUBLE_EQ(e.friction, raw_f * calib.applied_scale(0));
+      // kOutput: the scale reaches the estimate exactly, F x applied scale;
+      // kLevels: the model already ran at it, the estimate is left alone.
+      const double expected = calib.scales_levels(0) ? raw_f : raw_f * calib.applied_scale(0);
+      ASSERT_DOUBLE_EQ(e.friction, expected);
       applied.push_back(calib.applied_scale(0));
+      friction.push_back(e.friction);
       calib.identify_pending();
     }
   }
   Sweep sweep;
-  Recalibration calib{1, RecalibrationConfig{}, DriftConfig{}};
-  std::vector<double> applied;
+  Recalibration calib;
+  std::vector<double> applied, friction;
 };
+
+// The paper's model with every level term x k and theta kept: a sheath
+// re-routed to k times the friction (the levels grow with the wrap, the
+// tendon's stiffness does not).
+estimator::TsmModelSpec rerouted_plant(double k) {
+  auto spec = estimator::paper_spec();
+  for (auto& t : spec.terms) {
+    switch (t.kind) {
+      case estimator::TermKind::kCoulomb:
+      case estimator::TermKind::kDirectionAsymmetry:
+      case estimator::TermKind::kStribeck:
+        t.p[0] *= k;
+        break;
+      case estimator::TermKind::kAccelerationDependence:
+        t.p[0] *= k;
+        t.p[2] *= k;
+        break;
+      default:
+        break;
+    }
+  }
+  return spec;
+}
 
 TEST(Recalibration, ButtonThenFreeMotionFindsTheNewScaleAndRampsItIn) {
   CalibRig rig(1.5);
@@ -211,6 +251,57 @@ TEST(Recalibration, ButtonThenFreeMotionFindsTheNewScaleAndRampsItIn) {
   // No jump: the scale moved at most ramp_per_s x 1 ms per tick.
   for (std::size_t i = 1; i < rig.applied.size(); ++i)
     ASSERT_LE(std::fabs(rig.applied[i] - rig.applied[i - 1]), 0.5e-3 + 1e-12) << i;
+}
+
+TEST(Recalibration, LevelsFindARerouteOfTheLevelsAndKeepTheTransition) {
+  // A plant whose levels grew 1.5x with theta kept. Scaling the levels finds
+  // it; scaling the output (levels and theta) can only approximate it.
+  const auto run = [](CalibRig rig) {
+    rig.run(1.0);
+    rig.calib.request(1);
+    rig.run(5.5);
+    EXPECT_EQ(rig.calib.state(), CalibrationState::kApplied) << to_string(rig.calib.reason());
+    return std::pair{rig.calib.target_scale(0), rig.calib.figures(0)};
+  };
+  const auto [k_levels, f_levels] =
+      run(CalibRig::levels(Sweep(1.0, 0.6, 0.5, rerouted_plant(1.5))));
+  const auto [k_output, f_output] = run(CalibRig(Sweep(1.0, 0.6, 0.5, rerouted_plant(1.5)), {}));
+  EXPECT_NEAR(k_levels, 1.5, 0.02);
+  // The replay at the scale found leaves about the sensor noise (3 mN m).
+  EXPECT_LT(f_levels.rms_new, 0.0045);
+  EXPECT_LT(f_levels.rms_new, 0.7 * f_output.rms_new)
+      << "levels " << f_levels.rms_new << ", output " << f_output.rms_new << " (k " << k_output
+      << ")";
+}
+
+TEST(Recalibration, LevelsComeInWithoutAJumpInFriction) {
+  CalibRig rig = CalibRig::levels(Sweep(1.0, 0.6, 0.5, rerouted_plant(1.5)));
+  ASSERT_TRUE(rig.calib.scales_levels(0));
+  rig.run(1.0);
+  rig.calib.request(1);
+  rig.run(9.0);  // collect, identify, ramp in (1 -> 1.5 at 0.5/s: 1 s)
+  ASSERT_NEAR(rig.calib.applied_scale(0), 1.5, 0.02);
+  // A change of the level moves the state's target, not the state: the
+  // friction stays as smooth as the motion makes it.
+  double worst = 0.0, worst_before = 0.0;
+  for (std::size_t i = 1; i < rig.friction.size(); ++i) {
+    const double d = std::fabs(rig.friction[i] - rig.friction[i - 1]);
+    (i < 1000 ? worst_before : worst) = std::max(i < 1000 ? worst_before : worst, d);
+  }
+  EXPECT_LE(worst, 1.6 * worst_before);
+}
+
+TEST(Recalibration, ModelsWithoutALevelScaleTheOutput) {
+  std::vector<std::unique_ptr<estimator::FrictionModel>> none;
+  none.push_back(nullptr);
+  Recalibration a(1, RecalibrationConfig{}, DriftConfig{}, std::move(none));
+  EXPECT_FALSE(a.scales_levels(0));
+  RecalibrationConfig output;
+  output.scale = RecalibrationScale::kOutput;
+  std::vector<std::unique_ptr<estimator::FrictionModel>> tsm;
+  tsm.push_back(std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()));
+  Recalibration b(1, output, DriftConfig{}, std::move(tsm));
+  EXPECT_FALSE(b.scales_levels(0));
 }
 
 TEST(Recalibration, RefusesWithTheReason) {

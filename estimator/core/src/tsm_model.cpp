@@ -205,15 +205,24 @@ void TsmFrictionModel::reset() noexcept {
   started_ = false;
 }
 
+bool TsmFrictionModel::set_level_scale(double k) noexcept {
+  if (!(k > 0.0) || !std::isfinite(k)) return false;
+  level_scale_ = k;
+  return true;
+}
+
 double TsmFrictionModel::sliding_level(const Motion& m) const noexcept {
+  // level_scale_ is 1 unless a recalibration set it: x 1.0 is exact, so the
+  // identified model's output is unchanged bit for bit.
   if (!flat_.enabled)
-    return std::max(sum_of_term_levels(spec_.terms, m, asymmetric_), kMinSlidingLevel);
+    return std::max(level_scale_ * sum_of_term_levels(spec_.terms, m, asymmetric_),
+                    kMinSlidingLevel);
   const bool negative = negative_branch(m.xd);
   const double speed = std::fabs(m.xd);
   double level = negative ? flat_.rho_negative : flat_.rho_positive;
   if (flat_.stribeck) level += stribeck_level(flat_.mu1, flat_.kappa1, speed);
   if (flat_.acceleration) level += acceleration_level(flat_.acceleration_p, m, negative, speed);
-  return std::max(level, kMinSlidingLevel);
+  return std::max(level_scale_ * level, kMinSlidingLevel);
 }
 
 double TsmFrictionModel::step(const Motion& m, double dt) noexcept {

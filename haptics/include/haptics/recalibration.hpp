@@ -3,10 +3,13 @@
 // and the worker's side of one exchange.
 //
 // Re-routing the endoscope changes the sheaths' wrap and so the capstan
-// friction: mostly a common scale of the model's sliding levels. F = gamma z
-// is linear in that scale with z unchanged, so the loop applies a per-joint
-// friction scale to the model's output (exactly the levels' common scale),
-// and recalibration re-identifies only that scale:
+// friction: mostly a common scale of the model's sliding levels, while the
+// stiffness of a reversal's transition (the tendon's own elasticity, theta)
+// stays. Recalibration re-identifies that one scale per joint and applies it
+// to the model's levels (RecalibrationScale::kLevels, FrictionDynamics::
+// set_level_scale: the state and so the friction of the instant stay, no
+// jump), or, for models without a level, to the model's output (kOutput:
+// F = gamma z scaled, which scales theta with the levels):
 //
 //  * the loop (tick, estimate): applies the scale, ramping it towards a new
 //    target at `ramp_per_s` (no jump in rendered torque), runs the drift
@@ -14,8 +17,9 @@
 //    request, `request()`, any thread) copies `collect_s` of samples per
 //    joint into buffers allocated at construction;
 //  * the worker (`identify_pending()`, a non-real-time thread) fits the
-//    scale on those samples, validates it against them and publishes the
-//    result; the loop picks it up on a later tick.
+//    scale on those samples (kLevels: replaying them through its own copy of
+//    each joint's model; kOutput: least squares), validates it against them
+//    and publishes the result; the loop picks it up on a later tick.
 //
 // The hand-over is one atomic phase with acquire/release ordering: the loop
 // writes the buffers only while collecting, the worker reads them only while
@@ -25,10 +29,12 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <string_view>
 #include <vector>
 
 #include "estimator/distal_estimator.hpp"
+#include "estimator/friction_model.hpp"
 #include "haptics/drift_monitor.hpp"
 #include "haptics/joint_array.hpp"
 
@@ -55,7 +61,17 @@ enum class CalibrationReason : std::int32_t {
 std::string_view to_string(CalibrationState s) noexcept;
 std::string_view to_string(CalibrationReason r) noexcept;
 
+/// What the recalibrated scale multiplies.
+enum class RecalibrationScale {
+  /// The model's sliding levels, theta and the state kept (the physics of a
+  /// re-routed sheath); models without a level fall back to kOutput.
+  kLevels,
+  /// The model's friction output (levels and theta together).
+  kOutput,
+};
+
 struct RecalibrationConfig {
+  RecalibrationScale scale = RecalibrationScale::kLevels;
   double collect_s = 5.0;         ///< free motion recorded after a request
   double min_span_rad = 0.3;      ///< each requested joint's input angle must span this
   double min_sliding_s = 0.5;     ///< and slide (|xd| > 0.1 rad/s) this long each way
@@ -80,7 +96,11 @@ struct CalibrationFigures {
 
 class Recalibration {
  public:
-  Recalibration(int joints, const RecalibrationConfig& config, const DriftConfig& drift);
+  /// `replicas`: per joint, a copy of the joint's friction model for the
+  /// worker to replay the collected samples through (kLevels); a missing one,
+  /// or a model without a level scale, makes that joint use kOutput.
+  Recalibration(int joints, const RecalibrationConfig& config, const DriftConfig& drift,
+                std::vector<std::unique_ptr<estimator::FrictionModel>> replicas = {});
 
   // ---- any thread ----
   /// Asks for a recalibration of the joints in `mask` (bit j: joint j).
@@ -97,6 +117,10 @@ class Recalibration {
   /// master's calibrate button (a press starts a request for every joint).
   void on_tick(double now_s, double dt, bool button) noexcept;
   double applied_scale(int joint) const noexcept { return applied_[idx(joint)]; }
+  /// True when joint's scale goes to its model's levels: the loop then sets
+  /// applied_scale() on the joint's estimator before each update, and
+  /// on_estimate() leaves the estimate as the model made it.
+  bool scales_levels(int joint) const noexcept { return level_mode_[idx(joint)]; }
   const DriftMonitor& drift(int joint) const noexcept { return drift_[idx(joint)]; }
 
   // ---- the worker thread ----
@@ -133,11 +157,14 @@ class Recalibration {
 
  private:
   struct Sample {
-    double t, x, xd, tau_in;
-    double f_raw;  // R F of the model before scaling, N m
+    double t, x, xd, xdd, acc_sign, tau_in;
+    double f_raw;  // R F of the model before output scaling, N m
   };
   static std::size_t idx(int j) noexcept { return static_cast<std::size_t>(j); }
-  void identify_joint(int j, CalibrationReason& why, CalibrationFigures& fig) const;
+  void identify_joint(int j, CalibrationReason& why, CalibrationFigures& fig);
+  // kLevels: the scale that best replays the collected samples (and the
+  // residuals at it and at the scale in use).
+  void fit_level_scale(int j, CalibrationFigures& fig);
 
   int joints_;
   RecalibrationConfig config_;
@@ -146,6 +173,10 @@ class Recalibration {
   std::array<std::atomic<double>, kMaxJoints> target_{};
   std::array<std::atomic<double>, kMaxJoints> drift_scale_{};
   std::array<std::vector<Sample>, kMaxJoints> buffer_;  // capacity reserved once
+  std::array<bool, kMaxJoints> level_mode_{};
+  std::array<double, kMaxJoints> radius_{};  // loop: the joint's pulley radius, m
+  // The worker's copies of the joints' models (kLevels), used only by it.
+  std::vector<std::unique_ptr<estimator::FrictionModel>> replicas_;
   std::array<std::size_t, kMaxJoints> count_{};
   std::array<double, kMaxJoints> scale_at_collect_{};     // the scales in use, for rms_old
   std::array<CalibrationFigures, kMaxJoints> figures_{};  // worker writes, read after results_

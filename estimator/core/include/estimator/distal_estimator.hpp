@@ -59,6 +59,9 @@ class DistalTorqueEstimator {
   void reset() noexcept;
   double radius() const { return radius_; }
   const FrictionDynamics& model() const { return *model_; }
+  /// The model's level scale (FrictionDynamics::set_level_scale): false when
+  /// the model has none. Never allocates or throws.
+  bool set_level_scale(double k) noexcept { return model_->set_level_scale(k); }
 
  private:
   Estimate finish(double t, double x, double xd, double xdd, double acc_sign,

@@ -65,6 +65,10 @@ class TsmFrictionModel final : public FrictionModel {
   void preset(double friction, const Motion& m) noexcept override;
   /// gamma Ff at the last step's (or preset's) motion; NaN before either.
   double sliding_friction() const noexcept override { return spec_.gamma * level_; }
+  /// Scales Ff (every level term, after their sum) by k; theta, the memory
+  /// and the state stay. Kept through reset() and set_values().
+  bool set_level_scale(double k) noexcept override;
+  double level_scale() const noexcept { return level_scale_; }
   std::unique_ptr<FrictionModel> clone() const override;
 
   const TsmModelSpec& spec() const { return spec_; }
@@ -109,6 +113,7 @@ class TsmFrictionModel final : public FrictionModel {
   double z1_ = 0.0, z2_ = 0.0;
   FlatLevel flat_;
   bool asymmetric_ = false;
+  double level_scale_ = 1.0;
   double lambda_ = 0.0;
   double z_ = 0.0;
   double level_ = std::numeric_limits<double>::quiet_NaN();  // Ff of the last step
