@@ -81,7 +81,14 @@ TEST(SlidingLevel, LevelScaleMultipliesFfAndLeavesTheState) {
   EXPECT_DOUBLE_EQ(model.sliding_level(m), 1.5 * ff);  // configuration, kept by reset()
   for (double bad : {0.0, -1.0, std::nan(""), static_cast<double>(INFINITY)})
     EXPECT_FALSE(model.set_level_scale(bad)) << bad;
-  EXPECT_DOUBLE_EQ(model.level_scale(), 1.5);
+  EXPECT_DOUBLE_EQ(model.level_scale(false), 1.5);
+  // Each direction its own: the negative branch at 0.8.
+  ASSERT_TRUE(model.set_level_scales(1.5, 0.8));
+  Motion back = m;
+  back.xd = -0.5;
+  TsmFrictionModel plain(paper_spec());
+  EXPECT_DOUBLE_EQ(model.sliding_level(back), 0.8 * plain.sliding_level(back));
+  EXPECT_DOUBLE_EQ(model.sliding_level(m), 1.5 * ff);
 }
 
 TEST(SlidingTerms, CatalogNamesAreStableAndUnique) {

@@ -205,24 +205,27 @@ void TsmFrictionModel::reset() noexcept {
   started_ = false;
 }
 
-bool TsmFrictionModel::set_level_scale(double k) noexcept {
-  if (!(k > 0.0) || !std::isfinite(k)) return false;
-  level_scale_ = k;
+bool TsmFrictionModel::set_level_scales(double k_positive, double k_negative) noexcept {
+  const auto ok = [](double k) { return k > 0.0 && std::isfinite(k); };
+  if (!ok(k_positive) || !ok(k_negative)) return false;
+  level_scale_positive_ = k_positive;
+  level_scale_negative_ = k_negative;
   return true;
 }
 
 double TsmFrictionModel::sliding_level(const Motion& m) const noexcept {
-  // level_scale_ is 1 unless a recalibration set it: x 1.0 is exact, so the
-  // identified model's output is unchanged bit for bit.
+  // The level scales are 1 unless a recalibration set them: x 1.0 is exact,
+  // so the identified model's output is unchanged bit for bit.
   if (!flat_.enabled)
-    return std::max(level_scale_ * sum_of_term_levels(spec_.terms, m, asymmetric_),
+    return std::max(level_scale(negative_branch(m.xd)) *
+                        sum_of_term_levels(spec_.terms, m, asymmetric_),
                     kMinSlidingLevel);
   const bool negative = negative_branch(m.xd);
   const double speed = std::fabs(m.xd);
   double level = negative ? flat_.rho_negative : flat_.rho_positive;
   if (flat_.stribeck) level += stribeck_level(flat_.mu1, flat_.kappa1, speed);
   if (flat_.acceleration) level += acceleration_level(flat_.acceleration_p, m, negative, speed);
-  return std::max(level_scale_ * level, kMinSlidingLevel);
+  return std::max(level_scale(negative) * level, kMinSlidingLevel);
 }
 
 double TsmFrictionModel::step(const Motion& m, double dt) noexcept {

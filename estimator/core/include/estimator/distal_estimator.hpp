@@ -59,9 +59,11 @@ class DistalTorqueEstimator {
   void reset() noexcept;
   double radius() const { return radius_; }
   const FrictionDynamics& model() const { return *model_; }
-  /// The model's level scale (FrictionDynamics::set_level_scale): false when
+  /// The model's level scales (FrictionDynamics::set_level_scales): false when
   /// the model has none. Never allocates or throws.
-  bool set_level_scale(double k) noexcept { return model_->set_level_scale(k); }
+  bool set_level_scales(double k_positive, double k_negative) noexcept {
+    return model_->set_level_scales(k_positive, k_negative);
+  }
 
  private:
   Estimate finish(double t, double x, double xd, double xdd, double acc_sign,

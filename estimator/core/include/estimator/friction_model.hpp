@@ -57,14 +57,20 @@ class FrictionDynamics {
   virtual double sliding_friction() const noexcept {
     return std::numeric_limits<double>::quiet_NaN();
   }
-  /// Multiplies the model's sliding level by k > 0 from the next step on,
-  /// leaving the state, and so the friction of this instant, as it is: how a
-  /// re-routed sheath's friction changes (the levels grow with the wrap, the
-  /// stiffness of a reversal's transition does not). Returns false, and
-  /// changes nothing, for models without such a level or a k that is not a
+  /// Multiplies the model's sliding level by k_positive where the input
+  /// slides positive (xd >= 0) and by k_negative where it slides negative,
+  /// from the next step on, leaving the state, and so the friction of this
+  /// instant, as it is: how a re-routed sheath's friction changes (the levels
+  /// grow with the wrap, each direction's with its own sheath; the stiffness
+  /// of a reversal's transition does not). Returns false, and changes
+  /// nothing, for models without such a level or a scale that is not a
   /// finite number > 0 (the caller then scales the output instead). Never
   /// allocates or throws.
-  virtual bool set_level_scale(double /*k*/) noexcept { return false; }
+  virtual bool set_level_scales(double /*k_positive*/, double /*k_negative*/) noexcept {
+    return false;
+  }
+  /// The same scale both ways.
+  bool set_level_scale(double k) noexcept { return set_level_scales(k, k); }
 };
 
 /// The identification face: what a fit searches and a params file holds.

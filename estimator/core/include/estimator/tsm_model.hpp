@@ -65,10 +65,13 @@ class TsmFrictionModel final : public FrictionModel {
   void preset(double friction, const Motion& m) noexcept override;
   /// gamma Ff at the last step's (or preset's) motion; NaN before either.
   double sliding_friction() const noexcept override { return spec_.gamma * level_; }
-  /// Scales Ff (every level term, after their sum) by k; theta, the memory
-  /// and the state stay. Kept through reset() and set_values().
-  bool set_level_scale(double k) noexcept override;
-  double level_scale() const noexcept { return level_scale_; }
+  /// Scales Ff (every level term, after their sum) by k_positive on the
+  /// xd >= 0 branch, k_negative on the other; theta, the memory and the
+  /// state stay. Kept through reset() and set_values().
+  bool set_level_scales(double k_positive, double k_negative) noexcept override;
+  double level_scale(bool negative) const noexcept {
+    return negative ? level_scale_negative_ : level_scale_positive_;
+  }
   std::unique_ptr<FrictionModel> clone() const override;
 
   const TsmModelSpec& spec() const { return spec_; }
@@ -113,7 +116,7 @@ class TsmFrictionModel final : public FrictionModel {
   double z1_ = 0.0, z2_ = 0.0;
   FlatLevel flat_;
   bool asymmetric_ = false;
-  double level_scale_ = 1.0;
+  double level_scale_positive_ = 1.0, level_scale_negative_ = 1.0;
   double lambda_ = 0.0;
   double z_ = 0.0;
   double level_ = std::numeric_limits<double>::quiet_NaN();  // Ff of the last step
