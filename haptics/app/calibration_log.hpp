@@ -70,9 +70,11 @@ class CalibrationLog {
       for (int j = 0; j < calib_.joints(); ++j) {
         if (((mask >> j) & 1U) == 0) continue;
         const auto f = calib_.figures(j);
-        say("t = %.1f s: recalibration applied: joint %d friction scale -> %.3f (residual %.4f -> "
-            "%.4f N m rms over %zu samples, stroke %.2f rad); ramping in at %.2f/s",
-            t, j, f.scale, f.rms_old, f.rms_new, f.samples, f.span_rad, calib_.config().ramp_per_s);
+        say("t = %.1f s: recalibration applied: joint %d friction scale -> %.3f (sliding + %.3f, "
+            "- %.3f; one common scale %.3f) (residual %.4f -> %.4f N m rms over %zu samples, one "
+            "common scale %.4f; stroke %.2f rad); ramping in at %.2f/s",
+            t, j, f.scale, f.scale_positive, f.scale_negative, f.scale_common, f.rms_old, f.rms_new,
+            f.samples, f.rms_common, f.span_rad, calib_.config().ramp_per_s);
         events_.push_back({t, "applied", j, f.scale, ""});
       }
       return;

@@ -58,8 +58,10 @@ Recalibration::Recalibration(int joints, const RecalibrationConfig& config,
     throw std::invalid_argument("recalibration: inconsistent configuration");
   for (std::size_t j = 0; j < kMaxJoints; ++j) {
     drift_[j] = DriftMonitor(drift);
-    applied_[j] = 1.0;
-    target_[j].store(1.0, std::memory_order_relaxed);
+    for (int d = 0; d < 2; ++d) {
+      applied_[j][d] = 1.0;
+      target_[j][d].store(1.0, std::memory_order_relaxed);
+    }
     drift_scale_[j].store(std::nan(""), std::memory_order_relaxed);
     if (static_cast<int>(j) < joints) buffer_[j].resize(config.capacity);
     level_mode_[j] = config.scale == RecalibrationScale::kLevels && j < replicas_.size() &&
@@ -79,12 +81,12 @@ void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Est
   radius_[j] = radius_m;
   const double raw = e.friction;
   if (!level_mode_[j]) {  // kLevels: the model already runs at the applied scale
-    e.friction = applied_[j] * raw;
-    e.friction_level = applied_[j] * e.friction_level;
+    e.friction = applied_[j][0] * raw;  // kOutput: one scale, both directions
+    e.friction_level = applied_[j][0] * e.friction_level;
     e.tau_out_est = e.tau_in - radius_m * e.friction;
   }
   drift_[j].update(t, e, radius_m);
-  drift_scale_[j].store(drift_[j].judged() ? drift_[j].scale() * applied_[j] : std::nan(""),
+  drift_scale_[j].store(drift_[j].judged() ? drift_[j].scale() * applied_scale(joint) : std::nan(""),
                         std::memory_order_relaxed);
   const std::uint32_t bit = 1U << j;
   const std::uint32_t mask = drift_mask_.load(std::memory_order_relaxed);
@@ -128,7 +130,7 @@ void Recalibration::on_tick(double now_s, double dt, bool button) noexcept {
       full = full || count_[idx(j)] >= buffer_[idx(j)].size();
     if (now_s - collect_start_s_ >= config_.collect_s || full) {
       for (int j = 0; j < joints_; ++j)
-        scale_at_collect_[idx(j)] = applied_[idx(j)];
+        scale_at_collect_[idx(j)] = applied_[idx(j)];  // both directions
       // Hand the buffers over: the worker reads them only after this.
       phase_.store(static_cast<std::int32_t>(CalibrationState::kIdentifying),
                    std::memory_order_release);
@@ -137,11 +139,12 @@ void Recalibration::on_tick(double now_s, double dt, bool button) noexcept {
   // Ramp the applied scale towards the target: a bounded rate, so the
   // rendered torque changes smoothly (R F x ramp_per_s per second at most).
   const double step = config_.ramp_per_s * std::max(dt, 0.0);
-  for (int j = 0; j < joints_; ++j) {
-    const double target = target_[idx(j)].load(std::memory_order_relaxed);
-    double& a = applied_[idx(j)];
-    a = a < target ? std::min(target, a + step) : std::max(target, a - step);
-  }
+  for (int j = 0; j < joints_; ++j)
+    for (int d = 0; d < 2; ++d) {
+      const double target = target_[idx(j)][d].load(std::memory_order_relaxed);
+      double& a = applied_[idx(j)][d];
+      a = a < target ? std::min(target, a + step) : std::max(target, a - step);
+    }
 }
 
 CalibrationFigures Recalibration::figures(int joint) const noexcept {
@@ -187,7 +190,10 @@ void Recalibration::identify_joint(int joint, CalibrationReason& why, Calibratio
   }
   if (level_mode_[j]) {
     fit_level_scale(joint, fig);
-    if (!(fig.scale >= config_.min_scale && fig.scale <= config_.max_scale)) {
+    const auto plausible = [&](double k) {
+      return k >= config_.min_scale && k <= config_.max_scale;
+    };
+    if (!plausible(fig.scale_positive) || !plausible(fig.scale_negative)) {
       why = CalibrationReason::kImplausible;
       return;
     }
@@ -210,15 +216,15 @@ void Recalibration::identify_joint(int joint, CalibrationReason& why, Calibratio
     why = CalibrationReason::kMotionTooSmall;
     return;
   }
-  fig.scale = stf / sff;
+  fig.scale = fig.scale_positive = fig.scale_negative = fig.scale_common = stf / sff;
   double ss_old = 0.0, ss_new = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double e_old = b[i].tau_in - scale_at_collect_[j] * b[i].f_raw;
+    const double e_old = b[i].tau_in - scale_at_collect_[j][0] * b[i].f_raw;
     const double e_new = b[i].tau_in - fig.scale * b[i].f_raw;
     ss_old += e_old * e_old, ss_new += e_new * e_new;
   }
   fig.rms_old = std::sqrt(ss_old / static_cast<double>(n));
-  fig.rms_new = std::sqrt(ss_new / static_cast<double>(n));
+  fig.rms_new = fig.rms_common = std::sqrt(ss_new / static_cast<double>(n));
   if (!(fig.scale >= config_.min_scale && fig.scale <= config_.max_scale)) {
     why = CalibrationReason::kImplausible;
     return;
@@ -230,7 +236,8 @@ void Recalibration::identify_joint(int joint, CalibrationReason& why, Calibratio
   why = CalibrationReason::kNone;
 }
 
-void Recalibration::fit_level_scale(int joint, CalibrationFigures& fig) {
+double Recalibration::replay_sse(int joint, double k_positive, double k_negative,
+                                 std::size_t& scored) {
   const std::size_t j = idx(joint);
   const std::size_t n = count_[j];
   const auto& b = buffer_[j];
@@ -242,22 +249,54 @@ void Recalibration::fit_level_scale(int joint, CalibrationFigures& fig) {
   const auto motion = [&](const Sample& s) {
     return estimator::Motion{s.t, s.x, s.xd, s.xdd, s.acc_sign, std::fabs(s.tau_in) / r};
   };
-  std::size_t scored = 0;
-  const auto sse_at = [&](double k) {
-    model.reset();
-    model.set_level_scale(k);
-    model.preset(b[0].tau_in / r, motion(b[0]));
-    double sse = 0.0;
-    scored = 0;
-    for (std::size_t i = 1; i < n; ++i) {
-      const double dt = b[i].t - b[i - 1].t;
-      const double f = dt > 0.0 ? model.step(motion(b[i]), dt) : model.friction();
-      if (b[i].t - b[0].t < kSettle) continue;
-      const double e = b[i].tau_in - r * f;
-      sse += e * e;
-      ++scored;
+  model.reset();
+  model.set_level_scales(k_positive, k_negative);
+  model.preset(b[0].tau_in / r, motion(b[0]));
+  double sse = 0.0;
+  scored = 0;
+  for (std::size_t i = 1; i < n; ++i) {
+    const double dt = b[i].t - b[i - 1].t;
+    const double f = dt > 0.0 ? model.step(motion(b[i]), dt) : model.friction();
+    if (b[i].t - b[0].t < kSettle) continue;
+    const double e = b[i].tau_in - r * f;
+    sse += e * e;
+    ++scored;
+  }
+  return sse;
+}
+
+namespace {
+
+// Golden-section search for the minimum of f over [a, c] (log scale); returns
+// the best point and writes its value.
+template <class F>
+double golden_section(F&& f, double a, double c, int iterations, double& best_value) {
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = c - golden * (c - a), x2 = a + golden * (c - a);
+  double f1 = f(x1), f2 = f(x2);
+  for (int i = 0; i < iterations; ++i) {
+    if (f1 < f2) {
+      c = x2, x2 = x1, f2 = f1;
+      x1 = c - golden * (c - a);
+      f1 = f(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2;
+      x2 = a + golden * (c - a);
+      f2 = f(x2);
     }
-    return sse;
+  }
+  best_value = std::min(f1, f2);
+  return f1 < f2 ? x1 : x2;
+}
+
+}  // namespace
+
+void Recalibration::fit_level_scale(int joint, CalibrationFigures& fig) {
+  const std::size_t j = idx(joint);
+  std::size_t scored = 0;
+  const auto common = [&](double log_k) {
+    const double k = std::exp(log_k);
+    return replay_sse(joint, k, k, scored);
   };
   // The replay's error is smooth in k with one valley: a log-spaced scan
   // over the plausible range, then golden-section search around its best.
@@ -267,29 +306,43 @@ void Recalibration::fit_level_scale(int joint, CalibrationFigures& fig) {
   int best = 0;
   double best_sse = INFINITY;
   for (int i = 0; i < kScan; ++i) {
-    const double v = sse_at(std::exp(lo + step * i));
+    const double v = common(lo + step * i);
     if (v < best_sse) best_sse = v, best = i;
   }
-  double a = lo + step * std::max(best - 1, 0), c = lo + step * std::min(best + 1, kScan - 1);
-  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
-  double x1 = c - golden * (c - a), x2 = a + golden * (c - a);
-  double f1 = sse_at(std::exp(x1)), f2 = sse_at(std::exp(x2));
-  for (int i = 0; i < 30; ++i) {
-    if (f1 < f2) {
-      c = x2, x2 = x1, f2 = f1;
-      x1 = c - golden * (c - a);
-      f1 = sse_at(std::exp(x1));
-    } else {
-      a = x1, x1 = x2, f1 = f2;
-      x2 = a + golden * (c - a);
-      f2 = sse_at(std::exp(x2));
+  double sse = INFINITY;
+  double log_k = golden_section(common, lo + step * std::max(best - 1, 0),
+                                lo + step * std::min(best + 1, kScan - 1), 30, sse);
+  if (best_sse < sse) log_k = lo + step * best, sse = best_sse;
+  double log_kp = log_k, log_kn = log_k;
+  fig.scale_common = std::exp(log_k);
+  const double m_common = static_cast<double>(std::max<std::size_t>(scored, 1));
+  fig.rms_common = std::sqrt(sse / m_common);
+  if (config_.per_direction) {
+    // Each direction's level mostly sets its own direction's samples, so a
+    // few rounds of one-dimensional searches from the common scale converge;
+    // within +-0.5 in log (x0.6 .. x1.65) of the common scale, and never past
+    // the plausible range.
+    constexpr double kReach = 0.5;
+    for (int round = 0; round < 3; ++round) {
+      for (int d = 0; d < 2; ++d) {
+        double& target = d == 0 ? log_kp : log_kn;
+        const auto along = [&](double v) {
+          const double kp = std::exp(d == 0 ? v : log_kp), kn = std::exp(d == 0 ? log_kn : v);
+          return replay_sse(joint, kp, kn, scored);
+        };
+        double v_sse = INFINITY;
+        const double v = golden_section(along, std::max(log_k - kReach, lo),
+                                        std::min(log_k + kReach, hi), 24, v_sse);
+        if (v_sse < sse) target = v, sse = v_sse;
+      }
     }
   }
-  fig.scale = std::exp(f1 < f2 ? x1 : x2);
-  const double sse_new = std::min({f1, f2, best_sse});
-  if (best_sse < std::min(f1, f2)) fig.scale = std::exp(lo + step * best);
-  const double sse_old = sse_at(scale_at_collect_[j]);
+  fig.scale_positive = std::exp(log_kp);
+  fig.scale_negative = std::exp(log_kn);
+  fig.scale = 0.5 * (fig.scale_positive + fig.scale_negative);
+  const double sse_new = replay_sse(joint, fig.scale_positive, fig.scale_negative, scored);
   const double m = static_cast<double>(std::max<std::size_t>(scored, 1));
+  const double sse_old = replay_sse(joint, scale_at_collect_[j][0], scale_at_collect_[j][1], scored);
   fig.rms_old = std::sqrt(sse_old / m);
   fig.rms_new = std::sqrt(sse_new / m);
 }
@@ -315,7 +368,10 @@ bool Recalibration::identify_pending() {
   // All or nothing: a partly recalibrated instrument would feel inconsistent.
   if (first == CalibrationReason::kNone)
     for (int j = 0; j < joints_; ++j)
-      if ((mask >> j) & 1U) target_[idx(j)].store(figs[idx(j)].scale, std::memory_order_relaxed);
+      if ((mask >> j) & 1U) {
+        target_[idx(j)][0].store(figs[idx(j)].scale_positive, std::memory_order_relaxed);
+        target_[idx(j)][1].store(figs[idx(j)].scale_negative, std::memory_order_relaxed);
+      }
   reason_.store(static_cast<std::int32_t>(first), std::memory_order_relaxed);
   reason_joint_.store(first_joint, std::memory_order_relaxed);
   phase_.store(

@@ -148,6 +148,7 @@ void parse_calibration(FieldReader& drift, FieldReader& recal, LoopConfig& loop)
     rc.scale = RecalibrationScale::kOutput;
   else
     recal.fail("scale", "must be levels or output, got '" + scale + "'");
+  rc.per_direction = recal.get_bool("per_direction", rc.per_direction);
   // Two slave samples per loop tick at most, for the whole collection.
   rc.capacity = static_cast<std::size_t>(rc.collect_s * 2.0 * 4000.0) + 100;
   recal.reject_unknown();

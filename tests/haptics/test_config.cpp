@@ -121,6 +121,10 @@ TEST(ServerConfig, DriftAndRecalibrationKeys) {
   // Enough room for the whole collection even at 2 slave samples per tick at 4 kHz.
   EXPECT_GE(c.loop.recalibration.capacity, 4u * 2u * 4000u);
   EXPECT_EQ(c.loop.recalibration.scale, RecalibrationScale::kLevels);  // the default
+  EXPECT_TRUE(c.loop.recalibration.per_direction);                    // the default
+  EXPECT_FALSE(parse_server_config(kJoint + "recalibration: {per_direction: false}\n", "server.yaml",
+                                   "/cfg")
+                   .loop.recalibration.per_direction);
   EXPECT_EQ(parse_server_config(kJoint + "recalibration: {scale: output}\n", "server.yaml", "/cfg")
                 .loop.recalibration.scale,
             RecalibrationScale::kOutput);

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <tuple>
 
 #include "estimator/tsm_model.hpp"
 #include "fakes.hpp"
@@ -60,7 +61,15 @@ class Sweep {
   void set_k(double k) { k_ = k; }
   // What the loop does in RecalibrationScale::kLevels: the estimator's model
   // runs at the applied scale.
-  void set_model_level_scale(double k) { model_.set_level_scale(k); }
+  void set_model_level_scales(double k_positive, double k_negative) {
+    model_.set_level_scales(k_positive, k_negative);
+  }
+  // The plant's own levels, scaled per direction of sliding (a bend that
+  // wraps the pair's two sheaths by different amounts).
+  void set_plant_level_scales(double k_positive, double k_negative) {
+    if (!plant_) plant_.emplace(estimator::paper_spec());
+    plant_->set_level_scales(k_positive, k_negative);
+  }
 
  private:
   double k_, amp_, w_;
@@ -183,17 +192,21 @@ struct CalibRig {
   explicit CalibRig(double k, double amp = 0.6)
       : sweep(k, amp), calib(1, RecalibrationConfig{}, DriftConfig{}) {}
   CalibRig(Sweep s, std::vector<std::unique_ptr<estimator::FrictionModel>> replicas)
-      : sweep(std::move(s)), calib(1, RecalibrationConfig{}, DriftConfig{}, std::move(replicas)) {}
-  static CalibRig levels(Sweep s) {
+      : CalibRig(std::move(s), std::move(replicas), RecalibrationConfig{}) {}
+  CalibRig(Sweep s, std::vector<std::unique_ptr<estimator::FrictionModel>> replicas,
+           const RecalibrationConfig& config)
+      : sweep(std::move(s)), calib(1, config, DriftConfig{}, std::move(replicas)) {}
+  static CalibRig levels(Sweep s, const RecalibrationConfig& config = {}) {
     std::vector<std::unique_ptr<estimator::FrictionModel>> r;
     r.push_back(std::make_unique<estimator::TsmFrictionModel>(estimator::paper_spec()));
-    return CalibRig(std::move(s), std::move(r));
+    return CalibRig(std::move(s), std::move(r), config);
   }
   void run(double seconds, double load_per_rad_beyond = 0.0, bool button = false) {
     const int n = static_cast<int>(seconds * 1000.0);
     for (int i = 0; i < n; ++i) {
       calib.on_tick(sweep.t(), 1e-3, button && i < 100);
-      if (calib.scales_levels(0)) sweep.set_model_level_scale(calib.applied_scale(0));
+      if (calib.scales_levels(0))
+        sweep.set_model_level_scales(calib.applied_scale(0, false), calib.applied_scale(0, true));
       const double x = sweep.x();
       auto e = sweep.next(x > 0.3 ? load_per_rad_beyond * (x - 0.3) : 0.0);
       const double raw_f = e.friction;
@@ -272,6 +285,38 @@ TEST(Recalibration, LevelsFindARerouteOfTheLevelsAndKeepTheTransition) {
   EXPECT_LT(f_levels.rms_new, 0.7 * f_output.rms_new)
       << "levels " << f_levels.rms_new << ", output " << f_output.rms_new << " (k " << k_output
       << ")";
+}
+
+TEST(Recalibration, EachDirectionGetsItsOwnLevelScale) {
+  // A bend that grew the positive direction's friction 1.6x and the
+  // negative one's 1.3x. Per direction (the default) finds both; one common
+  // scale can only split the difference and fits the data worse.
+  const auto run = [](bool per_direction) {
+    Sweep plant(1.0, 0.6, 0.5);
+    plant.set_plant_level_scales(1.6, 1.3);
+    RecalibrationConfig config;
+    config.per_direction = per_direction;
+    CalibRig rig = CalibRig::levels(std::move(plant), config);
+    rig.run(1.0);
+    rig.calib.request(1);
+    rig.run(8.0);  // collect 5 s, identify, ramp in
+    EXPECT_EQ(rig.calib.state(), CalibrationState::kApplied) << to_string(rig.calib.reason());
+    return std::tuple{rig.calib.figures(0), rig.calib.applied_scale(0, false),
+                      rig.calib.applied_scale(0, true)};
+  };
+  const auto [both, applied_positive, applied_negative] = run(true);
+  EXPECT_NEAR(both.scale_positive, 1.6, 0.03);
+  EXPECT_NEAR(both.scale_negative, 1.3, 0.03);
+  EXPECT_NEAR(applied_positive, both.scale_positive, 1e-12);
+  EXPECT_NEAR(applied_negative, both.scale_negative, 1e-12);
+  EXPECT_LT(both.rms_new, 0.0045);  // about the sensor noise (3 mN m)
+  EXPECT_LT(both.rms_new, 0.8 * both.rms_common);
+  const auto common = std::get<0>(run(false));
+  EXPECT_DOUBLE_EQ(common.scale_positive, common.scale_negative);
+  EXPECT_GT(common.scale, 1.3);
+  EXPECT_LT(common.scale, 1.6);
+  EXPECT_DOUBLE_EQ(common.rms_new, common.rms_common);
+  EXPECT_LT(both.rms_new, 0.8 * common.rms_new);
 }
 
 TEST(Recalibration, LevelsComeInWithoutAJumpInFriction) {

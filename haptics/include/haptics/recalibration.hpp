@@ -5,11 +5,14 @@
 // Re-routing the endoscope changes the sheaths' wrap and so the capstan
 // friction: mostly a common scale of the model's sliding levels, while the
 // stiffness of a reversal's transition (the tendon's own elasticity, theta)
-// stays. Recalibration re-identifies that one scale per joint and applies it
-// to the model's levels (RecalibrationScale::kLevels, FrictionDynamics::
-// set_level_scale: the state and so the friction of the instant stay, no
-// jump), or, for models without a level, to the model's output (kOutput:
-// F = gamma z scaled, which scales theta with the levels):
+// stays. Each direction's level lives in its own sheath of the pair, and a
+// bend wraps the two by different amounts, so recalibration re-identifies
+// the levels' scale per direction of sliding (`per_direction`, the default;
+// else one common scale) and applies them to the model's levels
+// (RecalibrationScale::kLevels, FrictionDynamics::set_level_scales: the state
+// and so the friction of the instant stay, no jump), or, for models without
+// a level, one common scale to the model's output (kOutput: F = gamma z
+// scaled, which scales theta with the levels):
 //
 //  * the loop (tick, estimate): applies the scale, ramping it towards a new
 //    target at `ramp_per_s` (no jump in rendered torque), runs the drift
@@ -79,13 +82,20 @@ struct RecalibrationConfig {
   double min_scale = 0.25;        ///< plausible friction scales
   double max_scale = 4.0;
   double ramp_per_s = 0.5;  ///< applied scale moves towards the new one at this rate
+  /// kLevels: a scale for each direction of sliding (xd >= 0, xd < 0), fitted
+  /// from the common one; false: one scale for both.
+  bool per_direction = true;
   /// Samples kept per joint (slave samples; allocated once).
   std::size_t capacity = 12000;
 };
 
 /// What one request produced, per joint (written by the worker).
 struct CalibrationFigures {
-  double scale = 1.0;      ///< the scale found
+  double scale = 1.0;      ///< the scale found: the mean of the two directions'
+  double scale_positive = 1.0;  ///< the levels' scale sliding xd >= 0 (kLevels)
+  double scale_negative = 1.0;  ///< sliding xd < 0; both = scale when common
+  double scale_common = 1.0;    ///< the best single scale (as without per_direction)
+  double rms_common = 0.0;      ///< the residual at scale_common, N m
   double rms_old = 0.0;    ///< residual tau_in - s R F with the scale in use, N m
   double rms_new = 0.0;    ///< with the scale found
   double span_rad = 0.0;   ///< stroke of the input angle
@@ -116,9 +126,17 @@ class Recalibration {
   /// up the worker's result and ramps the applied scales. `button`: the
   /// master's calibrate button (a press starts a request for every joint).
   void on_tick(double now_s, double dt, bool button) noexcept;
-  double applied_scale(int joint) const noexcept { return applied_[idx(joint)]; }
+  /// The applied scale: the mean of the two directions' (they are equal
+  /// unless per_direction found them apart).
+  double applied_scale(int joint) const noexcept {
+    return 0.5 * (applied_[idx(joint)][0] + applied_[idx(joint)][1]);
+  }
+  /// The applied scale of the levels sliding positive (xd >= 0) / negative.
+  double applied_scale(int joint, bool negative) const noexcept {
+    return applied_[idx(joint)][negative ? 1 : 0];
+  }
   /// True when joint's scale goes to its model's levels: the loop then sets
-  /// applied_scale() on the joint's estimator before each update, and
+  /// the applied scales on the joint's estimator before each update, and
   /// on_estimate() leaves the estimate as the model made it.
   bool scales_levels(int joint) const noexcept { return level_mode_[idx(joint)]; }
   const DriftMonitor& drift(int joint) const noexcept { return drift_[idx(joint)]; }
@@ -149,8 +167,8 @@ class Recalibration {
   double drift_scale(int joint) const noexcept {
     return drift_scale_[idx(joint)].load(std::memory_order_relaxed);
   }
-  double target_scale(int joint) const noexcept {
-    return target_[idx(joint)].load(std::memory_order_relaxed);
+  double target_scale(int joint, bool negative = false) const noexcept {
+    return target_[idx(joint)][negative ? 1 : 0].load(std::memory_order_relaxed);
   }
   int joints() const noexcept { return joints_; }
   const RecalibrationConfig& config() const noexcept { return config_; }
@@ -162,15 +180,18 @@ class Recalibration {
   };
   static std::size_t idx(int j) noexcept { return static_cast<std::size_t>(j); }
   void identify_joint(int j, CalibrationReason& why, CalibrationFigures& fig);
-  // kLevels: the scale that best replays the collected samples (and the
-  // residuals at it and at the scale in use).
+  // kLevels: the scales that best replay the collected samples (and the
+  // residuals at them and at the scales in use).
   void fit_level_scale(int j, CalibrationFigures& fig);
+  // The replay's sum of squared residuals with the levels scaled by (k+, k-).
+  double replay_sse(int j, double k_positive, double k_negative, std::size_t& scored);
 
   int joints_;
   RecalibrationConfig config_;
   std::array<DriftMonitor, kMaxJoints> drift_;
-  std::array<double, kMaxJoints> applied_{};
-  std::array<std::atomic<double>, kMaxJoints> target_{};
+  // Per joint, [0]: sliding positive, [1]: negative (equal for kOutput).
+  std::array<std::array<double, 2>, kMaxJoints> applied_{};
+  std::array<std::array<std::atomic<double>, 2>, kMaxJoints> target_{};
   std::array<std::atomic<double>, kMaxJoints> drift_scale_{};
   std::array<std::vector<Sample>, kMaxJoints> buffer_;  // capacity reserved once
   std::array<bool, kMaxJoints> level_mode_{};
@@ -178,7 +199,7 @@ class Recalibration {
   // The worker's copies of the joints' models (kLevels), used only by it.
   std::vector<std::unique_ptr<estimator::FrictionModel>> replicas_;
   std::array<std::size_t, kMaxJoints> count_{};
-  std::array<double, kMaxJoints> scale_at_collect_{};     // the scales in use, for rms_old
+  std::array<std::array<double, 2>, kMaxJoints> scale_at_collect_{};  // in use, for rms_old
   std::array<CalibrationFigures, kMaxJoints> figures_{};  // worker writes, read after results_
 
   std::atomic<std::uint32_t> requested_{0};
