@@ -30,8 +30,11 @@ applied = [e for e in events if e["kind"] == "applied" and e["joint"] == 0]
 refused = [e for e in events if e["kind"] == "refused"]
 t_applied = applied[0]["t_s"] if applied else math.inf
 scale = applied[0]["scale"] if applied else 1.0
-# After the recalibration the scale ramps in at RAMP_PER_S: judge from its end.
-t_settled = t_applied + abs(scale - 1.0) / ramp
+# After the recalibration each direction's scale ramps in at RAMP_PER_S:
+# judge from the end of the longer ramp.
+directions = [applied[0].get(k) for k in ("scale_positive", "scale_negative")] if applied else []
+longest = max([abs(k - 1.0) for k in directions if k is not None] + [abs(scale - 1.0)])
+t_settled = t_applied + longest / ramp
 
 
 def phase(lo, hi):
@@ -56,6 +59,39 @@ def phase(lo, hi):
             "contact_rmse_nm": math.sqrt(sq_contact / n_contact) if n_contact else None}
 
 
+def presses():
+    """Each press (the slave's indentation > 0 for over 0.3 s) with the error
+    over it and 0.5 s either side: the phases' rms mixes presses, sweeps and
+    rests in different shares, this compares like with like."""
+    out, start = [], None
+    for r in trace:
+        if r["state"] != "1":
+            continue
+        t, d = float(r["t"]), float(r["indentation_0"])
+        if d > 0 and start is None:
+            start = t
+        elif not d > 0 and start is not None and not math.isnan(d):
+            if t - start > 0.3:
+                out.append((start, t))
+            start = None
+    rows_out = []
+    for lo, hi in out:
+        sq, n, peak = 0.0, 0, 0.0
+        for r in trace:
+            t = float(r["t"])
+            if not (lo - 0.5 <= t < hi + 0.5) or r["state"] != "1":
+                continue
+            true, est = float(r["true_tau_out_0"]), float(r["tau_est_0"])
+            if math.isnan(true) or math.isnan(est):
+                continue
+            sq += (est - true) ** 2
+            n += 1
+            peak = max(peak, abs(true))
+        rows_out.append({"from_s": lo, "to_s": hi, "peak_nm": peak,
+                         "rmse_nm": math.sqrt(sq / n) if n else None})
+    return rows_out
+
+
 end = float(trace[-1]["t"])
 phases = {"before": phase(0.0, t_reroute), "after": phase(t_reroute, min(t_applied, end)),
           "recalibrated": phase(t_settled, end) if applied else None}
@@ -73,7 +109,12 @@ report["reroute"] = {
     "after_over_before": ratio(a, b, "rmse_nm"),
     "recalibrated_over_before": ratio(c, b, "rmse_nm"),
     "contact_recalibrated_over_before": ratio(c, b, "contact_rmse_nm"),
+    "presses": presses(),
 }
+for p in report["reroute"]["presses"]:
+    p["phase"] = ("before" if p["to_s"] < t_reroute else
+                  "recalibrated" if p["from_s"] >= t_settled else
+                  "after" if p["to_s"] < t_applied else "mixed")
 tmp = report_path + ".tmp"
 with open(tmp, "w") as f:
     json.dump(report, f, indent=2)
@@ -96,6 +137,9 @@ print(f"   re-route at {t_reroute:.1f} s (wrap {wrap} rad); drift alarm "
 print(f"   joint 0 distal-torque error: before {fmt(b)}")
 print(f"                                after  {fmt(a)}")
 print(f"                        recalibrated  {fmt(c)}")
+for p in report["reroute"]["presses"]:
+    print(f"     press {p['from_s']:5.1f}-{p['to_s']:5.1f} s ({p['phase']}, peak {p['peak_nm']:.3f} N m): "
+          f"rmse {p['rmse_nm']:.4f} N m" if p["rmse_nm"] is not None else "no data")
 if report["reroute"]["recalibrated_over_before"]:
     print(f"   recalibrated / before: {report['reroute']['recalibrated_over_before']:.2f} "
           f"(target <= 1.2); after / before {report['reroute']['after_over_before']:.2f}")

@@ -8,6 +8,7 @@
 #include <cstdarg>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,9 @@ struct CalibrationEvent {
   int joint;         ///< -1: every joint concerned
   double scale;      ///< drift: the scale the data ask for; applied: the new scale
   std::string detail;
+  /// applied: the levels' scales sliding positive / negative; NaN otherwise.
+  double scale_positive = std::numeric_limits<double>::quiet_NaN();
+  double scale_negative = std::numeric_limits<double>::quiet_NaN();
 };
 
 class CalibrationLog {
@@ -75,7 +79,7 @@ class CalibrationLog {
             "common scale %.4f; stroke %.2f rad); ramping in at %.2f/s",
             t, j, f.scale, f.scale_positive, f.scale_negative, f.scale_common, f.rms_old, f.rms_new,
             f.samples, f.rms_common, f.span_rad, calib_.config().ramp_per_s);
-        events_.push_back({t, "applied", j, f.scale, ""});
+        events_.push_back({t, "applied", j, f.scale, "", f.scale_positive, f.scale_negative});
       }
       return;
     }

@@ -496,9 +496,13 @@ void write_trace_and_report(const haptics::HapticLoop& loop, haptics::TraceSpool
   if (cfg.evaluation.report.empty()) return;
   auto report = haptics::evaluate(loop, recorded, cfg);
   for (const auto& e : calibration.events())
-    report.calibration.push_back({e.t_s, e.kind, e.joint, e.scale, e.detail});
-  for (int j = 0; j < cfg.loop.joints; ++j)
+    report.calibration.push_back(
+        {e.t_s, e.kind, e.joint, e.scale, e.detail, e.scale_positive, e.scale_negative});
+  for (int j = 0; j < cfg.loop.joints; ++j) {
     report.friction_scale.push_back(loop.calibration().applied_scale(j));
+    report.friction_scale_positive.push_back(loop.calibration().applied_scale(j, false));
+    report.friction_scale_negative.push_back(loop.calibration().applied_scale(j, true));
+  }
   haptics::write_report(report, cfg.evaluation.report);
   if (!quiet) std::cerr << haptics::format_report(report);
 }

@@ -232,8 +232,13 @@ std::string report_to_json(const EvaluationReport& r) {
                       {"kind", e.kind},
                       {"joint", e.joint},
                       {"scale", num(e.scale)},
+                      {"scale_positive", num(e.scale_positive)},
+                      {"scale_negative", num(e.scale_negative)},
                       {"reason", e.reason}});
-  doc["calibration"] = {{"events", events}, {"friction_scale", r.friction_scale}};
+  doc["calibration"] = {{"events", events},
+                        {"friction_scale", r.friction_scale},
+                        {"friction_scale_positive", r.friction_scale_positive},
+                        {"friction_scale_negative", r.friction_scale_negative}};
   return doc.dump(2) + "\n";
 }
 

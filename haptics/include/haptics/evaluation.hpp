@@ -5,6 +5,7 @@
 // beside the true values. Written as the demo report (docs/data-formats.md).
 
 #include <string>
+#include <limits>
 #include <vector>
 
 #include "haptics/haptic_loop.hpp"
@@ -63,6 +64,10 @@ struct CalibrationRecord {
   int joint = -1;      ///< -1: every joint concerned
   double scale = 1.0;  ///< drift: the scale the data ask for; applied: the new scale
   std::string reason;  ///< refused: why
+  /// applied: the levels' scales sliding positive / negative (both = scale
+  /// when one common scale was fitted); NaN for the other kinds.
+  double scale_positive = std::numeric_limits<double>::quiet_NaN();
+  double scale_negative = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct EvaluationReport {
@@ -76,7 +81,9 @@ struct EvaluationReport {
   std::vector<JointEvaluation> joints;
   Discrimination discrimination;
   std::vector<CalibrationRecord> calibration;  ///< filled by the server (report "calibration")
-  std::vector<double> friction_scale;          ///< per joint, at the end
+  std::vector<double> friction_scale;          ///< per joint, at the end (mean of the two directions)
+  std::vector<double> friction_scale_positive;  ///< per joint, at the end, sliding xd >= 0
+  std::vector<double> friction_scale_negative;  ///< per joint, at the end, sliding xd < 0
 };
 
 EvaluationReport evaluate(const HapticLoop& loop, const Trace& trace, const ServerConfig& config);
