@@ -66,17 +66,27 @@ void Differentiator::build_gain_table() {
     warm_a = &pa;
     warm_s = &ps;
     const double sd = std::sqrt(pa[2][2]);
-    gains_[k] = {kv,
-                 ka,
-                 ks,
-                 use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])) : 0.0,
-                 1.0 / (cfg_.slow_consistency * sd),
-                 sd,
-                 1.0 / (cfg_.smooth_sigmas * sd)};
+    GainRow& row = gains_[k].at;
+    for (std::size_t i = 0; i < 3; ++i) {
+      row[kGainPairs + 2 * i] = kv[i];
+      row[kGainPairs + 2 * i + 1] = ks[i];
+    }
+    for (std::size_t i = 0; i < 4; ++i)
+      row[kGainAcc + i] = ka[i];
+    row[kSlowInvWidth] = use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])) : 0.0;
+    row[kInvConsistency] = 1.0 / (cfg_.slow_consistency * sd);
+    row[kAccSd] = sd;
+    row[kInvWidth] = 1.0 / (cfg_.smooth_sigmas * sd);
+  }
+  // The last node has no next one: a step of 0 keeps dt past it at its row.
+  for (std::size_t k = 0; k < n; ++k) {
+    const GainRow& next = gains_[std::min(k + 1, n - 1)].at;
+    for (std::size_t i = 0; i < kGainFields; ++i)
+      gains_[k].step[i] = next[i] - gains_[k].at[i];
   }
 }
 
-inline Differentiator::GainEntry Differentiator::gain_for(double dt) const noexcept {
+inline Differentiator::GainRow Differentiator::gain_for(double dt) const noexcept {
   // Linear interpolation between the grid's neighbours of dt.
   double pos;
   if (dt <= kFineEnd) {
@@ -87,22 +97,54 @@ inline Differentiator::GainEntry Differentiator::gain_for(double dt) const noexc
   const double last = static_cast<double>(gains_.size() - 1);
   pos = std::clamp(pos, 0.0, last);
   const auto k = static_cast<std::size_t>(pos);
-  const std::size_t k1 = std::min(k + 1, gains_.size() - 1);
   const double w = pos - static_cast<double>(k);
-  const GainEntry& a = gains_[k];
-  const GainEntry& b = gains_[k1];
-  GainEntry g;
-  for (std::size_t i = 0; i < 3; ++i)
-    g.velocity[i] = a.velocity[i] + w * (b.velocity[i] - a.velocity[i]);
-  for (std::size_t i = 0; i < 4; ++i)
-    g.acceleration[i] = a.acceleration[i] + w * (b.acceleration[i] - a.acceleration[i]);
-  for (std::size_t i = 0; i < 3; ++i)
-    g.slow[i] = a.slow[i] + w * (b.slow[i] - a.slow[i]);
-  g.slow_inv_width = a.slow_inv_width + w * (b.slow_inv_width - a.slow_inv_width);
-  g.inv_consistency = a.inv_consistency + w * (b.inv_consistency - a.inv_consistency);
-  g.acc_sd = a.acc_sd + w * (b.acc_sd - a.acc_sd);
-  g.inv_width = a.inv_width + w * (b.inv_width - a.inv_width);
+  const GainNode& node = gains_[k];
+  GainRow g;
+  for (std::size_t i = 0; i < kGainFields; ++i)
+    g[i] = node.at[i] + w * node.step[i];
   return g;
+}
+
+void Differentiator::enter_steady() noexcept {
+  for (std::size_t i = 0; i < 3; ++i) {
+    pair_state_[2 * i] = velocity_.state()[i];
+    pair_state_[2 * i + 1] = slow_.state()[i];
+  }
+  acc_state_ = acceleration_.state();
+  steady_ = true;
+}
+
+// PolyKalman::update_with_gain for the three channels at once, operation for
+// operation (the same results, bit for bit; test_differentiator.cpp pins
+// it): F(dt) is formed once for all three, and the velocity and slow
+// channels run as pairs, which the compiler turns into two-wide vector
+// operations.
+inline void Differentiator::steady_step(double dt, double z, const GainRow& g) noexcept {
+  // PolyKalman's taylor(): c[k] = c[k - 1] dt / k.
+  const double c1 = dt;
+  const double c2 = c1 * dt * 0.5;
+  const double c3 = c2 * dt * (1.0 / 3.0);
+  // PolyKalman's predicted() sums from 0.0, the first term times c[0] = 1.
+  std::array<double, 6> p;
+  for (std::size_t l = 0; l < 2; ++l) {
+    const double s0 = pair_state_[l], s1 = pair_state_[2 + l], s2 = pair_state_[4 + l];
+    p[l] = 0.0 + s0 + c1 * s1 + c2 * s2;
+    p[2 + l] = 0.0 + s1 + c1 * s2;
+    p[4 + l] = 0.0 + s2;
+  }
+  std::array<double, 2> innovation;
+  for (std::size_t l = 0; l < 2; ++l)
+    innovation[l] = z - p[l];
+  for (std::size_t i = 0; i < 6; ++i)
+    pair_state_[i] = p[i] + g[kGainPairs + i] * innovation[i & 1];
+
+  const std::array<double, 4>& s = acc_state_;
+  const std::array<double, 4> a = {0.0 + s[0] + c1 * s[1] + c2 * s[2] + c3 * s[3],
+                                   0.0 + s[1] + c1 * s[2] + c2 * s[3], 0.0 + s[2] + c1 * s[3],
+                                   0.0 + s[3]};
+  const double acc_innovation = z - a[0];
+  for (std::size_t i = 0; i < 4; ++i)
+    acc_state_[i] = a[i] + g[kGainAcc + i] * acc_innovation;
 }
 
 void Differentiator::reset() noexcept {
@@ -122,10 +164,11 @@ void Differentiator::start(double t, double x) noexcept {
   last_x_ = x;
   still_ = 0.0;
   settling_ = kSettlingSamples;
+  steady_ = false;
   out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
 }
 
-inline double Differentiator::decide_sign(double xdd, double sd, double inv_width,
+inline double Differentiator::decide_sign(double xdd, double slow_xdd, double sd, double inv_width,
                                           double slow_inv_width, double inv_consistency,
                                           double dt) noexcept {
   // At rest the true acceleration is exactly 0 and the model's state must
@@ -146,7 +189,6 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
     // with a fraction of the noise, tells its sign: in creeping motion the
     // fast channel's noise alone would flip eq. (4)'s drive at random.
     // Where they disagree (a reversal, a stop) the slow one lags: fast decides.
-    const double slow_xdd = slow_.state()[2];
     const double d = std::min(1.0, std::fabs(xdd - slow_xdd) * inv_consistency);
     const double slow = std::clamp(slow_xdd * slow_inv_width, -1.0, 1.0);
     return d * d * fast + (1.0 - d * d) * slow;
@@ -183,6 +225,7 @@ Derivatives Differentiator::update(double t, double x) noexcept {
   }
   t_ = t;
   double sd, inv_width, slow_inv_width, inv_consistency;
+  double x_f, xd, xdd, slow_xdd;
   if (cfg_.exact_covariance || settling_ > 0) {
     // The full recursion: always, or while the filters settle from their
     // start-up prior (the steady-state gains would converge more slowly).
@@ -195,21 +238,29 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     slow_inv_width =
         use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
     inv_consistency = 1.0 / (cfg_.slow_consistency * sd);
+    x_f = velocity_.state()[0];
+    xd = velocity_.state()[1];
+    xdd = acceleration_.state()[2];
+    slow_xdd = slow_.state()[2];
   } else {
-    const GainEntry g = gain_for(dt);
-    velocity_.update_with_gain(dt, x, g.velocity);
-    acceleration_.update_with_gain(dt, x, g.acceleration);
-    if (use_slow_) slow_.update_with_gain(dt, x, g.slow);
-    sd = g.acc_sd;
-    inv_width = g.inv_width;
-    slow_inv_width = g.slow_inv_width;
-    inv_consistency = g.inv_consistency;
+    if (!steady_) enter_steady();
+    const GainRow g = gain_for(dt);
+    // Without the slow channel its gains are 0: its lane runs idle.
+    steady_step(dt, x, g);
+    sd = g[kAccSd];
+    inv_width = g[kInvWidth];
+    slow_inv_width = g[kSlowInvWidth];
+    inv_consistency = g[kInvConsistency];
+    x_f = pair_state_[0];
+    xd = pair_state_[2];
+    xdd = acc_state_[2];
+    slow_xdd = pair_state_[5];
   }
   still_ = x == last_x_ ? still_ + dt : 0.0;
   last_x_ = x;
-  const double xdd = acceleration_.state()[2];
-  const double sign = decide_sign(xdd, sd, inv_width, slow_inv_width, inv_consistency, dt);
-  out_ = {velocity_.state()[0], velocity_.state()[1], xdd, sign, sd, true};
+  const double sign =
+      decide_sign(xdd, slow_xdd, sd, inv_width, slow_inv_width, inv_consistency, dt);
+  out_ = {x_f, xd, xdd, sign, sd, true};
   return out_;
 }
 
