@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace tsmh::estimator {
 namespace {
@@ -47,6 +48,7 @@ void Differentiator::build_gain_table() {
   coarse_inverse_step_ = kCoarse / std::max(1e-9, cfg_.max_gap - kFineEnd);
   const std::size_t n = kFine + (cfg_.max_gap > kFineEnd ? kCoarse : 0);
   gains_.resize(n);
+  gain_last_ = static_cast<double>(n - 1);
   // Each fixed point starts from the previous one: a few hundred steps each.
   const PolyKalman<3>::Mat* warm_v = nullptr;
   const PolyKalman<4>::Mat* warm_a = nullptr;
@@ -86,16 +88,38 @@ void Differentiator::build_gain_table() {
   }
 }
 
-inline Differentiator::GainRow Differentiator::gain_for(double dt) const noexcept {
-  // Linear interpolation between the grid's neighbours of dt.
+// Two doubles operated on together (an SSE2 register on x86-64; GCC and
+// Clang lower it to scalar code on targets without one). The arithmetic is
+// element-wise IEEE: each lane computes exactly what the scalar code would.
+using Pair = double __attribute__((vector_size(16)));
+
+inline Pair load_pair(const double* p) noexcept {
+  Pair v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+inline void store_pair(double* p, Pair v) noexcept {
+  std::memcpy(p, &v, sizeof v);
+}
+
+inline Pair splat(double v) noexcept {
+  return Pair{v, v};
+}
+
+inline double Differentiator::gain_position(double dt) const noexcept {
   double pos;
   if (dt <= kFineEnd) {
     pos = dt * (1.0 / kFineStep) - 1.0;
   } else {
     pos = static_cast<double>(kFine) - 1.0 + (dt - kFineEnd) * coarse_inverse_step_;
   }
-  const double last = static_cast<double>(gains_.size() - 1);
-  pos = std::clamp(pos, 0.0, last);
+  return std::clamp(pos, 0.0, gain_last_);
+}
+
+Differentiator::GainRow Differentiator::gain_for(double dt) const noexcept {
+  // Linear interpolation between the grid's neighbours of dt.
+  const double pos = gain_position(dt);
   const auto k = static_cast<std::size_t>(pos);
   const double w = pos - static_cast<double>(k);
   const GainNode& node = gains_[k];
@@ -114,37 +138,57 @@ void Differentiator::enter_steady() noexcept {
   steady_ = true;
 }
 
-// PolyKalman::update_with_gain for the three channels at once, operation for
-// operation (the same results, bit for bit; test_differentiator.cpp pins
-// it): F(dt) is formed once for all three, and the velocity and slow
-// channels run as pairs, which the compiler turns into two-wide vector
-// operations.
-inline void Differentiator::steady_step(double dt, double z, const GainRow& g) noexcept {
-  // PolyKalman's taylor(): c[k] = c[k - 1] dt / k.
+// gain_for() and PolyKalman::update_with_gain for the three channels at
+// once, operation for operation (the same results, bit for bit;
+// test_differentiator.cpp pins it), written for the processor rather than
+// per channel: F(dt) is formed once, the velocity and slow channels (the
+// same F) run side by side as Pairs, as do the interpolation of the gains
+// and most of the acceleration channel; nothing goes through memory but the
+// state.
+inline Differentiator::SignScales Differentiator::steady_step(double dt, double z) noexcept {
+  // The interval's gains (gain_for()): node + w (next node - node).
+  const double pos = gain_position(dt);
+  // pos is in [0, gains_.size() - 1]: the int conversion is exact and cheaper.
+  const int k = static_cast<int>(pos);
+  const Pair w = splat(pos - static_cast<double>(k));
+  const GainNode& node = gains_[static_cast<std::size_t>(k)];
+  const auto gain = [&](std::size_t i) {
+    return load_pair(&node.at[i]) + w * load_pair(&node.step[i]);
+  };
+  // PolyKalman's taylor(): c[k] = c[k - 1] dt / k; its predicted() sums
+  // from 0.0, the first term times c[0] = 1.
   const double c1 = dt;
   const double c2 = c1 * dt * 0.5;
   const double c3 = c2 * dt * (1.0 / 3.0);
-  // PolyKalman's predicted() sums from 0.0, the first term times c[0] = 1.
-  std::array<double, 6> p;
-  for (std::size_t l = 0; l < 2; ++l) {
-    const double s0 = pair_state_[l], s1 = pair_state_[2 + l], s2 = pair_state_[4 + l];
-    p[l] = 0.0 + s0 + c1 * s1 + c2 * s2;
-    p[2 + l] = 0.0 + s1 + c1 * s2;
-    p[4 + l] = 0.0 + s2;
-  }
-  std::array<double, 2> innovation;
-  for (std::size_t l = 0; l < 2; ++l)
-    innovation[l] = z - p[l];
-  for (std::size_t i = 0; i < 6; ++i)
-    pair_state_[i] = p[i] + g[kGainPairs + i] * innovation[i & 1];
+  const Pair zero = splat(0.0), c1s = splat(c1), c2s = splat(c2), zs = splat(z);
 
-  const std::array<double, 4>& s = acc_state_;
-  const std::array<double, 4> a = {0.0 + s[0] + c1 * s[1] + c2 * s[2] + c3 * s[3],
-                                   0.0 + s[1] + c1 * s[2] + c2 * s[3], 0.0 + s[2] + c1 * s[3],
-                                   0.0 + s[3]};
-  const double acc_innovation = z - a[0];
-  for (std::size_t i = 0; i < 4; ++i)
-    acc_state_[i] = a[i] + g[kGainAcc + i] * acc_innovation;
+  // Velocity and slow channel: {velocity[i], slow[i]}.
+  const Pair s0 = load_pair(&pair_state_[0]), s1 = load_pair(&pair_state_[2]),
+             s2 = load_pair(&pair_state_[4]);
+  const Pair p0 = zero + s0 + c1s * s1 + c2s * s2;
+  const Pair p1 = zero + s1 + c1s * s2;
+  const Pair p2 = zero + s2;
+  const Pair innovation = zs - p0;
+  store_pair(&pair_state_[0], p0 + gain(kGainPairs) * innovation);
+  store_pair(&pair_state_[2], p1 + gain(kGainPairs + 2) * innovation);
+  store_pair(&pair_state_[4], p2 + gain(kGainPairs + 4) * innovation);
+
+  // Acceleration channel: {a[0], a[1]} and {a[2], a[3]}; the terms lane 1
+  // has no counterpart for are added to lane 0 alone, in their place in
+  // the sum.
+  const Pair a01 = load_pair(&acc_state_[0]), a23 = load_pair(&acc_state_[2]);
+  const Pair a12 = Pair{a01[1], a23[0]};
+  const double a3 = a23[1];
+  Pair q01 = zero + a01 + c1s * a12 + c2s * a23;
+  q01[0] += c3 * a3;
+  Pair q23 = zero + a23;
+  q23[0] += c1 * a3;
+  const Pair acc_innovation = splat(z - q01[0]);
+  store_pair(&acc_state_[0], q01 + gain(kGainAcc) * acc_innovation);
+  store_pair(&acc_state_[2], q23 + gain(kGainAcc + 2) * acc_innovation);
+
+  const Pair slow_consistency = gain(kSlowInvWidth), sd_width = gain(kAccSd);
+  return {sd_width[0], sd_width[1], slow_consistency[0], slow_consistency[1]};
 }
 
 void Differentiator::reset() noexcept {
@@ -244,13 +288,12 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     slow_xdd = slow_.state()[2];
   } else {
     if (!steady_) enter_steady();
-    const GainRow g = gain_for(dt);
     // Without the slow channel its gains are 0: its lane runs idle.
-    steady_step(dt, x, g);
-    sd = g[kAccSd];
-    inv_width = g[kInvWidth];
-    slow_inv_width = g[kSlowInvWidth];
-    inv_consistency = g[kInvConsistency];
+    const SignScales g = steady_step(dt, x);
+    sd = g.acc_sd;
+    inv_width = g.inv_width;
+    slow_inv_width = g.slow_inv_width;
+    inv_consistency = g.inv_consistency;
     x_f = pair_state_[0];
     xd = pair_state_[2];
     xdd = acc_state_[2];

@@ -162,13 +162,20 @@ class Differentiator {
   int settling_ = 0;  // samples of full recursion left after a (re)start
   void build_gain_table();
   double grid_dt(std::size_t k) const noexcept;
+  double gain_last_ = 0.0;  // gains_.size() - 1
+  double gain_position(double dt) const noexcept;
+  // The gains for the interval dt (interpolated between nodes); tests and
+  // diagnostics: the steady-state step forms them itself.
   GainRow gain_for(double dt) const noexcept;
+  struct SignScales {
+    double acc_sd, inv_width, slow_inv_width, inv_consistency;
+  };
   // The filters' state while the steady-state gains run: the velocity and
   // slow channels interleaved like their gains, then the acceleration
   // channel. The full recursion keeps it in the PolyKalman objects; it is
   // copied here once, when the gains take over (steady_).
   void enter_steady() noexcept;
-  void steady_step(double dt, double z, const GainRow& g) noexcept;
+  SignScales steady_step(double dt, double z) noexcept;
   alignas(16) std::array<double, 6> pair_state_{};
   alignas(16) std::array<double, 4> acc_state_{};
   bool steady_ = false;
