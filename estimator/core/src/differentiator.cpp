@@ -145,7 +145,7 @@ void Differentiator::enter_steady() noexcept {
 // same F) run side by side as Pairs, as do the interpolation of the gains
 // and most of the acceleration channel; nothing goes through memory but the
 // state.
-inline Differentiator::SignScales Differentiator::steady_step(double dt, double z) noexcept {
+inline Differentiator::Step Differentiator::steady_step(double dt, double z) noexcept {
   // The interval's gains (gain_for()): node + w (next node - node).
   const double pos = gain_position(dt);
   // pos is in [0, gains_.size() - 1]: the int conversion is exact and cheaper.
@@ -188,7 +188,16 @@ inline Differentiator::SignScales Differentiator::steady_step(double dt, double 
   store_pair(&acc_state_[2], q23 + gain(kGainAcc + 2) * acc_innovation);
 
   const Pair slow_consistency = gain(kSlowInvWidth), sd_width = gain(kAccSd);
-  return {sd_width[0], sd_width[1], slow_consistency[0], slow_consistency[1]};
+  Step step;
+  step.x = pair_state_[0];
+  step.xd = pair_state_[2];
+  step.xdd = acc_state_[2];
+  step.slow_xdd = pair_state_[5];
+  step.acc_sd = sd_width[0];
+  step.inv_width = sd_width[1];
+  step.slow_inv_width = slow_consistency[0];
+  step.inv_consistency = slow_consistency[1];
+  return step;
 }
 
 void Differentiator::reset() noexcept {
@@ -268,43 +277,42 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     return out_;
   }
   t_ = t;
-  double sd, inv_width, slow_inv_width, inv_consistency;
-  double x_f, xd, xdd, slow_xdd;
+  Step step;
   if (cfg_.exact_covariance || settling_ > 0) {
-    // The full recursion: always, or while the filters settle from their
-    // start-up prior (the steady-state gains would converge more slowly).
-    if (settling_ > 0) --settling_;
-    velocity_.update(dt, x);
-    acceleration_.update(dt, x);
-    sd = std::sqrt(acceleration_.covariance()[2][2]);
-    inv_width = 1.0 / (cfg_.smooth_sigmas * sd);
-    if (use_slow_) slow_.update(dt, x);
-    slow_inv_width =
-        use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
-    inv_consistency = 1.0 / (cfg_.slow_consistency * sd);
-    x_f = velocity_.state()[0];
-    xd = velocity_.state()[1];
-    xdd = acceleration_.state()[2];
-    slow_xdd = slow_.state()[2];
+    step = full_step(dt, x);
   } else {
     if (!steady_) enter_steady();
     // Without the slow channel its gains are 0: its lane runs idle.
-    const SignScales g = steady_step(dt, x);
-    sd = g.acc_sd;
-    inv_width = g.inv_width;
-    slow_inv_width = g.slow_inv_width;
-    inv_consistency = g.inv_consistency;
-    x_f = pair_state_[0];
-    xd = pair_state_[2];
-    xdd = acc_state_[2];
-    slow_xdd = pair_state_[5];
+    step = steady_step(dt, x);
   }
   still_ = x == last_x_ ? still_ + dt : 0.0;
   last_x_ = x;
-  const double sign =
-      decide_sign(xdd, slow_xdd, sd, inv_width, slow_inv_width, inv_consistency, dt);
-  out_ = {x_f, xd, xdd, sign, sd, true};
+  const double sign = decide_sign(step.xdd, step.slow_xdd, step.acc_sd, step.inv_width,
+                                  step.slow_inv_width, step.inv_consistency, dt);
+  out_ = {step.x, step.xd, step.xdd, sign, step.acc_sd, true};
   return out_;
+}
+
+// Out of line: the hot steady-state path of update() then needs no stack
+// frame for the covariance recursion's temporaries.
+[[gnu::noinline]] Differentiator::Step Differentiator::full_step(double dt, double x) noexcept {
+  // The full recursion: always, or while the filters settle from their
+  // start-up prior (the steady-state gains would converge more slowly).
+  if (settling_ > 0) --settling_;
+  velocity_.update(dt, x);
+  acceleration_.update(dt, x);
+  Step step;
+  step.acc_sd = std::sqrt(acceleration_.covariance()[2][2]);
+  step.inv_width = 1.0 / (cfg_.smooth_sigmas * step.acc_sd);
+  if (use_slow_) slow_.update(dt, x);
+  step.slow_inv_width =
+      use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
+  step.inv_consistency = 1.0 / (cfg_.slow_consistency * step.acc_sd);
+  step.x = velocity_.state()[0];
+  step.xd = velocity_.state()[1];
+  step.xdd = acceleration_.state()[2];
+  step.slow_xdd = slow_.state()[2];
+  return step;
 }
 
 }  // namespace tsmh::estimator

@@ -167,15 +167,18 @@ class Differentiator {
   // The gains for the interval dt (interpolated between nodes); tests and
   // diagnostics: the steady-state step forms them itself.
   GainRow gain_for(double dt) const noexcept;
-  struct SignScales {
+  // One sample's filtered values and what decide_sign() needs.
+  struct Step {
+    double x, xd, xdd, slow_xdd;
     double acc_sd, inv_width, slow_inv_width, inv_consistency;
   };
+  Step full_step(double dt, double x) noexcept;
   // The filters' state while the steady-state gains run: the velocity and
   // slow channels interleaved like their gains, then the acceleration
   // channel. The full recursion keeps it in the PolyKalman objects; it is
   // copied here once, when the gains take over (steady_).
   void enter_steady() noexcept;
-  SignScales steady_step(double dt, double z) noexcept;
+  Step steady_step(double dt, double z) noexcept;
   alignas(16) std::array<double, 6> pair_state_{};
   alignas(16) std::array<double, 4> acc_state_{};
   bool steady_ = false;
