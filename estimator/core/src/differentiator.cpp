@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 namespace tsmh::estimator {
@@ -289,7 +290,16 @@ Derivatives Differentiator::update(double t, double x) noexcept {
   last_x_ = x;
   const double sign = decide_sign(step.xdd, step.slow_xdd, step.acc_sd, step.inv_width,
                                   step.slow_inv_width, step.inv_consistency, dt);
-  out_ = {step.x, step.xd, step.xdd, sign, step.acc_sd, true};
+  // out_ written in 16-byte pairs from registers, the way it is copied to
+  // the result: field by field, GCC merged the copy into 16-byte loads of
+  // two 8-byte stores, which the processor cannot forward (a stall on the
+  // way from the sample to the model).
+  auto* bytes = reinterpret_cast<unsigned char*>(&out_);
+  const Pair position = {step.x, step.xd}, acceleration = {step.xdd, sign};
+  std::memcpy(bytes + offsetof(Derivatives, x), &position, sizeof position);
+  std::memcpy(bytes + offsetof(Derivatives, xdd), &acceleration, sizeof acceleration);
+  out_.acc_sd = step.acc_sd;
+  out_.valid = true;
   return out_;
 }
 
