@@ -130,6 +130,23 @@ Differentiator::GainRow Differentiator::gain_for(double dt) const noexcept {
   return g;
 }
 
+Differentiator::SteadyGains Differentiator::steady_gains(double dt) const noexcept {
+  SteadyGains out;
+  if (gains_.empty() || !(dt > 0.0)) return out;
+  const GainRow g = gain_for(dt);
+  for (std::size_t i = 0; i < 3; ++i) {
+    out.velocity[i] = g[kGainPairs + 2 * i];
+    out.slow[i] = g[kGainPairs + 2 * i + 1];
+  }
+  for (std::size_t i = 0; i < 4; ++i)
+    out.acceleration[i] = g[kGainAcc + i];
+  out.acc_sd = g[kAccSd];
+  out.inv_width = g[kInvWidth];
+  out.slow_inv_width = g[kSlowInvWidth];
+  out.inv_consistency = g[kInvConsistency];
+  return out;
+}
+
 void Differentiator::enter_steady() noexcept {
   for (std::size_t i = 0; i < 3; ++i) {
     pair_state_[2 * i] = velocity_.state()[i];

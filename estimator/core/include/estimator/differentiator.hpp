@@ -121,6 +121,20 @@ class Differentiator {
   void reset() noexcept;
 
   const DifferentiatorConfig& config() const { return cfg_; }
+
+  /// The steady-state gains for a sample interval dt > 0 as update() uses
+  /// them once the filters have settled (interpolated from the table; all 0
+  /// with exact_covariance). For tests and diagnostics: each channel then is
+  /// PolyKalman::update_with_gain with its gain (test_differentiator.cpp).
+  struct SteadyGains {
+    PolyKalman<3>::Vec velocity{}, slow{};
+    PolyKalman<4>::Vec acceleration{};
+    double acc_sd = 0.0;           ///< sd of xdd, rad/s^2
+    double inv_width = 0.0;        ///< 1 / (smooth_sigmas acc_sd)
+    double slow_inv_width = 0.0;   ///< 1 / (slow_sigmas slow sd); 0 without the slow channel
+    double inv_consistency = 0.0;  ///< 1 / (slow_consistency acc_sd)
+  };
+  SteadyGains steady_gains(double dt) const noexcept;
   const Derivatives& last() const { return out_; }
 
  private:
@@ -164,8 +178,8 @@ class Differentiator {
   double grid_dt(std::size_t k) const noexcept;
   double gain_last_ = 0.0;  // gains_.size() - 1
   double gain_position(double dt) const noexcept;
-  // The gains for the interval dt (interpolated between nodes); tests and
-  // diagnostics: the steady-state step forms them itself.
+  // The gains for the interval dt, interpolated between nodes (for
+  // steady_gains(); the steady-state step forms them itself).
   GainRow gain_for(double dt) const noexcept;
   // One sample's filtered values and what decide_sign() needs.
   struct Step {
