@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <numbers>
 #include <random>
 
@@ -233,6 +235,86 @@ TEST(Differentiator, ScheduledGainsMatchTheFullRecursionOnceSettled) {
   EXPECT_LT(worst_a, 0.5);  // rad/s^2, of 7.9 peak
   RecordProperty("rms_acceleration_difference", std::to_string(std::sqrt(se_a / n)));
   EXPECT_LT(std::sqrt(se_a / n), 0.1);  // below the estimate's own sd (0.16)
+}
+
+// The steady-state step runs the three channels fused, in vector pairs (the
+// 1 kHz loop's hot path); it must compute exactly what each channel's
+// PolyKalman::update_with_gain computes with the gains steady_gains() reports,
+// bit for bit, on uneven intervals across the table (fine and coarse part),
+// in all three sign modes and without the slow channel.
+TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
+  const auto same = [](double a, double b) {
+    std::uint64_t x, y;
+    std::memcpy(&x, &a, sizeof x);
+    std::memcpy(&y, &b, sizeof y);
+    return x == y;
+  };
+  for (const SignMode mode : {SignMode::kSmooth, SignMode::kSmoothFast, SignMode::kHard}) {
+    for (const double slow_psd : {1e-3, 0.0}) {
+      const DifferentiatorConfig cfg{.slow_jerk_psd = slow_psd, .sign_mode = mode};
+      Differentiator d(cfg);
+      const double r = cfg.quantum * cfg.quantum / 12.0;
+      PolyKalman<3> velocity(cfg.jerk_psd, r), slow(slow_psd > 0.0 ? slow_psd : 1.0, r);
+      PolyKalman<4> acceleration(cfg.snap_psd, r);
+      // A reproducible sequence of intervals (not std::uniform_*, whose
+      // output is the library's own): 0.3-1.7 ms, now and then 2-20 ms.
+      std::uint64_t lcg = 12345;
+      const auto uniform = [&lcg] {
+        lcg = lcg * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(lcg >> 11) * 0x1.0p-53;
+      };
+      double t = 100.0;
+      int mismatches = 0, steady = 0;
+      for (int i = 0; i < 20000; ++i) {
+        const double x = quantise(0.6 * std::sin(2.5 * t) + 0.2 * std::sin(8.2 * t));
+        const double dt =
+            uniform() < 0.02 ? 0.002 + 0.018 * uniform() : 0.3e-3 + 1.4e-3 * uniform();
+        const double t_prev = t;
+        if (i > 0) t += dt;
+        const Derivatives out = d.update(t, x);
+        if (i == 0) {
+          velocity.start(x, {0.0, 10.0, 100.0});
+          acceleration.start(x, {0.0, 10.0, 100.0, 1000.0});
+          slow.start(x, {0.0, 10.0, 100.0});
+          continue;
+        }
+        // The first 100 intervals run the full recursion (the settling).
+        if (i <= 100) {
+          velocity.update(t - t_prev, x);
+          acceleration.update(t - t_prev, x);
+          if (mode == SignMode::kSmooth && slow_psd > 0.0) slow.update(t - t_prev, x);
+          continue;
+        }
+        const auto g = d.steady_gains(t - t_prev);
+        velocity.update_with_gain(t - t_prev, x, g.velocity);
+        acceleration.update_with_gain(t - t_prev, x, g.acceleration);
+        slow.update_with_gain(t - t_prev, x, g.slow);
+        ++steady;
+        if (!same(out.x, velocity.state()[0]) || !same(out.xd, velocity.state()[1]) ||
+            !same(out.xdd, acceleration.state()[2]) || !same(out.acc_sd, g.acc_sd))
+          ++mismatches;
+        if (mode != SignMode::kHard) {
+          // Away from rest (the still_time rule decides there): the ramp.
+          const double xdd = acceleration.state()[2];
+          double sign = std::clamp(xdd * g.inv_width, -1.0, 1.0);
+          if (mode == SignMode::kSmooth && slow_psd > 0.0) {
+            const double s_xdd = slow.state()[2];
+            const double k = std::min(1.0, std::fabs(xdd - s_xdd) * g.inv_consistency);
+            sign = k * k * sign + (1.0 - k * k) * std::clamp(s_xdd * g.slow_inv_width, -1.0, 1.0);
+          }
+          if (out.acc_sign != 0.0 && !same(out.acc_sign, sign)) ++mismatches;
+        }
+      }
+      EXPECT_EQ(steady, 19899);
+      EXPECT_EQ(mismatches, 0) << "mode " << static_cast<int>(mode) << " slow " << slow_psd;
+    }
+  }
+}
+
+TEST(Differentiator, SteadyGainsAreZeroWithExactCovariance) {
+  const auto g = Differentiator(DifferentiatorConfig{.exact_covariance = true}).steady_gains(1e-3);
+  EXPECT_EQ(g.velocity[0], 0.0);
+  EXPECT_EQ(g.acc_sd, 0.0);
 }
 
 TEST(Differentiator, RejectsNonFiniteAndNonIncreasingTime) {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 
 namespace tsmh::estimator {
 namespace {
@@ -47,6 +49,7 @@ void Differentiator::build_gain_table() {
   coarse_inverse_step_ = kCoarse / std::max(1e-9, cfg_.max_gap - kFineEnd);
   const std::size_t n = kFine + (cfg_.max_gap > kFineEnd ? kCoarse : 0);
   gains_.resize(n);
+  gain_last_ = static_cast<double>(n - 1);
   // Each fixed point starts from the previous one: a few hundred steps each.
   const PolyKalman<3>::Mat* warm_v = nullptr;
   const PolyKalman<4>::Mat* warm_a = nullptr;
@@ -66,43 +69,153 @@ void Differentiator::build_gain_table() {
     warm_a = &pa;
     warm_s = &ps;
     const double sd = std::sqrt(pa[2][2]);
-    gains_[k] = {kv,
-                 ka,
-                 ks,
-                 use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])) : 0.0,
-                 1.0 / (cfg_.slow_consistency * sd),
-                 sd,
-                 1.0 / (cfg_.smooth_sigmas * sd)};
+    GainRow& row = gains_[k].at;
+    for (std::size_t i = 0; i < 3; ++i) {
+      row[kGainPairs + 2 * i] = kv[i];
+      row[kGainPairs + 2 * i + 1] = ks[i];
+    }
+    for (std::size_t i = 0; i < 4; ++i)
+      row[kGainAcc + i] = ka[i];
+    row[kSlowInvWidth] = use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])) : 0.0;
+    row[kInvConsistency] = 1.0 / (cfg_.slow_consistency * sd);
+    row[kAccSd] = sd;
+    row[kInvWidth] = 1.0 / (cfg_.smooth_sigmas * sd);
+  }
+  // The last node has no next one: a step of 0 keeps dt past it at its row.
+  for (std::size_t k = 0; k < n; ++k) {
+    const GainRow& next = gains_[std::min(k + 1, n - 1)].at;
+    for (std::size_t i = 0; i < kGainFields; ++i)
+      gains_[k].step[i] = next[i] - gains_[k].at[i];
   }
 }
 
-inline Differentiator::GainEntry Differentiator::gain_for(double dt) const noexcept {
-  // Linear interpolation between the grid's neighbours of dt.
+// Two doubles operated on together (an SSE2 register on x86-64; GCC and
+// Clang lower it to scalar code on targets without one). The arithmetic is
+// element-wise IEEE: each lane computes exactly what the scalar code would.
+using Pair = double __attribute__((vector_size(16)));
+
+inline Pair load_pair(const double* p) noexcept {
+  Pair v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+inline void store_pair(double* p, Pair v) noexcept {
+  std::memcpy(p, &v, sizeof v);
+}
+
+inline Pair splat(double v) noexcept {
+  return Pair{v, v};
+}
+
+inline double Differentiator::gain_position(double dt) const noexcept {
   double pos;
   if (dt <= kFineEnd) {
     pos = dt * (1.0 / kFineStep) - 1.0;
   } else {
     pos = static_cast<double>(kFine) - 1.0 + (dt - kFineEnd) * coarse_inverse_step_;
   }
-  const double last = static_cast<double>(gains_.size() - 1);
-  pos = std::clamp(pos, 0.0, last);
+  return std::clamp(pos, 0.0, gain_last_);
+}
+
+Differentiator::GainRow Differentiator::gain_for(double dt) const noexcept {
+  // Linear interpolation between the grid's neighbours of dt.
+  const double pos = gain_position(dt);
   const auto k = static_cast<std::size_t>(pos);
-  const std::size_t k1 = std::min(k + 1, gains_.size() - 1);
   const double w = pos - static_cast<double>(k);
-  const GainEntry& a = gains_[k];
-  const GainEntry& b = gains_[k1];
-  GainEntry g;
-  for (std::size_t i = 0; i < 3; ++i)
-    g.velocity[i] = a.velocity[i] + w * (b.velocity[i] - a.velocity[i]);
-  for (std::size_t i = 0; i < 4; ++i)
-    g.acceleration[i] = a.acceleration[i] + w * (b.acceleration[i] - a.acceleration[i]);
-  for (std::size_t i = 0; i < 3; ++i)
-    g.slow[i] = a.slow[i] + w * (b.slow[i] - a.slow[i]);
-  g.slow_inv_width = a.slow_inv_width + w * (b.slow_inv_width - a.slow_inv_width);
-  g.inv_consistency = a.inv_consistency + w * (b.inv_consistency - a.inv_consistency);
-  g.acc_sd = a.acc_sd + w * (b.acc_sd - a.acc_sd);
-  g.inv_width = a.inv_width + w * (b.inv_width - a.inv_width);
+  const GainNode& node = gains_[k];
+  GainRow g;
+  for (std::size_t i = 0; i < kGainFields; ++i)
+    g[i] = node.at[i] + w * node.step[i];
   return g;
+}
+
+Differentiator::SteadyGains Differentiator::steady_gains(double dt) const noexcept {
+  SteadyGains out;
+  if (gains_.empty() || !(dt > 0.0)) return out;
+  const GainRow g = gain_for(dt);
+  for (std::size_t i = 0; i < 3; ++i) {
+    out.velocity[i] = g[kGainPairs + 2 * i];
+    out.slow[i] = g[kGainPairs + 2 * i + 1];
+  }
+  for (std::size_t i = 0; i < 4; ++i)
+    out.acceleration[i] = g[kGainAcc + i];
+  out.acc_sd = g[kAccSd];
+  out.inv_width = g[kInvWidth];
+  out.slow_inv_width = g[kSlowInvWidth];
+  out.inv_consistency = g[kInvConsistency];
+  return out;
+}
+
+void Differentiator::enter_steady() noexcept {
+  for (std::size_t i = 0; i < 3; ++i) {
+    pair_state_[2 * i] = velocity_.state()[i];
+    pair_state_[2 * i + 1] = slow_.state()[i];
+  }
+  acc_state_ = acceleration_.state();
+  steady_ = true;
+}
+
+// gain_for() and PolyKalman::update_with_gain for the three channels at
+// once, operation for operation (the same results, bit for bit;
+// test_differentiator.cpp pins it), written for the processor rather than
+// per channel: F(dt) is formed once, the velocity and slow channels (the
+// same F) run side by side as Pairs, as do the interpolation of the gains
+// and most of the acceleration channel; nothing goes through memory but the
+// state.
+inline Differentiator::Step Differentiator::steady_step(double dt, double z) noexcept {
+  // The interval's gains (gain_for()): node + w (next node - node).
+  const double pos = gain_position(dt);
+  // pos is in [0, gains_.size() - 1]: the int conversion is exact and cheaper.
+  const int k = static_cast<int>(pos);
+  const Pair w = splat(pos - static_cast<double>(k));
+  const GainNode& node = gains_[static_cast<std::size_t>(k)];
+  const auto gain = [&](std::size_t i) {
+    return load_pair(&node.at[i]) + w * load_pair(&node.step[i]);
+  };
+  // PolyKalman's taylor(): c[k] = c[k - 1] dt / k; its predicted() sums
+  // from 0.0, the first term times c[0] = 1.
+  const double c1 = dt;
+  const double c2 = c1 * dt * 0.5;
+  const double c3 = c2 * dt * (1.0 / 3.0);
+  const Pair zero = splat(0.0), c1s = splat(c1), c2s = splat(c2), zs = splat(z);
+
+  // Velocity and slow channel: {velocity[i], slow[i]}.
+  const Pair s0 = load_pair(&pair_state_[0]), s1 = load_pair(&pair_state_[2]),
+             s2 = load_pair(&pair_state_[4]);
+  const Pair p0 = zero + s0 + c1s * s1 + c2s * s2;
+  const Pair p1 = zero + s1 + c1s * s2;
+  const Pair p2 = zero + s2;
+  const Pair innovation = zs - p0;
+  store_pair(&pair_state_[0], p0 + gain(kGainPairs) * innovation);
+  store_pair(&pair_state_[2], p1 + gain(kGainPairs + 2) * innovation);
+  store_pair(&pair_state_[4], p2 + gain(kGainPairs + 4) * innovation);
+
+  // Acceleration channel: {a[0], a[1]} and {a[2], a[3]}; the terms lane 1
+  // has no counterpart for are added to lane 0 alone, in their place in
+  // the sum.
+  const Pair a01 = load_pair(&acc_state_[0]), a23 = load_pair(&acc_state_[2]);
+  const Pair a12 = Pair{a01[1], a23[0]};
+  const double a3 = a23[1];
+  Pair q01 = zero + a01 + c1s * a12 + c2s * a23;
+  q01[0] += c3 * a3;
+  Pair q23 = zero + a23;
+  q23[0] += c1 * a3;
+  const Pair acc_innovation = splat(z - q01[0]);
+  store_pair(&acc_state_[0], q01 + gain(kGainAcc) * acc_innovation);
+  store_pair(&acc_state_[2], q23 + gain(kGainAcc + 2) * acc_innovation);
+
+  const Pair slow_consistency = gain(kSlowInvWidth), sd_width = gain(kAccSd);
+  Step step;
+  step.x = pair_state_[0];
+  step.xd = pair_state_[2];
+  step.xdd = acc_state_[2];
+  step.slow_xdd = pair_state_[5];
+  step.acc_sd = sd_width[0];
+  step.inv_width = sd_width[1];
+  step.slow_inv_width = slow_consistency[0];
+  step.inv_consistency = slow_consistency[1];
+  return step;
 }
 
 void Differentiator::reset() noexcept {
@@ -122,10 +235,11 @@ void Differentiator::start(double t, double x) noexcept {
   last_x_ = x;
   still_ = 0.0;
   settling_ = kSettlingSamples;
+  steady_ = false;
   out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
 }
 
-inline double Differentiator::decide_sign(double xdd, double sd, double inv_width,
+inline double Differentiator::decide_sign(double xdd, double slow_xdd, double sd, double inv_width,
                                           double slow_inv_width, double inv_consistency,
                                           double dt) noexcept {
   // At rest the true acceleration is exactly 0 and the model's state must
@@ -146,7 +260,6 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
     // with a fraction of the noise, tells its sign: in creeping motion the
     // fast channel's noise alone would flip eq. (4)'s drive at random.
     // Where they disagree (a reversal, a stop) the slow one lags: fast decides.
-    const double slow_xdd = slow_.state()[2];
     const double d = std::min(1.0, std::fabs(xdd - slow_xdd) * inv_consistency);
     const double slow = std::clamp(slow_xdd * slow_inv_width, -1.0, 1.0);
     return d * d * fast + (1.0 - d * d) * slow;
@@ -182,35 +295,51 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     return out_;
   }
   t_ = t;
-  double sd, inv_width, slow_inv_width, inv_consistency;
+  Step step;
   if (cfg_.exact_covariance || settling_ > 0) {
-    // The full recursion: always, or while the filters settle from their
-    // start-up prior (the steady-state gains would converge more slowly).
-    if (settling_ > 0) --settling_;
-    velocity_.update(dt, x);
-    acceleration_.update(dt, x);
-    sd = std::sqrt(acceleration_.covariance()[2][2]);
-    inv_width = 1.0 / (cfg_.smooth_sigmas * sd);
-    if (use_slow_) slow_.update(dt, x);
-    slow_inv_width =
-        use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
-    inv_consistency = 1.0 / (cfg_.slow_consistency * sd);
+    step = full_step(dt, x);
   } else {
-    const GainEntry g = gain_for(dt);
-    velocity_.update_with_gain(dt, x, g.velocity);
-    acceleration_.update_with_gain(dt, x, g.acceleration);
-    if (use_slow_) slow_.update_with_gain(dt, x, g.slow);
-    sd = g.acc_sd;
-    inv_width = g.inv_width;
-    slow_inv_width = g.slow_inv_width;
-    inv_consistency = g.inv_consistency;
+    if (!steady_) enter_steady();
+    // Without the slow channel its gains are 0: its lane runs idle.
+    step = steady_step(dt, x);
   }
   still_ = x == last_x_ ? still_ + dt : 0.0;
   last_x_ = x;
-  const double xdd = acceleration_.state()[2];
-  const double sign = decide_sign(xdd, sd, inv_width, slow_inv_width, inv_consistency, dt);
-  out_ = {velocity_.state()[0], velocity_.state()[1], xdd, sign, sd, true};
+  const double sign = decide_sign(step.xdd, step.slow_xdd, step.acc_sd, step.inv_width,
+                                  step.slow_inv_width, step.inv_consistency, dt);
+  // out_ written in 16-byte pairs from registers, the way it is copied to
+  // the result: field by field, GCC merged the copy into 16-byte loads of
+  // two 8-byte stores, which the processor cannot forward (a stall on the
+  // way from the sample to the model).
+  auto* bytes = reinterpret_cast<unsigned char*>(&out_);
+  const Pair position = {step.x, step.xd}, acceleration = {step.xdd, sign};
+  std::memcpy(bytes + offsetof(Derivatives, x), &position, sizeof position);
+  std::memcpy(bytes + offsetof(Derivatives, xdd), &acceleration, sizeof acceleration);
+  out_.acc_sd = step.acc_sd;
+  out_.valid = true;
   return out_;
+}
+
+// Out of line: the hot steady-state path of update() then needs no stack
+// frame for the covariance recursion's temporaries.
+[[gnu::noinline]] Differentiator::Step Differentiator::full_step(double dt, double x) noexcept {
+  // The full recursion: always, or while the filters settle from their
+  // start-up prior (the steady-state gains would converge more slowly).
+  if (settling_ > 0) --settling_;
+  velocity_.update(dt, x);
+  acceleration_.update(dt, x);
+  Step step;
+  step.acc_sd = std::sqrt(acceleration_.covariance()[2][2]);
+  step.inv_width = 1.0 / (cfg_.smooth_sigmas * step.acc_sd);
+  if (use_slow_) slow_.update(dt, x);
+  step.slow_inv_width =
+      use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
+  step.inv_consistency = 1.0 / (cfg_.slow_consistency * step.acc_sd);
+  step.x = velocity_.state()[0];
+  step.xd = velocity_.state()[1];
+  step.xdd = acceleration_.state()[2];
+  step.slow_xdd = slow_.state()[2];
+  return step;
 }
 
 }  // namespace tsmh::estimator

@@ -17,6 +17,8 @@
 // fast one; exactly 0 once the encoder has been still for `still_time`. Delay,
 // noise and accuracy are measured in docs/friction-model.md.
 
+#include <array>
+#include <cstddef>
 #include <numbers>
 #include <optional>
 #include <string_view>
@@ -119,12 +121,26 @@ class Differentiator {
   void reset() noexcept;
 
   const DifferentiatorConfig& config() const { return cfg_; }
+
+  /// The steady-state gains for a sample interval dt > 0 as update() uses
+  /// them once the filters have settled (interpolated from the table; all 0
+  /// with exact_covariance). For tests and diagnostics: each channel then is
+  /// PolyKalman::update_with_gain with its gain (test_differentiator.cpp).
+  struct SteadyGains {
+    PolyKalman<3>::Vec velocity{}, slow{};
+    PolyKalman<4>::Vec acceleration{};
+    double acc_sd = 0.0;           ///< sd of xdd, rad/s^2
+    double inv_width = 0.0;        ///< 1 / (smooth_sigmas acc_sd)
+    double slow_inv_width = 0.0;   ///< 1 / (slow_sigmas slow sd); 0 without the slow channel
+    double inv_consistency = 0.0;  ///< 1 / (slow_consistency acc_sd)
+  };
+  SteadyGains steady_gains(double dt) const noexcept;
   const Derivatives& last() const { return out_; }
 
  private:
   void start(double t, double x) noexcept;
-  double decide_sign(double xdd, double sd, double inv_width, double slow_inv_width,
-                     double inv_consistency, double dt) noexcept;
+  double decide_sign(double xdd, double slow_xdd, double sd, double inv_width,
+                     double slow_inv_width, double inv_consistency, double dt) noexcept;
 
   DifferentiatorConfig cfg_;
   double r_;  // measurement variance, rad^2
@@ -134,23 +150,52 @@ class Differentiator {
   // The slow channel runs only where it decides something: the smooth sign
   // with slow_jerk_psd > 0.
   bool use_slow_;
-  // Steady-state gains by interval (exact_covariance false): entry k is for
-  // the interval grid_dt(k); see grid_index().
-  struct GainEntry {
-    PolyKalman<3>::Vec velocity;
-    PolyKalman<4>::Vec acceleration;
-    PolyKalman<3>::Vec slow;
-    double slow_inv_width;   // 1 / (slow_sigmas slow sd)
-    double inv_consistency;  // 1 / (slow_consistency acc_sd)
-    double acc_sd;
-    double inv_width;  // 1 / (smooth_sigmas acc_sd)
+  // Steady-state gains by interval (exact_covariance false): node k is for
+  // the interval grid_dt(k); see gain_for(). A row holds the three
+  // channels' gains and what decide_sign() needs; the velocity and slow
+  // gains are interleaved ({velocity[i], slow[i]}) because the steady-state
+  // step advances those two channels (both white jerk, the same F(dt))
+  // side by side, as pairs of doubles.
+  static constexpr std::size_t kGainPairs = 0;        // 3 pairs {velocity[i], slow[i]}
+  static constexpr std::size_t kGainAcc = 6;          // acceleration[0..3]
+  static constexpr std::size_t kSlowInvWidth = 10;    // 1 / (slow_sigmas slow sd)
+  static constexpr std::size_t kInvConsistency = 11;  // 1 / (slow_consistency acc_sd)
+  static constexpr std::size_t kAccSd = 12;
+  static constexpr std::size_t kInvWidth = 13;  // 1 / (smooth_sigmas acc_sd)
+  static constexpr std::size_t kGainFields = 14;
+  using GainRow = std::array<double, kGainFields>;
+  // A node's row and the step to the next node's (next - this, as the
+  // interpolation would form it): interpolating is then one multiply-add per
+  // field, from one place in memory.
+  struct GainNode {
+    alignas(16) GainRow at;
+    alignas(16) GainRow step;
   };
-  std::vector<GainEntry> gains_;
+  std::vector<GainNode> gains_;
   double coarse_inverse_step_ = 0.0;
   int settling_ = 0;  // samples of full recursion left after a (re)start
   void build_gain_table();
   double grid_dt(std::size_t k) const noexcept;
-  GainEntry gain_for(double dt) const noexcept;
+  double gain_last_ = 0.0;  // gains_.size() - 1
+  double gain_position(double dt) const noexcept;
+  // The gains for the interval dt, interpolated between nodes (for
+  // steady_gains(); the steady-state step forms them itself).
+  GainRow gain_for(double dt) const noexcept;
+  // One sample's filtered values and what decide_sign() needs.
+  struct Step {
+    double x, xd, xdd, slow_xdd;
+    double acc_sd, inv_width, slow_inv_width, inv_consistency;
+  };
+  Step full_step(double dt, double x) noexcept;
+  // The filters' state while the steady-state gains run: the velocity and
+  // slow channels interleaved like their gains, then the acceleration
+  // channel. The full recursion keeps it in the PolyKalman objects; it is
+  // copied here once, when the gains take over (steady_).
+  void enter_steady() noexcept;
+  Step steady_step(double dt, double z) noexcept;
+  alignas(16) std::array<double, 6> pair_state_{};
+  alignas(16) std::array<double, 4> acc_state_{};
+  bool steady_ = false;
   double in_band_ = 0.0;  // how long |xdd| has been inside the release band, s
   double last_x_ = 0.0;   // last encoder reading
   double still_ = 0.0;    // how long it has not changed, s
