@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace tsmh::estimator {
 namespace {
@@ -13,6 +14,16 @@ constexpr std::size_t kCoarse = 200;  // kFineEnd ... max_gap
 // Samples of full recursion after a (re)start, while the covariance falls
 // from the start-up prior to its steady state (about 0.1 s at 1 kHz).
 constexpr int kSettlingSamples = 100;
+// The cruise hypothesis: the acceleration channel's normalised innovation
+// squared is averaged over this time (s) before it is held against
+// cruise_nis; fewer samples than kMinWindowSamples in the window: no test.
+constexpr double kNisTime = 0.005;
+constexpr std::size_t kMinWindowSamples = 8;
+// Spread of the acceleration (rad/s^2) and jerk (rad/s^3) of a moving hand
+// or motor, the alternative to the cruise hypothesis: its Bayes factor
+// weighs how much of that spread the window's fit leaves possible.
+constexpr double kMovingAccSd = 10.0;
+constexpr double kMovingJerkSd = 300.0;
 
 double measurement_variance(const DifferentiatorConfig& c) {
   const double r = c.quantum * c.quantum / 12.0 + c.position_noise * c.position_noise;
@@ -32,7 +43,8 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
       velocity_(config.jerk_psd, r_),
       acceleration_(config.snap_psd, r_),
       slow_(config.slow_jerk_psd > 0.0 ? config.slow_jerk_psd : 1.0, r_),
-      use_slow_(config.sign_mode == SignMode::kSmooth && config.slow_jerk_psd > 0.0) {
+      use_slow_(config.sign_mode == SignMode::kSmooth && config.slow_jerk_psd > 0.0),
+      use_cruise_(config.sign_mode == SignMode::kSmooth && config.cruise_window > 0.0) {
   if (!config.exact_covariance) build_gain_table();
   reset();
 }
@@ -122,6 +134,13 @@ void Differentiator::start(double t, double x) noexcept {
   last_x_ = x;
   still_ = 0.0;
   settling_ = kSettlingSamples;
+  // Nothing seen yet that the acceleration channel could not follow.
+  window_head_ = 0;
+  window_size_ = 1;
+  window_t_[0] = t;
+  window_x_[0] = x;
+  nis_ = 1.0;
+  since_inconsistent_ = std::numeric_limits<double>::infinity();
   out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
 }
 
@@ -139,17 +158,27 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
     // The expected sign across the estimate's uncertainty, as a ramp: no
     // decision delay at a zero crossing and no chatter. The model is linear
     // in sgn(xdd), so a fraction acts as the expected value of both branches.
-    const double fast = std::clamp(xdd * inv_width, -1.0, 1.0);
-    if (!use_slow_) return fast;
-    // Where the fast estimate agrees with the slow channel's (within its own
-    // noise), the motion's acceleration varies slowly and the slow channel,
-    // with a fraction of the noise, tells its sign: in creeping motion the
-    // fast channel's noise alone would flip eq. (4)'s drive at random.
-    // Where they disagree (a reversal, a stop) the slow one lags: fast decides.
-    const double slow_xdd = slow_.state()[2];
-    const double d = std::min(1.0, std::fabs(xdd - slow_xdd) * inv_consistency);
-    const double slow = std::clamp(slow_xdd * slow_inv_width, -1.0, 1.0);
-    return d * d * fast + (1.0 - d * d) * slow;
+    double sign = std::clamp(xdd * inv_width, -1.0, 1.0);
+    if (use_slow_) {
+      // Where the fast estimate agrees with the slow channel's (within its own
+      // noise), the motion's acceleration varies slowly and the slow channel,
+      // with a fraction of the noise, tells its sign: in creeping motion the
+      // fast channel's noise alone would flip eq. (4)'s drive at random.
+      // Where they disagree (a reversal, a stop) the slow one lags: fast decides.
+      const double slow_xdd = slow_.state()[2];
+      const double d = std::min(1.0, std::fabs(xdd - slow_xdd) * inv_consistency);
+      const double slow = std::clamp(slow_xdd * slow_inv_width, -1.0, 1.0);
+      sign = d * d * sign + (1.0 - d * d) * slow;
+    }
+    // After a manoeuvre the acceleration channel could not follow, the motion
+    // is not the smooth kind its model describes: it may be a stroke at
+    // constant speed, where the true xdd is exactly 0 (and the channel rings
+    // for 0.1-0.2 s). The expected sign is then (1 - P(cruise)) times the
+    // sign given motion. On smooth motion the channel stays consistent and
+    // this never runs: its small accelerations keep their sign.
+    if (use_cruise_ && since_inconsistent_ < cfg_.cruise_armed_time)
+      sign *= 1.0 - cruise_probability();
+    return sign;
   }
   // Hard: a dead band with hysteresis around zero, scaled by the estimate's
   // own uncertainty; a decided sign is held inside the release band for
@@ -169,6 +198,95 @@ inline double Differentiator::decide_sign(double xdd, double sd, double inv_widt
   return sign;
 }
 
+void Differentiator::track_consistency(double t, double x, double innovation, double innovation_var,
+                                       double dt) noexcept {
+  // A Kalman filter whose model holds has innovations of its predicted
+  // variance: their normalised square averages 1 (on smooth motion, 1 +- 0.5
+  // over 5 ms, at most about 5 on every multisine tried). A manoeuvre whose
+  // jerk jumps (a reversal's start and end) takes it to hundreds.
+  const double w = std::min(1.0, dt / kNisTime);
+  nis_ += w * (innovation * innovation / innovation_var - nis_);
+  since_inconsistent_ = nis_ > cfg_.cruise_nis ? 0.0 : since_inconsistent_ + dt;
+  window_head_ = (window_head_ + 1) % kWindowCapacity;
+  window_t_[window_head_] = t;
+  window_x_[window_head_] = x;
+  window_size_ = std::min(window_size_ + 1, kWindowCapacity);
+}
+
+double Differentiator::cruise_probability() const noexcept {
+  // Least-squares cubic c0 + c1 u + c2 u^2 + c3 u^3 through the samples of the
+  // last cruise_window (u = (t_i - t) / window in [-1, 0], y = x_i - x: well
+  // conditioned), on their actual time stamps. A finite window forgets a
+  // manoeuvre entirely once it has passed, where the Kalman channels ring.
+  const double window = cfg_.cruise_window;
+  const double t_now = window_t_[window_head_];
+  const double x_now = window_x_[window_head_];
+  double m[7] = {}, b[4] = {};
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < window_size_; ++k) {
+    const std::size_t i = (window_head_ + kWindowCapacity - k) % kWindowCapacity;
+    const double u = (window_t_[i] - t_now) / window;
+    if (u < -1.0) break;
+    const double y = window_x_[i] - x_now;
+    const double u2 = u * u, u3 = u2 * u;
+    m[0] += 1.0;
+    m[1] += u;
+    m[2] += u2;
+    m[3] += u3;
+    m[4] += u2 * u2;
+    m[5] += u2 * u3;
+    m[6] += u3 * u3;
+    b[0] += y;
+    b[1] += u * y;
+    b[2] += u2 * y;
+    b[3] += u3 * y;
+    ++n;
+  }
+  if (n < kMinWindowSamples) return 0.0;
+  // Inverse of the normal matrix (symmetric positive definite: Gauss-Jordan
+  // without pivoting); the coefficients' covariance is r times it.
+  double a[4][8];
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      a[i][j] = m[i + j];
+      a[i][j + 4] = i == j ? 1.0 : 0.0;
+    }
+  for (int c = 0; c < 4; ++c) {
+    const double inv = 1.0 / a[c][c];
+    for (int j = 0; j < 8; ++j)
+      a[c][j] *= inv;
+    for (int i = 0; i < 4; ++i) {
+      if (i == c) continue;
+      const double f = a[i][c];
+      for (int j = 0; j < 8; ++j)
+        a[i][j] -= f * a[c][j];
+    }
+  }
+  double c2 = 0.0, c3 = 0.0;
+  for (int j = 0; j < 4; ++j) {
+    c2 += a[2][j + 4] * b[j];
+    c3 += a[3][j + 4] * b[j];
+  }
+  // Acceleration and jerk at the newest sample, and their covariance.
+  const double w2 = 1.0 / (window * window), w3 = w2 / window;
+  const double acc = 2.0 * c2 * w2, jerk = 6.0 * c3 * w3;
+  const double caa = r_ * 4.0 * a[2][6] * w2 * w2;
+  const double caj = r_ * 12.0 * a[2][7] * w2 * w3;
+  const double cjj = r_ * 36.0 * a[3][7] * w3 * w3;
+  // Bayes factor of "acceleration and jerk exactly 0" against "Gaussian with
+  // the spread of a moving hand": N(e; 0, C) / N(e; 0, C + Pr).
+  const double det0 = caa * cjj - caj * caj;
+  const double paa = caa + kMovingAccSd * kMovingAccSd, pjj = cjj + kMovingJerkSd * kMovingJerkSd;
+  const double det1 = paa * pjj - caj * caj;
+  if (!(det0 > 0.0) || !(det1 > 0.0)) return 0.0;
+  const double q0 = (cjj * acc * acc - 2.0 * caj * acc * jerk + caa * jerk * jerk) / det0;
+  const double q1 = (pjj * acc * acc - 2.0 * caj * acc * jerk + paa * jerk * jerk) / det1;
+  const double log_bayes = -0.5 * (q0 - q1) + 0.5 * std::log(det1 / det0);
+  const double odds =
+      cfg_.cruise_prior / (1.0 - cfg_.cruise_prior) * std::exp(std::min(log_bayes, 50.0));
+  return odds / (1.0 + odds);
+}
+
 Derivatives Differentiator::update(double t, double x) noexcept {
   if (!std::isfinite(t) || !std::isfinite(x)) return invalidated(out_);
   if (!started_) {
@@ -182,7 +300,14 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     return out_;
   }
   t_ = t;
-  double sd, inv_width, slow_inv_width, inv_consistency;
+  // The acceleration channel's prediction of this sample, for its innovation
+  // (the cruise hypothesis' consistency test).
+  double predicted = 0.0;
+  if (use_cruise_) {
+    const auto& a = acceleration_.state();
+    predicted = a[0] + dt * (a[1] + dt * (0.5 * a[2] + dt * (1.0 / 6.0) * a[3]));
+  }
+  double sd, inv_width, slow_inv_width, inv_consistency, gain0;
   if (cfg_.exact_covariance || settling_ > 0) {
     // The full recursion: always, or while the filters settle from their
     // start-up prior (the steady-state gains would converge more slowly).
@@ -195,6 +320,8 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     slow_inv_width =
         use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
     inv_consistency = 1.0 / (cfg_.slow_consistency * sd);
+    // After a correction P[0][0] = K[0] r.
+    gain0 = acceleration_.covariance()[0][0] / r_;
   } else {
     const GainEntry g = gain_for(dt);
     velocity_.update_with_gain(dt, x, g.velocity);
@@ -204,7 +331,10 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     inv_width = g.inv_width;
     slow_inv_width = g.slow_inv_width;
     inv_consistency = g.inv_consistency;
+    gain0 = g.acceleration[0];
   }
+  // The innovation's predicted variance is P[0][0] + r = r / (1 - K[0]).
+  if (use_cruise_) track_consistency(t, x, x - predicted, r_ / (1.0 - gain0), dt);
   still_ = x == last_x_ ? still_ + dt : 0.0;
   last_x_ = x;
   const double xdd = acceleration_.state()[2];

@@ -17,6 +17,8 @@
 // fast one; exactly 0 once the encoder has been still for `still_time`. Delay,
 // noise and accuracy are measured in docs/friction-model.md.
 
+#include <array>
+#include <cstddef>
 #include <numbers>
 #include <optional>
 #include <string_view>
@@ -70,6 +72,20 @@ struct DifferentiatorConfig {
   double slow_consistency = 3.0;
   /// Smooth sign from the slow channel: +-1 beyond this many of its sd.
   double slow_sigmas = 1.0;
+  /// Smooth sign, the cruise hypothesis: after a manoeuvre the acceleration
+  /// channel's model cannot follow (its normalised innovation squared,
+  /// averaged over 5 ms, above `cruise_nis`), for `cruise_armed_time` s the
+  /// sign is weighted by 1 - P(cruise), P(cruise) the probability that the
+  /// acceleration and jerk have been exactly 0 over the last `cruise_window`
+  /// s (a least-squares cubic through those samples, a Bayes factor against
+  /// accelerations and jerks of a moving hand, prior `cruise_prior`). On a
+  /// constant-speed stroke the paper's model takes xdd = 0 (no lambda in g,
+  /// branch (11)); the acceleration channel rings there for 0.1-0.2 s after
+  /// the reversal's jerk ends. cruise_window 0: off.
+  double cruise_window = 0.04;
+  double cruise_prior = 0.1;
+  double cruise_nis = 16.0;
+  double cruise_armed_time = 1.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
   double quantum = 2.0 * std::numbers::pi / 40960.0;
@@ -125,6 +141,9 @@ class Differentiator {
   void start(double t, double x) noexcept;
   double decide_sign(double xdd, double sd, double inv_width, double slow_inv_width,
                      double inv_consistency, double dt) noexcept;
+  void track_consistency(double t, double x, double innovation, double innovation_var,
+                         double dt) noexcept;
+  double cruise_probability() const noexcept;
 
   DifferentiatorConfig cfg_;
   double r_;  // measurement variance, rad^2
@@ -151,6 +170,16 @@ class Differentiator {
   void build_gain_table();
   double grid_dt(std::size_t k) const noexcept;
   GainEntry gain_for(double dt) const noexcept;
+  // The cruise hypothesis (smooth sign, cruise_window > 0): the last samples
+  // (a ring, newest at window_head_), the acceleration channel's normalised
+  // innovation squared averaged over kNisTime, and how long ago it last
+  // exceeded cruise_nis.
+  bool use_cruise_;
+  static constexpr std::size_t kWindowCapacity = 128;
+  std::array<double, kWindowCapacity> window_t_{}, window_x_{};
+  std::size_t window_head_ = 0, window_size_ = 0;
+  double nis_ = 1.0;
+  double since_inconsistent_ = 0.0;
   double in_band_ = 0.0;  // how long |xdd| has been inside the release band, s
   double last_x_ = 0.0;   // last encoder reading
   double still_ = 0.0;    // how long it has not changed, s
