@@ -19,6 +19,9 @@ constexpr int kSettlingSamples = 100;
 // cruise_nis; fewer samples than kMinWindowSamples in the window: no test.
 constexpr double kNisTime = 0.005;
 constexpr std::size_t kMinWindowSamples = 8;
+// The window's power sums are moved sample by sample (O(1)) and rebuilt from
+// the samples this often, before rounding can accumulate.
+constexpr int kRebuildSamples = 500;
 // Spread of the acceleration (rad/s^2) and jerk (rad/s^3) of a moving hand
 // or motor, the alternative to the cruise hypothesis: its Bayes factor
 // weighs how much of that spread the window's fit leaves possible.
@@ -141,6 +144,7 @@ void Differentiator::start(double t, double x) noexcept {
   window_x_[0] = x;
   nis_ = 1.0;
   since_inconsistent_ = std::numeric_limits<double>::infinity();
+  moments_valid_ = false;
   out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
 }
 
@@ -207,72 +211,137 @@ void Differentiator::track_consistency(double t, double x, double innovation, do
   const double w = std::min(1.0, dt / kNisTime);
   nis_ += w * (innovation * innovation / innovation_var - nis_);
   since_inconsistent_ = nis_ > cfg_.cruise_nis ? 0.0 : since_inconsistent_ + dt;
+  const double dx = x - window_x_[window_head_];
   window_head_ = (window_head_ + 1) % kWindowCapacity;
   window_t_[window_head_] = t;
   window_x_[window_head_] = x;
   window_size_ = std::min(window_size_ + 1, kWindowCapacity);
+  if (since_inconsistent_ >= cfg_.cruise_armed_time) {
+    moments_valid_ = false;  // not needed until the next manoeuvre
+  } else if (!moments_valid_ || ++since_rebuild_ >= kRebuildSamples) {
+    rebuild_moments();
+  } else {
+    advance_moments(dt, dx);
+  }
+}
+
+// The window's fit works on the power sums M_k = sum u^k (k <= 6) and
+// B_k = sum u^k y (k <= 3) over its samples, u = (t_i - t) / cruise_window
+// in [-1, 0] and y = x_i - x about the newest sample (well conditioned).
+inline void Differentiator::add_to_moments(double u, double y, double weight) noexcept {
+  const double u2 = u * u, u3 = u2 * u;
+  moments_[0] += weight;
+  moments_[1] += weight * u;
+  moments_[2] += weight * u2;
+  moments_[3] += weight * u3;
+  moments_[4] += weight * u2 * u2;
+  moments_[5] += weight * u2 * u3;
+  moments_[6] += weight * u3 * u3;
+  const double wy = weight * y;
+  moments_y_[0] += wy;
+  moments_y_[1] += wy * u;
+  moments_y_[2] += wy * u2;
+  moments_y_[3] += wy * u3;
+}
+
+void Differentiator::rebuild_moments() noexcept {
+  const double inv_window = 1.0 / cfg_.cruise_window;
+  const double t_now = window_t_[window_head_];
+  const double x_now = window_x_[window_head_];
+  moments_ = {};
+  moments_y_ = {};
+  std::size_t n = 0;
+  for (; n < window_size_; ++n) {
+    const std::size_t i = (window_head_ + kWindowCapacity - n) % kWindowCapacity;
+    const double u = (window_t_[i] - t_now) * inv_window;
+    if (u < -1.0) break;
+    add_to_moments(u, window_x_[i] - x_now, 1.0);
+  }
+  window_count_ = n;
+  since_rebuild_ = 0;
+  moments_valid_ = true;
+}
+
+void Differentiator::advance_moments(double dt, double dx) noexcept {
+  // The same sums, moved to the new newest sample in O(1): every y drops by
+  // dx, every u by dt / window ((u + d)^k by the binomial theorem, highest
+  // k first so that the lower sums are still the old ones); then the new
+  // sample (u = 0, y = 0) joins and those now older than the window leave.
+  // Rounding accumulates in the sums, so they are rebuilt from the samples
+  // every kRebuildSamples.
+  static constexpr double kBinomial[7][7] = {{1, 0, 0, 0, 0, 0, 0},   {1, 1, 0, 0, 0, 0, 0},
+                                             {1, 2, 1, 0, 0, 0, 0},   {1, 3, 3, 1, 0, 0, 0},
+                                             {1, 4, 6, 4, 1, 0, 0},   {1, 5, 10, 10, 5, 1, 0},
+                                             {1, 6, 15, 20, 15, 6, 1}};
+  for (std::size_t k = 0; k < 4; ++k)
+    moments_y_[k] -= dx * moments_[k];
+  const double d = -dt / cfg_.cruise_window;
+  double p[7];
+  p[0] = 1.0;
+  for (std::size_t i = 1; i < 7; ++i)
+    p[i] = p[i - 1] * d;
+  for (std::size_t k = 6; k >= 1; --k) {
+    double v = 0.0;
+    for (std::size_t j = 0; j <= k; ++j)
+      v += kBinomial[k][j] * p[k - j] * moments_[j];
+    moments_[k] = v;
+  }
+  for (std::size_t k = 3; k >= 1; --k) {
+    double v = 0.0;
+    for (std::size_t j = 0; j <= k; ++j)
+      v += kBinomial[k][j] * p[k - j] * moments_y_[j];
+    moments_y_[k] = v;
+  }
+  moments_[0] += 1.0;
+  ++window_count_;
+  const double inv_window = 1.0 / cfg_.cruise_window;
+  const double t_now = window_t_[window_head_];
+  const double x_now = window_x_[window_head_];
+  // The ring must keep every sample of the window: at most capacity - 1, so
+  // that the next sample does not overwrite the oldest one still in it.
+  while (window_count_ > 0) {
+    const std::size_t i = (window_head_ + kWindowCapacity - (window_count_ - 1)) % kWindowCapacity;
+    const double u = (window_t_[i] - t_now) * inv_window;
+    if (u >= -1.0 && window_count_ < kWindowCapacity) break;
+    add_to_moments(u, window_x_[i] - x_now, -1.0);
+    --window_count_;
+  }
 }
 
 double Differentiator::cruise_probability() const noexcept {
   // Least-squares cubic c0 + c1 u + c2 u^2 + c3 u^3 through the samples of the
-  // last cruise_window (u = (t_i - t) / window in [-1, 0], y = x_i - x: well
-  // conditioned), on their actual time stamps. A finite window forgets a
-  // manoeuvre entirely once it has passed, where the Kalman channels ring.
+  // last cruise_window, on their actual time stamps (the sums above). A
+  // finite window forgets a manoeuvre entirely once it has passed, where the
+  // Kalman channels ring.
   const double window = cfg_.cruise_window;
-  const double t_now = window_t_[window_head_];
-  const double x_now = window_x_[window_head_];
-  double m[7] = {}, b[4] = {};
-  std::size_t n = 0;
-  for (std::size_t k = 0; k < window_size_; ++k) {
-    const std::size_t i = (window_head_ + kWindowCapacity - k) % kWindowCapacity;
-    const double u = (window_t_[i] - t_now) / window;
-    if (u < -1.0) break;
-    const double y = window_x_[i] - x_now;
-    const double u2 = u * u, u3 = u2 * u;
-    m[0] += 1.0;
-    m[1] += u;
-    m[2] += u2;
-    m[3] += u3;
-    m[4] += u2 * u2;
-    m[5] += u2 * u3;
-    m[6] += u3 * u3;
-    b[0] += y;
-    b[1] += u * y;
-    b[2] += u2 * y;
-    b[3] += u3 * y;
-    ++n;
-  }
+  const auto& m = moments_;
+  const auto& b = moments_y_;
+  const std::size_t n = window_count_;
   if (n < kMinWindowSamples) return 0.0;
-  // Inverse of the normal matrix (symmetric positive definite: Gauss-Jordan
-  // without pivoting); the coefficients' covariance is r times it.
-  double a[4][8];
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) {
-      a[i][j] = m[i + j];
-      a[i][j + 4] = i == j ? 1.0 : 0.0;
-    }
-  for (int c = 0; c < 4; ++c) {
-    const double inv = 1.0 / a[c][c];
-    for (int j = 0; j < 8; ++j)
-      a[c][j] *= inv;
-    for (int i = 0; i < 4; ++i) {
-      if (i == c) continue;
-      const double f = a[i][c];
-      for (int j = 0; j < 8; ++j)
-        a[i][j] -= f * a[c][j];
-    }
-  }
-  double c2 = 0.0, c3 = 0.0;
-  for (int j = 0; j < 4; ++j) {
-    c2 += a[2][j + 4] * b[j];
-    c3 += a[3][j + 4] * b[j];
-  }
+  // Only c2, c3 and their covariance are needed: with the normal matrix in
+  // 2x2 blocks [A B; B' D], they come from the Schur complement
+  // S = D - B' A^-1 B: (c2, c3) = S^-1 ((b2, b3) - B' A^-1 (b0, b1)), and
+  // their covariance is r S^-1.
+  const double det_a = m[0] * m[2] - m[1] * m[1];
+  if (!(det_a > 0.0)) return 0.0;
+  // A^-1 B, column by column (A^-1 = [m2 -m1; -m1 m0] / det_a).
+  const double k00 = (m[2] * m[2] - m[1] * m[3]) / det_a, k10 = (m[0] * m[3] - m[1] * m[2]) / det_a;
+  const double k01 = (m[2] * m[3] - m[1] * m[4]) / det_a, k11 = (m[0] * m[4] - m[1] * m[3]) / det_a;
+  const double s00 = m[4] - (m[2] * k00 + m[3] * k10);
+  const double s01 = m[5] - (m[2] * k01 + m[3] * k11);
+  const double s11 = m[6] - (m[3] * k01 + m[4] * k11);
+  const double r2 = b[2] - (k00 * b[0] + k10 * b[1]);
+  const double r3 = b[3] - (k01 * b[0] + k11 * b[1]);
+  const double det_s = s00 * s11 - s01 * s01;
+  if (!(det_s > 0.0)) return 0.0;
+  const double i00 = s11 / det_s, i01 = -s01 / det_s, i11 = s00 / det_s;  // S^-1
+  const double c2 = i00 * r2 + i01 * r3, c3 = i01 * r2 + i11 * r3;
   // Acceleration and jerk at the newest sample, and their covariance.
   const double w2 = 1.0 / (window * window), w3 = w2 / window;
   const double acc = 2.0 * c2 * w2, jerk = 6.0 * c3 * w3;
-  const double caa = r_ * 4.0 * a[2][6] * w2 * w2;
-  const double caj = r_ * 12.0 * a[2][7] * w2 * w3;
-  const double cjj = r_ * 36.0 * a[3][7] * w3 * w3;
+  const double caa = r_ * 4.0 * i00 * w2 * w2;
+  const double caj = r_ * 12.0 * i01 * w2 * w3;
+  const double cjj = r_ * 36.0 * i11 * w3 * w3;
   // Bayes factor of "acceleration and jerk exactly 0" against "Gaussian with
   // the spread of a moving hand": N(e; 0, C) / N(e; 0, C + Pr).
   const double det0 = caa * cjj - caj * caj;

@@ -144,6 +144,9 @@ class Differentiator {
   void track_consistency(double t, double x, double innovation, double innovation_var,
                          double dt) noexcept;
   double cruise_probability() const noexcept;
+  void add_to_moments(double u, double y, double weight) noexcept;
+  void rebuild_moments() noexcept;
+  void advance_moments(double dt, double dx) noexcept;
 
   DifferentiatorConfig cfg_;
   double r_;  // measurement variance, rad^2
@@ -178,6 +181,13 @@ class Differentiator {
   static constexpr std::size_t kWindowCapacity = 128;
   std::array<double, kWindowCapacity> window_t_{}, window_x_{};
   std::size_t window_head_ = 0, window_size_ = 0;
+  // Power sums of the samples in the window (see cruise_probability()),
+  // kept only while armed: how many samples, and samples since the last rebuild.
+  std::array<double, 7> moments_{};
+  std::array<double, 4> moments_y_{};
+  std::size_t window_count_ = 0;
+  int since_rebuild_ = 0;
+  bool moments_valid_ = false;
   double nis_ = 1.0;
   double since_inconsistent_ = 0.0;
   double in_band_ = 0.0;  // how long |xdd| has been inside the release band, s
