@@ -14,8 +14,11 @@
 // sgn(xdd), on which eq. (4) and the branches of eqs. (5)-(10) switch, is by
 // default the expected sign across the estimate's uncertainty (SignMode), from
 // the slow channel where the two acceleration estimates agree, else from the
-// fast one; exactly 0 once the encoder has been still for `still_time`. Delay,
-// noise and accuracy are measured in docs/friction-model.md.
+// fast one, and weighted by 1 - P(cruise) for a while after a manoeuvre the
+// acceleration channel could not follow (a reversal: on the stroke after it
+// the true xdd is exactly 0, while that channel rings); exactly 0 once the
+// encoder has been still for `still_time`. Delay, noise and accuracy are
+// measured in docs/friction-model.md.
 
 #include <array>
 #include <cstddef>
@@ -38,7 +41,8 @@ enum class SignMode {
   /// crossing and no chatter; +-1 once the sign is certain. The default: the
   /// server and `tsm simulate` use it (docs/friction-model.md has all three).
   /// Where the slow channel agrees with the fast one, its sign (see
-  /// slow_jerk_psd).
+  /// slow_jerk_psd); after a manoeuvre, weighted by 1 - P(cruise) (see
+  /// cruise_window).
   kSmooth,
   /// kSmooth from the fast channel alone (the default until the slow channel
   /// was added; for comparison).
@@ -81,7 +85,9 @@ struct DifferentiatorConfig {
   /// accelerations and jerks of a moving hand, prior `cruise_prior`). On a
   /// constant-speed stroke the paper's model takes xdd = 0 (no lambda in g,
   /// branch (11)); the acceleration channel rings there for 0.1-0.2 s after
-  /// the reversal's jerk ends. cruise_window 0: off.
+  /// the reversal's jerk ends. cruise_window 0: off; the window holds at
+  /// most 127 samples (at 1 kHz, any window up to 0.12 s). cruise_prior in
+  /// (0, 1). Measured, with a sweep of all four, in docs/friction-model.md.
   double cruise_window = 0.04;
   double cruise_prior = 0.1;
   double cruise_nis = 16.0;
