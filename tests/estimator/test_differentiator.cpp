@@ -292,7 +292,7 @@ struct ReversalTrace {
   double min_sign_mid_reversal = 0.0;   // -sign in the reversal's middle 30 ms
 };
 
-ReversalTrace run_reversal(double cruise_window, bool jitter) {
+ReversalTrace run_reversal(double cruise_window, bool jitter, double dt = 1e-3) {
   constexpr double kStart = 1.0, kDuration = 0.06, kV = 1.0;
   constexpr double kOmega = std::numbers::pi / kDuration;
   const auto position = [&](double t) {
@@ -313,8 +313,9 @@ ReversalTrace run_reversal(double cruise_window, bool jitter) {
   double sum = 0.0;
   int n = 0;
   r.min_sign_mid_reversal = 1.0;
-  for (int i = 0; i < 2000; ++i) {
-    const double t = i * 1e-3 + (jitter ? wobble(rng) : 0.0);
+  const int samples = static_cast<int>(std::lround(2.0 / dt));
+  for (int i = 0; i < samples; ++i) {
+    const double t = i * dt + (jitter ? wobble(rng) * dt / 1e-3 : 0.0);
     const auto der = d.update(t, quantise(position(t)));
     if (t > end && t < end + 0.3 && std::fabs(der.acc_sign) > 0.5) r.settled_ms = 1e3 * (t - end);
     if (t > end + 0.03 && t < end + 0.3) sum += std::fabs(der.acc_sign), ++n;
@@ -346,6 +347,16 @@ TEST(Differentiator, CruiseHypothesisSettlesTheSignAfterAReversal) {
     // Inside the reversal (|xdd| 35-52 rad/s^2) the sign stays certain.
     EXPECT_EQ(with.min_sign_mid_reversal, 1.0) << tag;
   }
+}
+
+TEST(Differentiator, CruiseHypothesisAtAHighSampleRate) {
+  // At 5 kHz the 40 ms window would hold 200 samples; the ring keeps the
+  // newest 127 (25 ms) and the sums must stay those of the samples in it.
+  const ReversalTrace with = run_reversal(DifferentiatorConfig{}.cruise_window, true, 2e-4);
+  RecordProperty("reversal_mean_abs_sign_cruising_5khz",
+                 std::to_string(with.mean_abs_sign_cruising));
+  EXPECT_LT(with.mean_abs_sign_cruising, 0.15);
+  EXPECT_EQ(with.min_sign_mid_reversal, 1.0);
 }
 
 TEST(Differentiator, CruiseHypothesisLeavesSmoothMotionAlone) {

@@ -250,8 +250,11 @@ void Differentiator::rebuild_moments() noexcept {
   const double x_now = window_x_[window_head_];
   moments_ = {};
   moments_y_ = {};
+  // At most capacity - 1 samples (see advance_moments): above about 3 kHz
+  // the window is the newest 127 samples.
+  const std::size_t most = std::min(window_size_, kWindowCapacity - 1);
   std::size_t n = 0;
-  for (; n < window_size_; ++n) {
+  for (; n < most; ++n) {
     const std::size_t i = (window_head_ + kWindowCapacity - n) % kWindowCapacity;
     const double u = (window_t_[i] - t_now) * inv_window;
     if (u < -1.0) break;
