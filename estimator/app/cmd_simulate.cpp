@@ -21,6 +21,7 @@ struct SimulateOptions {
   std::optional<double> radius;
   estimator::DerivativeSource derivatives = estimator::DerivativeSource::kAutomatic;
   estimator::SignMode sign = estimator::SignMode::kSmooth;
+  double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
   estimator::StartState start = estimator::StartState::kFreeTip;
 };
 
@@ -30,9 +31,9 @@ struct SimulateOptions {
 std::vector<double> causal_friction(const estimator::FrictionModel& model,
                                     const estimator::Recording& rec, const SimulateOptions& o) {
   const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m);
-  estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0,
-                                       estimator::DifferentiatorConfig{.sign_mode = o.sign},
-                                       o.start);
+  estimator::DifferentiatorConfig diff{.sign_mode = o.sign};
+  diff.cruise_window = o.cruise_window;
+  estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0, diff, o.start);
   std::vector<double> f(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i)
     f[i] = est.update(rec.t[i], rec.x_in[i], has_load ? rec.tau_in[i] : 0.0).friction;
@@ -100,6 +101,10 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "smooth-fast (without the slow acceleration channel) or hard (the paper's "
                   "-1/0/+1 switch)")
       ->transform(CLI::CheckedTransformer(signs, CLI::ignore_case));
+  cmd->add_option("--cruise-window", opts->cruise_window,
+                  "smooth sign: window of the cruise hypothesis, s (haptic-server's default; 0: "
+                  "off, the estimator before issue 13)")
+      ->check(CLI::Range(0.0, 0.12));
   const std::map<std::string, estimator::StartState> starts{
       {"free_tip", estimator::StartState::kFreeTip}, {"zero", estimator::StartState::kZero}};
   cmd->add_option("--start-state", opts->start,

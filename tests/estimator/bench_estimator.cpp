@@ -51,6 +51,47 @@ BENCHMARK(BM_EstimatorStep)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);
 
+// Strokes at 1.2 rad/s joined by 60 ms reversals (the jerk steps at each
+// reversal's ends arm the differentiator's cruise hypothesis for 1 s, so it
+// runs on most samples): the estimator's cost while the cruise test is
+// armed, beside the smooth motion above, where it never is.
+Samples reversal_samples(std::size_t n) {
+  Samples s;
+  const double q = 2.0 * std::numbers::pi / 40960.0;
+  const double speed = 1.2, stroke_s = 1.0, reversal_s = 0.06;
+  double x = 0.0, direction = 1.0, phase = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) * 1e-3;
+    s.t.push_back(t);
+    s.x.push_back(std::round(x / q) * q);
+    s.tau.push_back(0.15 * std::sin(2 * std::numbers::pi * 0.7 * t));
+    const double v =
+        phase < stroke_s
+            ? direction * speed
+            : direction * speed * std::cos(std::numbers::pi * (phase - stroke_s) / reversal_s);
+    x += v * 1e-3;
+    phase += 1e-3;
+    if (phase >= stroke_s + reversal_s) phase = 0.0, direction = -direction;
+  }
+  return s;
+}
+
+void BM_EstimatorStepReversals(benchmark::State& state) {
+  const Samples s = reversal_samples(1 << 16);
+  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
+  std::size_t i = 0;
+  double t_offset = 0.0;
+  for (auto _ : state) {
+    const auto e = est.update(s.t[i] + t_offset, s.x[i], s.tau[i]);
+    benchmark::DoNotOptimize(e);
+    if (++i == s.t.size()) i = 0, t_offset += 100.0;
+  }
+}
+BENCHMARK(BM_EstimatorStepReversals)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
 void BM_ModelStepOnly(benchmark::State& state) {
   TsmFrictionModel model(paper_spec());
   std::vector<Motion> m;

@@ -236,6 +236,12 @@ int main(int argc, char** argv) {
                  "smooth sign from the slow channel: width in sd");
   app.add_option("--sign-sigmas", diff.sign_sigmas, "sgn(xdd) decided beyond this many sd");
   app.add_option("--sign-release", diff.sign_release, "... and released below this many sd");
+  app.add_option("--cruise-window", diff.cruise_window,
+                 "smooth sign: cruise hypothesis window, s (0: off)");
+  app.add_option("--cruise-prior", diff.cruise_prior, "... its prior probability");
+  app.add_option("--cruise-nis", diff.cruise_nis,
+                 "... armed when the acceleration channel's NIS (5 ms) exceeds this");
+  app.add_option("--cruise-armed-time", diff.cruise_armed_time, "... for this long, s");
   std::string sign_mode = "smooth";
   app.add_option("--sign-mode", sign_mode, "smooth (deployed), smooth-fast or hard");
   app.add_flag("--exact-covariance", diff.exact_covariance, "full Kalman recursion every sample");

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "estimator/differentiator.hpp"
 
@@ -251,7 +252,10 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
   };
   for (const SignMode mode : {SignMode::kSmooth, SignMode::kSmoothFast, SignMode::kHard}) {
     for (const double slow_psd : {1e-3, 0.0}) {
-      const DifferentiatorConfig cfg{.slow_jerk_psd = slow_psd, .sign_mode = mode};
+      DifferentiatorConfig cfg{.slow_jerk_psd = slow_psd, .sign_mode = mode};
+      // The sign is rebuilt below from the channels alone; the cruise
+      // hypothesis (its own tests) would arm on this input's long gaps.
+      cfg.cruise_window = 0.0;
       Differentiator d(cfg);
       const double r = cfg.quantum * cfg.quantum / 12.0;
       PolyKalman<3> velocity(cfg.jerk_psd, r), slow(slow_psd > 0.0 ? slow_psd : 1.0, r);
@@ -362,6 +366,101 @@ TEST(Differentiator, SlowChannelResolvesTheSignOfCreepingAccelerations) {
   EXPECT_GT(with.accelerating, 0.6);
   EXPECT_LT(with.cruising_abs, 0.5);
   EXPECT_GT(with.accelerating - with.cruising_abs, without.accelerating - without.cruising_abs);
+}
+
+// A stroke at +1 rad/s, a 60 ms raised-cosine reversal to -1 rad/s starting
+// at t = 1 s (peak |xdd| 52 rad/s^2, its jerk jumping at both ends), then a
+// stroke at -1 rad/s: the reversals kind of the accuracy suite in small.
+struct ReversalTrace {
+  double mean_abs_sign_cruising = 0.0;  // 30-300 ms after the reversal's end
+  double settled_ms = 0.0;              // last time |sign| > 0.5, up to 300 ms after the end
+  double min_sign_mid_reversal = 0.0;   // -sign in the reversal's middle 30 ms
+};
+
+ReversalTrace run_reversal(double cruise_window, bool jitter, double dt = 1e-3) {
+  constexpr double kStart = 1.0, kDuration = 0.06, kV = 1.0;
+  constexpr double kOmega = std::numbers::pi / kDuration;
+  const auto position = [&](double t) {
+    if (t < kStart) return kV * t;
+    const double tau = std::min(t - kStart, kDuration);
+    // v(tau) = kV - kV (1 - cos(omega tau)): from +kV to -kV.
+    double x = kV * kStart + kV * tau - kV * (tau - std::sin(kOmega * tau) / kOmega);
+    if (t > kStart + kDuration) x -= kV * (t - kStart - kDuration);
+    return x;
+  };
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> wobble(-2e-4, 2e-4);
+  DifferentiatorConfig config;
+  config.cruise_window = cruise_window;
+  Differentiator d(config);
+  ReversalTrace r;
+  const double end = kStart + kDuration;
+  double sum = 0.0;
+  int n = 0;
+  r.min_sign_mid_reversal = 1.0;
+  const int samples = static_cast<int>(std::lround(2.0 / dt));
+  for (int i = 0; i < samples; ++i) {
+    const double t = i * dt + (jitter ? wobble(rng) * dt / 1e-3 : 0.0);
+    const auto der = d.update(t, quantise(position(t)));
+    if (t > end && t < end + 0.3 && std::fabs(der.acc_sign) > 0.5) r.settled_ms = 1e3 * (t - end);
+    if (t > end + 0.03 && t < end + 0.3) sum += std::fabs(der.acc_sign), ++n;
+    if (t > kStart + 0.015 && t < kStart + 0.045)
+      r.min_sign_mid_reversal = std::min(r.min_sign_mid_reversal, -der.acc_sign);
+  }
+  r.mean_abs_sign_cruising = sum / n;
+  return r;
+}
+
+TEST(Differentiator, CruiseHypothesisSettlesTheSignAfterAReversal) {
+  // On the stroke after a reversal the true xdd is exactly 0 (the paper's
+  // model: no lambda in g, branch (11)), but the acceleration channel rings
+  // for 0.1-0.2 s after the reversal's jerk ends. The cruise hypothesis,
+  // armed by the channel's inconsistency during the reversal, takes the sign
+  // to about 0 once the last cruise_window of samples is a straight line.
+  for (bool jitter : {false, true}) {
+    const ReversalTrace with = run_reversal(DifferentiatorConfig{}.cruise_window, jitter);
+    const ReversalTrace without = run_reversal(0.0, jitter);
+    const std::string tag = jitter ? "_jittered" : "";
+    RecordProperty("reversal_mean_abs_sign_cruising" + tag,
+                   std::to_string(with.mean_abs_sign_cruising));
+    RecordProperty("reversal_mean_abs_sign_cruising_without" + tag,
+                   std::to_string(without.mean_abs_sign_cruising));
+    RecordProperty("reversal_sign_settled_ms" + tag, std::to_string(with.settled_ms));
+    EXPECT_LT(with.mean_abs_sign_cruising, 0.15) << tag;
+    EXPECT_GT(without.mean_abs_sign_cruising, 0.3) << tag;
+    EXPECT_LT(with.settled_ms, 50.0) << tag;
+    // Inside the reversal (|xdd| 35-52 rad/s^2) the sign stays certain.
+    EXPECT_EQ(with.min_sign_mid_reversal, 1.0) << tag;
+  }
+}
+
+TEST(Differentiator, CruiseHypothesisAtAHighSampleRate) {
+  // At 5 kHz the 40 ms window would hold 200 samples; the ring keeps the
+  // newest 127 (25 ms) and the sums must stay those of the samples in it.
+  const ReversalTrace with = run_reversal(DifferentiatorConfig{}.cruise_window, true, 2e-4);
+  RecordProperty("reversal_mean_abs_sign_cruising_5khz",
+                 std::to_string(with.mean_abs_sign_cruising));
+  EXPECT_LT(with.mean_abs_sign_cruising, 0.15);
+  EXPECT_EQ(with.min_sign_mid_reversal, 1.0);
+}
+
+TEST(Differentiator, CruiseHypothesisLeavesSmoothMotionAlone) {
+  // On smooth motion the acceleration channel's model holds (its innovations
+  // keep their predicted size), the hypothesis is never armed, and the sign
+  // is the same bit for bit as without it: the small accelerations of smooth
+  // motion keep their sign where it decides eq. (4)'s drive.
+  DifferentiatorConfig off;
+  off.cruise_window = 0.0;
+  Differentiator with{DifferentiatorConfig{}}, without{off};
+  int differ = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double t = i * 1e-3;
+    const double x = 0.8 * std::sin(kW * t) + 0.3 * std::sin(3.1 * kW * t + 1.0);
+    const auto a = with.update(t, quantise(x));
+    const auto b = without.update(t, quantise(x));
+    differ += a.acc_sign != b.acc_sign || a.xdd != b.xdd;
+  }
+  EXPECT_EQ(differ, 0);
 }
 
 }  // namespace

@@ -14,8 +14,11 @@
 // sgn(xdd), on which eq. (4) and the branches of eqs. (5)-(10) switch, is by
 // default the expected sign across the estimate's uncertainty (SignMode), from
 // the slow channel where the two acceleration estimates agree, else from the
-// fast one; exactly 0 once the encoder has been still for `still_time`. Delay,
-// noise and accuracy are measured in docs/friction-model.md.
+// fast one, and weighted by 1 - P(cruise) for a while after a manoeuvre the
+// acceleration channel could not follow (a reversal: on the stroke after it
+// the true xdd is exactly 0, while that channel rings); exactly 0 once the
+// encoder has been still for `still_time`. Delay, noise and accuracy are
+// measured in docs/friction-model.md.
 
 #include <array>
 #include <cstddef>
@@ -38,7 +41,8 @@ enum class SignMode {
   /// crossing and no chatter; +-1 once the sign is certain. The default: the
   /// server and `tsm simulate` use it (docs/friction-model.md has all three).
   /// Where the slow channel agrees with the fast one, its sign (see
-  /// slow_jerk_psd).
+  /// slow_jerk_psd); after a manoeuvre, weighted by 1 - P(cruise) (see
+  /// cruise_window).
   kSmooth,
   /// kSmooth from the fast channel alone (the default until the slow channel
   /// was added; for comparison).
@@ -72,6 +76,22 @@ struct DifferentiatorConfig {
   double slow_consistency = 3.0;
   /// Smooth sign from the slow channel: +-1 beyond this many of its sd.
   double slow_sigmas = 1.0;
+  /// Smooth sign, the cruise hypothesis: after a manoeuvre the acceleration
+  /// channel's model cannot follow (its normalised innovation squared,
+  /// averaged over 5 ms, above `cruise_nis`), for `cruise_armed_time` s the
+  /// sign is weighted by 1 - P(cruise), P(cruise) the probability that the
+  /// acceleration and jerk have been exactly 0 over the last `cruise_window`
+  /// s (a least-squares cubic through those samples, a Bayes factor against
+  /// accelerations and jerks of a moving hand, prior `cruise_prior`). On a
+  /// constant-speed stroke the paper's model takes xdd = 0 (no lambda in g,
+  /// branch (11)); the acceleration channel rings there for 0.1-0.2 s after
+  /// the reversal's jerk ends. cruise_window 0: off; the window holds at
+  /// most 127 samples (at 1 kHz, any window up to 0.12 s). cruise_prior in
+  /// (0, 1). Measured, with a sweep of all four, in docs/friction-model.md.
+  double cruise_window = 0.04;
+  double cruise_prior = 0.1;
+  double cruise_nis = 16.0;
+  double cruise_armed_time = 1.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
   double quantum = 2.0 * std::numbers::pi / 40960.0;
@@ -141,6 +161,12 @@ class Differentiator {
   void start(double t, double x) noexcept;
   double decide_sign(double xdd, double slow_xdd, double sd, double inv_width,
                      double slow_inv_width, double inv_consistency, double dt) noexcept;
+  void track_consistency(double t, double x, double innovation, double innovation_var,
+                         double dt) noexcept;
+  double cruise_probability() const noexcept;
+  void add_to_moments(double u, double y, double weight) noexcept;
+  void rebuild_moments() noexcept;
+  void advance_moments(double dt, double dx) noexcept;
 
   DifferentiatorConfig cfg_;
   double r_;  // measurement variance, rad^2
@@ -185,6 +211,8 @@ class Differentiator {
   struct Step {
     double x, xd, xdd, slow_xdd;
     double acc_sd, inv_width, slow_inv_width, inv_consistency;
+    // The acceleration channel's innovation and K[0] (the cruise test).
+    double acc_innovation, acc_gain0;
   };
   Step full_step(double dt, double x) noexcept;
   // The filters' state while the steady-state gains run: the velocity and
@@ -196,6 +224,23 @@ class Differentiator {
   alignas(16) std::array<double, 6> pair_state_{};
   alignas(16) std::array<double, 4> acc_state_{};
   bool steady_ = false;
+  // The cruise hypothesis (smooth sign, cruise_window > 0): the last samples
+  // (a ring, newest at window_head_), the acceleration channel's normalised
+  // innovation squared averaged over kNisTime, and how long ago it last
+  // exceeded cruise_nis.
+  bool use_cruise_;
+  static constexpr std::size_t kWindowCapacity = 128;
+  std::array<double, kWindowCapacity> window_t_{}, window_x_{};
+  std::size_t window_head_ = 0, window_size_ = 0;
+  // Power sums of the samples in the window (see cruise_probability()),
+  // kept only while armed: how many samples, and samples since the last rebuild.
+  std::array<double, 7> moments_{};
+  std::array<double, 4> moments_y_{};
+  std::size_t window_count_ = 0;
+  int since_rebuild_ = 0;
+  bool moments_valid_ = false;
+  double nis_ = 1.0;
+  double since_inconsistent_ = 0.0;
   double in_band_ = 0.0;  // how long |xdd| has been inside the release band, s
   double last_x_ = 0.0;   // last encoder reading
   double still_ = 0.0;    // how long it has not changed, s
