@@ -35,8 +35,9 @@ Samples encoder_samples(std::size_t n) {
   return s;
 }
 
-void BM_EstimatorStep(benchmark::State& state) {
-  const Samples s = encoder_samples(1 << 16);
+// One estimator step per iteration over the samples, repeated with a time
+// offset so that time keeps increasing.
+void run_estimator(benchmark::State& state, const Samples& s) {
   DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
   std::size_t i = 0;
   double t_offset = 0.0;
@@ -45,6 +46,10 @@ void BM_EstimatorStep(benchmark::State& state) {
     benchmark::DoNotOptimize(e);
     if (++i == s.t.size()) i = 0, t_offset += 100.0;
   }
+}
+
+void BM_EstimatorStep(benchmark::State& state) {
+  run_estimator(state, encoder_samples(1 << 16));
 }
 BENCHMARK(BM_EstimatorStep)
     ->Repetitions(15)
@@ -77,15 +82,7 @@ Samples reversal_samples(std::size_t n) {
 }
 
 void BM_EstimatorStepReversals(benchmark::State& state) {
-  const Samples s = reversal_samples(1 << 16);
-  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
-  std::size_t i = 0;
-  double t_offset = 0.0;
-  for (auto _ : state) {
-    const auto e = est.update(s.t[i] + t_offset, s.x[i], s.tau[i]);
-    benchmark::DoNotOptimize(e);
-    if (++i == s.t.size()) i = 0, t_offset += 100.0;
-  }
+  run_estimator(state, reversal_samples(1 << 16));
 }
 BENCHMARK(BM_EstimatorStepReversals)
     ->Repetitions(15)
