@@ -318,7 +318,7 @@ void HapticLoop::estimate() noexcept {
     auto& e = estimates_[j];
     if (calibration_.scales_levels(static_cast<int>(j)))
       estimators_[j]->set_level_scales(calibration_.applied_scale(static_cast<int>(j), false),
-                                        calibration_.applied_scale(static_cast<int>(j), true));
+                                       calibration_.applied_scale(static_cast<int>(j), true));
     e = joints_ok ? estimators_[j]->update_tensions(static_cast<double>(state_.utime) * 1e-6,
                                                     state_.x_in[j], state_.T1[j], state_.T3[j])
                   : estimator::Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};

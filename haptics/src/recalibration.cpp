@@ -80,14 +80,15 @@ void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Est
   if (!e.valid) return;
   radius_[j] = radius_m;
   const double raw = e.friction;
-  if (!level_mode_[j]) {  // kLevels: the model already runs at the applied scale
+  if (!level_mode_[j]) {                // kLevels: the model already runs at the applied scale
     e.friction = applied_[j][0] * raw;  // kOutput: one scale, both directions
     e.friction_level = applied_[j][0] * e.friction_level;
     e.tau_out_est = e.tau_in - radius_m * e.friction;
   }
   drift_[j].update(t, e, radius_m);
-  drift_scale_[j].store(drift_[j].judged() ? drift_[j].scale() * applied_scale(joint) : std::nan(""),
-                        std::memory_order_relaxed);
+  drift_scale_[j].store(
+      drift_[j].judged() ? drift_[j].scale() * applied_scale(joint) : std::nan(""),
+      std::memory_order_relaxed);
   const std::uint32_t bit = 1U << j;
   const std::uint32_t mask = drift_mask_.load(std::memory_order_relaxed);
   const std::uint32_t now = drift_[j].alarm() ? (mask | bit) : (mask & ~bit);
@@ -342,7 +343,8 @@ void Recalibration::fit_level_scale(int joint, CalibrationFigures& fig) {
   fig.scale = 0.5 * (fig.scale_positive + fig.scale_negative);
   const double sse_new = replay_sse(joint, fig.scale_positive, fig.scale_negative, scored);
   const double m = static_cast<double>(std::max<std::size_t>(scored, 1));
-  const double sse_old = replay_sse(joint, scale_at_collect_[j][0], scale_at_collect_[j][1], scored);
+  const double sse_old =
+      replay_sse(joint, scale_at_collect_[j][0], scale_at_collect_[j][1], scored);
   fig.rms_old = std::sqrt(sse_old / m);
   fig.rms_new = std::sqrt(sse_new / m);
 }

@@ -98,6 +98,20 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: soft}\n")
                 .find("joints[0].sign"),
             std::string::npos);
+  // The cruise hypothesis' window: the differentiator's default, 0 turns it
+  // off, beyond the window's 0.12 s capacity is an error naming the key.
+  EXPECT_DOUBLE_EQ(c.joints[0].cruise_window, estimator::DifferentiatorConfig{}.cruise_window);
+  EXPECT_DOUBLE_EQ(
+      parse_server_config(
+          "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, cruise_window: 0}\n",
+          "server.yaml", "/cfg")
+          .joints[0]
+          .cruise_window,
+      0.0);
+  EXPECT_NE(
+      error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, cruise_window: 0.5}\n")
+          .find("joints[0].cruise_window"),
+      std::string::npos);
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, start_state: x}\n")
                 .find("joints[0].start_state"),
             std::string::npos);
@@ -121,10 +135,10 @@ TEST(ServerConfig, DriftAndRecalibrationKeys) {
   // Enough room for the whole collection even at 2 slave samples per tick at 4 kHz.
   EXPECT_GE(c.loop.recalibration.capacity, 4u * 2u * 4000u);
   EXPECT_EQ(c.loop.recalibration.scale, RecalibrationScale::kLevels);  // the default
-  EXPECT_TRUE(c.loop.recalibration.per_direction);                    // the default
-  EXPECT_FALSE(parse_server_config(kJoint + "recalibration: {per_direction: false}\n", "server.yaml",
-                                   "/cfg")
-                   .loop.recalibration.per_direction);
+  EXPECT_TRUE(c.loop.recalibration.per_direction);                     // the default
+  EXPECT_FALSE(
+      parse_server_config(kJoint + "recalibration: {per_direction: false}\n", "server.yaml", "/cfg")
+          .loop.recalibration.per_direction);
   EXPECT_EQ(parse_server_config(kJoint + "recalibration: {scale: output}\n", "server.yaml", "/cfg")
                 .loop.recalibration.scale,
             RecalibrationScale::kOutput);

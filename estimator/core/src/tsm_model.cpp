@@ -217,9 +217,9 @@ double TsmFrictionModel::sliding_level(const Motion& m) const noexcept {
   // The level scales are 1 unless a recalibration set them: x 1.0 is exact,
   // so the identified model's output is unchanged bit for bit.
   if (!flat_.enabled)
-    return std::max(level_scale(negative_branch(m.xd)) *
-                        sum_of_term_levels(spec_.terms, m, asymmetric_),
-                    kMinSlidingLevel);
+    return std::max(
+        level_scale(negative_branch(m.xd)) * sum_of_term_levels(spec_.terms, m, asymmetric_),
+        kMinSlidingLevel);
   const bool negative = negative_branch(m.xd);
   const double speed = std::fabs(m.xd);
   double level = negative ? flat_.rho_negative : flat_.rho_positive;

@@ -4,8 +4,8 @@
 // stiffness a surgeon would perceive for soft tissue and for the nodule
 // beside the true values. Written as the demo report (docs/data-formats.md).
 
-#include <string>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "haptics/haptic_loop.hpp"
@@ -81,7 +81,7 @@ struct EvaluationReport {
   std::vector<JointEvaluation> joints;
   Discrimination discrimination;
   std::vector<CalibrationRecord> calibration;  ///< filled by the server (report "calibration")
-  std::vector<double> friction_scale;          ///< per joint, at the end (mean of the two directions)
+  std::vector<double> friction_scale;  ///< per joint, at the end (mean of the two directions)
   std::vector<double> friction_scale_positive;  ///< per joint, at the end, sliding xd >= 0
   std::vector<double> friction_scale_negative;  ///< per joint, at the end, sliding xd < 0
 };

@@ -91,16 +91,16 @@ struct RecalibrationConfig {
 
 /// What one request produced, per joint (written by the worker).
 struct CalibrationFigures {
-  double scale = 1.0;      ///< the scale found: the mean of the two directions'
+  double scale = 1.0;           ///< the scale found: the mean of the two directions'
   double scale_positive = 1.0;  ///< the levels' scale sliding xd >= 0 (kLevels)
   double scale_negative = 1.0;  ///< sliding xd < 0; both = scale when common
   double scale_common = 1.0;    ///< the best single scale (as without per_direction)
   double rms_common = 0.0;      ///< the residual at scale_common, N m
-  double rms_old = 0.0;    ///< residual tau_in - s R F with the scale in use, N m
-  double rms_new = 0.0;    ///< with the scale found
-  double span_rad = 0.0;   ///< stroke of the input angle
-  double sliding_s = 0.0;  ///< time sliding in the less covered direction
-  int contact_bins = 0;    ///< angle bins the contact check could judge (>= 2 needed)
+  double rms_old = 0.0;         ///< residual tau_in - s R F with the scale in use, N m
+  double rms_new = 0.0;         ///< with the scale found
+  double span_rad = 0.0;        ///< stroke of the input angle
+  double sliding_s = 0.0;       ///< time sliding in the less covered direction
+  int contact_bins = 0;         ///< angle bins the contact check could judge (>= 2 needed)
   std::size_t samples = 0;
 };
 

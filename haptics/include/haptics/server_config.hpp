@@ -29,6 +29,9 @@ struct JointConfig {
   /// sgn(xdd) as the model sees it: the smoothed expected sign (default) or
   /// the paper's -1/0/+1 switch (docs/friction-model.md).
   estimator::SignMode sign = estimator::SignMode::kSmooth;
+  /// Smooth sign: the window of the differentiator's cruise hypothesis, s
+  /// (0: off), as `tsm simulate --cruise-window`.
+  double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
   /// The estimator's friction state at start: tip assumed free (default) or zero.
   estimator::StartState start_state = estimator::StartState::kFreeTip;
 };
