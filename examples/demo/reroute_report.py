@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The re-route demo's figures (issue 17), from haptic-server's trace and report.
 
-  reroute_report.py TRACE.csv REPORT.json REROUTE_AT_S WRAP RAMP_PER_S
+  reroute_report.py TRACE.csv REPORT.json REROUTE_AT_S WRAP RAMP_PER_S [CONTROL.csv]
 
 Adds a "reroute" object to REPORT.json (every existing field kept) with the
 distal-torque error of joint 0 before the re-route, after it (before the
@@ -10,6 +10,13 @@ recalibration; writes the phases for the plot beside the trace
 (reroute-phases.dat) and prints a summary. The slave's clock is its seq
 (one sample per 1 kHz tick from 0), so the re-route's tick in the trace is
 the first row whose state_seq reaches REROUTE_AT_S x 1000.
+
+CONTROL.csv: the trace of the same scenario on a sheath never re-routed and
+never recalibrated; each phase's error is then also measured over the same
+time window of the control ("control"), and the recalibrated phase is set
+beside its own window there: the phases before and after differ in content
+(the first follows a tared start, the last follows the sweep), the control
+does not.
 """
 import csv
 import json
@@ -19,8 +26,14 @@ import sys
 
 trace_path, report_path = sys.argv[1], sys.argv[2]
 reroute_at, wrap, ramp = float(sys.argv[3]), sys.argv[4], float(sys.argv[5])
-rows = [line for line in open(trace_path) if not line.startswith("#")]
-trace = list(csv.DictReader(rows))
+control_path = sys.argv[6] if len(sys.argv) > 6 and os.path.exists(sys.argv[6]) else None
+
+
+def read_trace(path):
+    return list(csv.DictReader(line for line in open(path) if not line.startswith("#")))
+
+
+trace = read_trace(trace_path)
 report = json.load(open(report_path))
 
 t_reroute = next(float(r["t"]) for r in trace if int(r["state_seq"]) >= reroute_at * 1000)
@@ -37,10 +50,10 @@ longest = max([abs(k - 1.0) for k in directions if k is not None] + [abs(scale -
 t_settled = t_applied + longest / ramp
 
 
-def phase(lo, hi):
+def phase(lo, hi, rows=None):
     sq = sq_contact = 0.0
     n = n_contact = 0
-    for r in trace:
+    for r in trace if rows is None else rows:
         t = float(r["t"])
         if not (lo <= t < hi) or r["state"] != "1":
             continue
@@ -96,6 +109,11 @@ end = float(trace[-1]["t"])
 phases = {"before": phase(0.0, t_reroute), "after": phase(t_reroute, min(t_applied, end)),
           "recalibrated": phase(t_settled, end) if applied else None}
 b, a, c = phases["before"], phases["after"], phases["recalibrated"]
+control = None
+if control_path:
+    rows_control = read_trace(control_path)
+    control = {k: phase(p["from_s"], p["to_s"] if p["to_s"] is not None else math.inf, rows_control)
+               for k, p in phases.items() if p}
 ratio = lambda x, y, k: (x[k] / y[k]) if x and y and x[k] and y[k] else None
 report["reroute"] = {
     "joint": 0, "at_slave_s": reroute_at, "at_s": t_reroute, "wrap_rad": wrap,
@@ -110,6 +128,8 @@ report["reroute"] = {
     "recalibrated_over_before": ratio(c, b, "rmse_nm"),
     "contact_recalibrated_over_before": ratio(c, b, "contact_rmse_nm"),
     "presses": presses(),
+    "control": control,
+    "recalibrated_over_control": ratio(c, control["recalibrated"], "rmse_nm") if control and c else None,
 }
 for p in report["reroute"]["presses"]:
     p["phase"] = ("before" if p["to_s"] < t_reroute else
@@ -140,6 +160,12 @@ print(f"                        recalibrated  {fmt(c)}")
 for p in report["reroute"]["presses"]:
     print(f"     press {p['from_s']:5.1f}-{p['to_s']:5.1f} s ({p['phase']}, peak {p['peak_nm']:.3f} N m): "
           f"rmse {p['rmse_nm']:.4f} N m" if p["rmse_nm"] is not None else "no data")
+if control:
+    print(f"   the same windows on a sheath never re-routed (control run): before {fmt(control['before'])}")
+    if "recalibrated" in control:
+        print(f"                                                   recalibrated window {fmt(control['recalibrated'])}")
+    if report["reroute"]["recalibrated_over_control"]:
+        print(f"   recalibrated / the same window never re-routed: {report['reroute']['recalibrated_over_control']:.2f}")
 if report["reroute"]["recalibrated_over_before"]:
     print(f"   recalibrated / before: {report['reroute']['recalibrated_over_before']:.2f} "
           f"(target <= 1.2); after / before {report['reroute']['after_over_before']:.2f}")
