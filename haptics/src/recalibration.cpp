@@ -80,8 +80,10 @@ void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Est
   if (!e.valid) return;
   radius_[j] = radius_m;
   const double raw = e.friction;
-  if (!level_mode_[j]) {                // kLevels: the model already runs at the applied scale
-    e.friction = applied_[j][0] * raw;  // kOutput: one scale, both directions
+  // kOutput: one scale for both directions, on the model's output; kLevels:
+  // the model already ran at the applied scales, the estimate stays.
+  if (!level_mode_[j]) {
+    e.friction = applied_[j][0] * raw;
     e.friction_level = applied_[j][0] * e.friction_level;
     e.tau_out_est = e.tau_in - radius_m * e.friction;
   }
