@@ -51,6 +51,8 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
       use_slow_(config.sign_mode == SignMode::kSmooth && config.slow_jerk_psd > 0.0),
       use_cruise_(config.sign_mode == SignMode::kSmooth && config.cruise_window > 0.0) {
   if (!config.exact_covariance) build_gain_table();
+  // The window's sums move every sample while armed: one division less each.
+  if (use_cruise_) inv_cruise_window_ = 1.0 / config.cruise_window;
   reset();
 }
 
@@ -394,7 +396,7 @@ void Differentiator::advance_moments(double dt, double dx) noexcept {
                                              {1, 6, 15, 20, 15, 6, 1}};
   for (std::size_t k = 0; k < 4; ++k)
     moments_y_[k] -= dx * moments_[k];
-  const double d = -dt / cfg_.cruise_window;
+  const double d = -dt * inv_cruise_window_;
   double p[7];
   p[0] = 1.0;
   for (std::size_t i = 1; i < 7; ++i)
@@ -413,7 +415,7 @@ void Differentiator::advance_moments(double dt, double dx) noexcept {
   }
   moments_[0] += 1.0;
   ++window_count_;
-  const double inv_window = 1.0 / cfg_.cruise_window;
+  const double inv_window = inv_cruise_window_;
   const double t_now = window_t_[window_head_];
   const double x_now = window_x_[window_head_];
   // The ring must keep every sample of the window: at most capacity - 1, so
@@ -444,8 +446,9 @@ double Differentiator::cruise_probability() const noexcept {
   const double det_a = m[0] * m[2] - m[1] * m[1];
   if (!(det_a > 0.0)) return 0.0;
   // A^-1 B, column by column (A^-1 = [m2 -m1; -m1 m0] / det_a).
-  const double k00 = (m[2] * m[2] - m[1] * m[3]) / det_a, k10 = (m[0] * m[3] - m[1] * m[2]) / det_a;
-  const double k01 = (m[2] * m[3] - m[1] * m[4]) / det_a, k11 = (m[0] * m[4] - m[1] * m[3]) / det_a;
+  const double inv_a = 1.0 / det_a;
+  const double k00 = (m[2] * m[2] - m[1] * m[3]) * inv_a, k10 = (m[0] * m[3] - m[1] * m[2]) * inv_a;
+  const double k01 = (m[2] * m[3] - m[1] * m[4]) * inv_a, k11 = (m[0] * m[4] - m[1] * m[3]) * inv_a;
   const double s00 = m[4] - (m[2] * k00 + m[3] * k10);
   const double s01 = m[5] - (m[2] * k01 + m[3] * k11);
   const double s11 = m[6] - (m[3] * k01 + m[4] * k11);
@@ -453,7 +456,8 @@ double Differentiator::cruise_probability() const noexcept {
   const double r3 = b[3] - (k01 * b[0] + k11 * b[1]);
   const double det_s = s00 * s11 - s01 * s01;
   if (!(det_s > 0.0)) return 0.0;
-  const double i00 = s11 / det_s, i01 = -s01 / det_s, i11 = s00 / det_s;  // S^-1
+  const double inv_s = 1.0 / det_s;
+  const double i00 = s11 * inv_s, i01 = -s01 * inv_s, i11 = s00 * inv_s;  // S^-1
   const double c2 = i00 * r2 + i01 * r3, c3 = i01 * r2 + i11 * r3;
   // Acceleration and jerk at the newest sample, and their covariance.
   const double w2 = 1.0 / (window * window), w3 = w2 / window;
@@ -469,10 +473,12 @@ double Differentiator::cruise_probability() const noexcept {
   if (!(det0 > 0.0) || !(det1 > 0.0)) return 0.0;
   const double q0 = (cjj * acc * acc - 2.0 * caj * acc * jerk + caa * jerk * jerk) / det0;
   const double q1 = (pjj * acc * acc - 2.0 * caj * acc * jerk + paa * jerk * jerk) / det1;
-  const double log_bayes = -0.5 * (q0 - q1) + 0.5 * std::log(det1 / det0);
-  const double odds =
-      cfg_.cruise_prior / (1.0 - cfg_.cruise_prior) * std::exp(std::min(log_bayes, 50.0));
-  return odds / (1.0 + odds);
+  // P = odds / (1 + odds) with odds = prior odds x exp(-(q0 - q1) / 2)
+  // sqrt(det1 / det0), written as 1 / (1 + 1 / odds): no logarithm, and an
+  // exp() that overflows gives P = 0 and one that underflows P = 1.
+  const double inverse_odds = (1.0 - cfg_.cruise_prior) / cfg_.cruise_prior *
+                              std::exp(0.5 * (q0 - q1)) * std::sqrt(det0 / det1);
+  return 1.0 / (1.0 + inverse_odds);
 }
 
 Derivatives Differentiator::update(double t, double x) noexcept {

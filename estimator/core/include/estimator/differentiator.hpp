@@ -229,6 +229,7 @@ class Differentiator {
   // innovation squared averaged over kNisTime, and how long ago it last
   // exceeded cruise_nis.
   bool use_cruise_;
+  double inv_cruise_window_ = 0.0;  // 1 / cruise_window
   static constexpr std::size_t kWindowCapacity = 128;
   std::array<double, kWindowCapacity> window_t_{}, window_x_{};
   std::size_t window_head_ = 0, window_size_ = 0;
