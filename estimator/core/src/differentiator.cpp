@@ -529,8 +529,7 @@ Derivatives Differentiator::update(double t, double x) noexcept {
   // start-up prior (the steady-state gains would converge more slowly).
   if (settling_ > 0) --settling_;
   Step step;
-  const auto& a = acceleration_.state();
-  step.acc_innovation = x - (a[0] + dt * (a[1] + dt * (0.5 * a[2] + dt * (1.0 / 6.0) * a[3])));
+  step.acc_innovation = x - acceleration_.predicted(dt)[0];
   velocity_.update(dt, x);
   acceleration_.update(dt, x);
   // After a correction P[0][0] = K[0] r.

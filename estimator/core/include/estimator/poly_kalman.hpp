@@ -112,6 +112,18 @@ class PolyKalman {
 
   const Vec& state() const noexcept { return s_; }
   const Mat& covariance() const noexcept { return p_; }
+  /// The state predicted dt ahead, F s (F[i][j] = dt^(j-i) / (j-i)!).
+  Vec predicted(double dt) const noexcept {
+    const auto c = taylor<N>(dt);
+    Vec out;
+    for (std::size_t i = 0; i < N; ++i) {
+      double v = 0.0;
+      for (std::size_t j = i; j < N; ++j)
+        v += c[j - i] * s_[j];
+      out[i] = v;
+    }
+    return out;
+  }
 
  private:
   // dt^k / k! for k < M, with the divisions done at compile time.
@@ -128,18 +140,6 @@ class PolyKalman {
     for (std::size_t k = 1; k < M; ++k)
       c[k] = c[k - 1] * dt * inverse[k];
     return c;
-  }
-  // F s, F[i][j] = dt^(j-i) / (j-i)!.
-  Vec predicted(double dt) const noexcept {
-    const auto c = taylor<N>(dt);
-    Vec out;
-    for (std::size_t i = 0; i < N; ++i) {
-      double v = 0.0;
-      for (std::size_t j = i; j < N; ++j)
-        v += c[j - i] * s_[j];
-      out[i] = v;
-    }
-    return out;
   }
   void predict_state(double dt) noexcept { s_ = predicted(dt); }
 
