@@ -47,6 +47,8 @@ HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device,
       calibration_(config.joints, config.recalibration, config.drift, model_replicas(estimators_)),
       safety_(config.joints, config.limits, config.timing),
       oscillation_(config.joints, config.oscillation, config.rate_hz) {
+  for (auto& t : truths_)
+    t.seq = -1;
   if (static_cast<int>(estimators_.size()) != config_.joints)
     throw std::invalid_argument("haptic loop: one estimator per joint is needed");
   for (const auto& e : estimators_)
@@ -238,8 +240,16 @@ void HapticLoop::command_slave(const TickFacts& f) noexcept {
 }
 
 void HapticLoop::append_trace(const TickFacts& f) noexcept {
-  const std::uint64_t tv = link_.latest_truth(truth_);
-  const bool truth_matches = tv != 0 && have_state_ && truth_.seq == state_.seq;
+  const std::uint64_t tv = link_.latest_truth(truth_in_);
+  if (tv != 0 && tv != truth_version_ && truth_in_.seq >= 0) {
+    truth_version_ = tv;
+    truths_[static_cast<std::size_t>(truth_in_.seq) % truths_.size()] = truth_in_;
+  }
+  const bridge::SlaveTruthSample* truth =
+      have_state_ && state_.seq >= 0
+          ? &truths_[static_cast<std::size_t>(state_.seq) % truths_.size()]
+          : nullptr;
+  const bool truth_matches = truth != nullptr && truth_version_ != 0 && truth->seq == state_.seq;
   TraceRow row;
   row.t = static_cast<double>(f.now_ns - first_ns_) * 1e-9;
   row.state_seq = have_state_ ? state_.seq : -1;
@@ -256,10 +266,10 @@ void HapticLoop::append_trace(const TickFacts& f) noexcept {
     r.torque_cmd = f.out.torque[j];
     r.x_in = have_state_ ? state_.x_in[j] : nan;
     r.x_out = have_state_ ? state_.x_out[j] : nan;
-    r.true_tau_out = truth_matches ? truth_.tau_out[j] : nan;
-    r.true_x_out = truth_matches ? truth_.x_out[j] : nan;
-    r.indentation = truth_matches ? truth_.indentation[j] : nan;
-    r.contact_force = truth_matches ? truth_.contact_force[j] : nan;
+    r.true_tau_out = truth_matches ? truth->tau_out[j] : nan;
+    r.true_x_out = truth_matches ? truth->x_out[j] : nan;
+    r.indentation = truth_matches ? truth->indentation[j] : nan;
+    r.contact_force = truth_matches ? truth->contact_force[j] : nan;
   }
   trace_->append(row);
 }

@@ -166,8 +166,13 @@ int run_realtime_mode(const CliOptions& o) {
   inbox_options.expected_joints = kJoints;
   auto& commands = rx.subscribe<bridge::MasterCommandSample>(inbox_options);
   bridge::Sender tx(config);
-  auto& state_box = tx.outbox<bridge::SlaveStateSample>();
+  // The truth goes out before the state of the same tick (the sender drains
+  // its outboxes in creation order, LCM delivers one socket in order): a
+  // consumer that sees SLAVE_STATE seq N then already holds SLAVE_TRUTH N.
+  // The other order lost the match whenever the server's tick fell between
+  // the two arrivals, for most ticks at some phases on a loaded host.
   auto& truth_box = tx.outbox<bridge::SlaveTruthSample>();
+  auto& state_box = tx.outbox<bridge::SlaveStateSample>();
 
   VirtualSlave slave(setup.params, o.seed);
   for (int j = 0; j < kJoints; ++j)
@@ -230,8 +235,8 @@ int run_realtime_mode(const CliOptions& o) {
     truth.utime = state.utime;
     truth.seq = seq;
     fill_truth(truth, s);
-    state_box.publish(state);
     truth_box.publish(truth);
+    state_box.publish(state);
     ++seq;
     timing.compute.record(realtime::monotonic_now_ns() - woke);
     next += period_ns;

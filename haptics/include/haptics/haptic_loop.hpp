@@ -7,6 +7,7 @@
 // real-time runner (CLOCK_MONOTONIC) and in deterministic simulated time.
 // Nothing in tick() allocates, locks, blocks or prints.
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -230,7 +231,12 @@ class HapticLoop {
   LoopEvents events_;
 
   bridge::SlaveStateSample state_{};
-  bridge::SlaveTruthSample truth_{};
+  // The last few SLAVE_TRUTH samples by seq (slot seq % size): the loop reads
+  // the truth after the state, and a newer pair that lands in between must
+  // not lose the state's own truth. seq -1 marks an empty slot.
+  std::array<bridge::SlaveTruthSample, 4> truths_{};
+  bridge::SlaveTruthSample truth_in_{};
+  std::uint64_t truth_version_ = 0;
   std::uint64_t state_version_ = 0;
   std::uint64_t calibration_request_version_ = 0;
   bridge::CalibrationRequestSample calibration_request_{};
