@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The re-route demo's figures (issue 17), from haptic-server's trace and report.
 
-  reroute_report.py TRACE.csv REPORT.json REROUTE_AT_S WRAP RAMP_PER_S [CONTROL.csv]
+  reroute_report.py TRACE.csv REPORT.json REROUTE_AT_S WRAP RAMP_PER_S [CONTROL.csv [REFIT.csv]]
 
 Adds a "reroute" object to REPORT.json (every existing field kept) with the
 distal-torque error of joint 0 before the re-route, after it (before the
@@ -17,6 +17,13 @@ time window of the control ("control"), and the recalibrated phase is set
 beside its own window there: the phases before and after differ in content
 (the first follows a tared start, the last follows the sweep), the control
 does not.
+
+REFIT.csv: what a lab re-identification reaches on the new routing: the
+same scenario on a sheath re-routed from the start, with the model
+identified on that routing by the bench procedure *with* a tip load cell
+(the free-motion recalibration has no tip sensor). Measured over the same
+windows ("lab_refit"); "recalibrated_over_lab_refit" at or below 1 means the
+recalibration is as good as re-identifying in a lab there.
 """
 import csv
 import json
@@ -27,6 +34,7 @@ import sys
 trace_path, report_path = sys.argv[1], sys.argv[2]
 reroute_at, wrap, ramp = float(sys.argv[3]), sys.argv[4], float(sys.argv[5])
 control_path = sys.argv[6] if len(sys.argv) > 6 and os.path.exists(sys.argv[6]) else None
+refit_path = sys.argv[7] if len(sys.argv) > 7 and os.path.exists(sys.argv[7]) else None
 
 
 def read_trace(path):
@@ -109,11 +117,18 @@ end = float(trace[-1]["t"])
 phases = {"before": phase(0.0, t_reroute), "after": phase(t_reroute, min(t_applied, end)),
           "recalibrated": phase(t_settled, end) if applied else None}
 b, a, c = phases["before"], phases["after"], phases["recalibrated"]
-control = None
-if control_path:
-    rows_control = read_trace(control_path)
-    control = {k: phase(p["from_s"], p["to_s"] if p["to_s"] is not None else math.inf, rows_control)
-               for k, p in phases.items() if p}
+
+
+def same_windows(path):
+    """Each phase's error over the same time window of another run's trace."""
+    if not path:
+        return None
+    rows = read_trace(path)
+    return {k: phase(p["from_s"], p["to_s"] if p["to_s"] is not None else math.inf, rows)
+            for k, p in phases.items() if p}
+
+
+control, refit = same_windows(control_path), same_windows(refit_path)
 ratio = lambda x, y, k: (x[k] / y[k]) if x and y and x[k] and y[k] else None
 report["reroute"] = {
     "joint": 0, "at_slave_s": reroute_at, "at_s": t_reroute, "wrap_rad": wrap,
@@ -130,6 +145,10 @@ report["reroute"] = {
     "presses": presses(),
     "control": control,
     "recalibrated_over_control": ratio(c, control["recalibrated"], "rmse_nm") if control and c else None,
+    "lab_refit": refit,
+    "recalibrated_over_lab_refit": ratio(c, refit["recalibrated"], "rmse_nm") if refit and c else None,
+    "contact_recalibrated_over_lab_refit":
+        ratio(c, refit["recalibrated"], "contact_rmse_nm") if refit and c else None,
 }
 for p in report["reroute"]["presses"]:
     p["phase"] = ("before" if p["to_s"] < t_reroute else
@@ -166,6 +185,16 @@ if control:
         print(f"                                                   recalibrated window {fmt(control['recalibrated'])}")
     if report["reroute"]["recalibrated_over_control"]:
         print(f"   recalibrated / the same window never re-routed: {report['reroute']['recalibrated_over_control']:.2f}")
+if refit:
+    print(f"   the same windows with a lab re-identification (tsm fit with a tip load cell on the new routing):")
+    print(f"                                                   before window {fmt(refit['before'])}")
+    if "recalibrated" in refit:
+        print(f"                                                   recalibrated window {fmt(refit['recalibrated'])}")
+    rr = report["reroute"]
+    if rr["recalibrated_over_lab_refit"]:
+        print(f"   recalibrated (free motion, no tip sensor) / lab re-identification: {rr['recalibrated_over_lab_refit']:.2f}"
+              + (f", in contact {rr['contact_recalibrated_over_lab_refit']:.2f}"
+                 if rr["contact_recalibrated_over_lab_refit"] else ""))
 if report["reroute"]["recalibrated_over_before"]:
     print(f"   recalibrated / before: {report['reroute']['recalibrated_over_before']:.2f} "
           f"(target <= 1.2); after / before {report['reroute']['after_over_before']:.2f}")

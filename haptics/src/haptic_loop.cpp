@@ -124,7 +124,14 @@ void HapticLoop::recalibrate(const TickFacts& f) noexcept {
 // The estimator runs once per new sample, on the slave's own clock (utime),
 // so its differentiator sees true intervals.
 void HapticLoop::take_slave_state(TickFacts& f) noexcept {
+  // The truth is read right before and right after the state (evaluation
+  // only): SLAVE_TRUTH N arrives before SLAVE_STATE N, so one of the two
+  // reads sees the state's own truth unless two whole pairs land within
+  // these few instructions. A single read at the end of the tick lost it
+  // whenever the next pair arrived during the tick's device I/O.
+  collect_truth();
   const std::uint64_t version = link_.latest_state(state_);
+  collect_truth();
   if (version != 0 && version != state_version_) {
     state_version_ = version;
     ++counters_.slave_samples;
@@ -239,12 +246,14 @@ void HapticLoop::command_slave(const TickFacts& f) noexcept {
   link_.publish_command(command_);
 }
 
+void HapticLoop::collect_truth() noexcept {
+  const std::uint64_t version = link_.latest_truth(truth_in_);
+  if (version == 0 || version == truth_version_ || truth_in_.seq < 0) return;
+  truth_version_ = version;
+  truths_[static_cast<std::size_t>(truth_in_.seq) % truths_.size()] = truth_in_;
+}
+
 void HapticLoop::append_trace(const TickFacts& f) noexcept {
-  const std::uint64_t tv = link_.latest_truth(truth_in_);
-  if (tv != 0 && tv != truth_version_ && truth_in_.seq >= 0) {
-    truth_version_ = tv;
-    truths_[static_cast<std::size_t>(truth_in_.seq) % truths_.size()] = truth_in_;
-  }
   const bridge::SlaveTruthSample* truth =
       have_state_ && state_.seq >= 0
           ? &truths_[static_cast<std::size_t>(state_.seq) % truths_.size()]

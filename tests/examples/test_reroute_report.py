@@ -40,17 +40,19 @@ def write_trace(path, error_at):
 
 
 with tempfile.TemporaryDirectory() as d:
-    trace, control, report = (os.path.join(d, n) for n in ("trace.csv", "control.csv", "r.json"))
+    trace, control, refit, report = (os.path.join(d, n)
+                                      for n in ("trace.csv", "control.csv", "refit.csv", "r.json"))
     # Re-routed at 8 s: the error 0.001 before, 0.04 until the recalibration
     # (20 s, scales 1.5 / 1.4: settled 1 s later at 0.5/s), then 0.003; the
     # control 0.002 everywhere.
     write_trace(trace, lambda t: 0.001 if t < 8.0 else 0.04 if t < 21.0 else 0.003)
     write_trace(control, lambda t: 0.002)
+    write_trace(refit, lambda t: 0.006)
     json.dump({"calibration": {"events": [
         {"t_s": 10.0, "kind": "drift_alarm", "joint": 0, "scale": 1.4},
         {"t_s": 20.0, "kind": "applied", "joint": 0, "scale": 1.45,
          "scale_positive": 1.5, "scale_negative": 1.4}]}}, open(report, "w"))
-    out = subprocess.run([sys.executable, script, trace, report, "8", "5.1", "0.5", control],
+    out = subprocess.run([sys.executable, script, trace, report, "8", "5.1", "0.5", control, refit],
                          capture_output=True, text=True)
     check("exit 0", out.returncode == 0)
     r = json.load(open(report))["reroute"]
@@ -69,12 +71,16 @@ with tempfile.TemporaryDirectory() as d:
     check("press errors", len(presses) == 2 and near(presses[0]["rmse_nm"], 0.001)
           and near(presses[1]["rmse_nm"], 0.003))
     check("summary names the control", "never re-routed" in out.stderr + out.stdout)
+    check("lab refit over the same windows", near(r["lab_refit"]["recalibrated"]["rmse_nm"], 0.006))
+    check("recalibrated / lab refit", near(r["recalibrated_over_lab_refit"], 0.5))
+    check("in contact / lab refit", near(r["contact_recalibrated_over_lab_refit"], 0.5))
+    check("summary names the lab refit", "lab re-identification" in out.stderr + out.stdout)
     # Without a control the report has none (and says nothing of it).
     json.dump({"calibration": {"events": []}}, open(report, "w"))
     out = subprocess.run([sys.executable, script, trace, report, "8", "5.1", "0.5"],
                          capture_output=True, text=True)
     r = json.load(open(report))["reroute"]
-    check("no control: none", out.returncode == 0 and r["control"] is None
+    check("no control: none", out.returncode == 0 and r["control"] is None and r["lab_refit"] is None
           and r["recalibrated_over_control"] is None and r["phases"]["recalibrated"] is None)
 
 for name in failures:

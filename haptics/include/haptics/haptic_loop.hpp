@@ -191,6 +191,7 @@ class HapticLoop {
   void decide_state(TickFacts& f) noexcept;
   void render(TickFacts& f) noexcept;
   void command_slave(const TickFacts& f) noexcept;
+  void collect_truth() noexcept;
   void append_trace(const TickFacts& f) noexcept;
   std::int32_t status_flags_of(const TickFacts& f) const noexcept;
   void publish_status(const TickFacts& f) noexcept;
@@ -231,9 +232,10 @@ class HapticLoop {
   LoopEvents events_;
 
   bridge::SlaveStateSample state_{};
-  // The last few SLAVE_TRUTH samples by seq (slot seq % size): the loop reads
-  // the truth after the state, and a newer pair that lands in between must
-  // not lose the state's own truth. seq -1 marks an empty slot.
+  // The last few SLAVE_TRUTH samples by seq (slot seq % size), collected
+  // around the state's read (take_slave_state): the newest truth is often a
+  // pair ahead of the state by the time the trace row is written. seq -1
+  // marks an empty slot.
   std::array<bridge::SlaveTruthSample, 4> truths_{};
   bridge::SlaveTruthSample truth_in_{};
   std::uint64_t truth_version_ = 0;
