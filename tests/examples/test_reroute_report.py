@@ -65,6 +65,9 @@ with tempfile.TemporaryDirectory() as d:
     check("after / before", near(r["after_over_before"], 40.0))
     check("control over the same windows", near(r["control"]["recalibrated"]["rmse_nm"], 0.002))
     check("recalibrated / control", near(r["recalibrated_over_control"], 1.5))
+    check("in contact / control", near(r["contact_recalibrated_over_control"], 1.5))
+    check("the control's own phase ratio", near(r["control_recalibrated_over_before"], 1.0))
+    check("verdict on the control", "(target <= 1.2: NOT met)" in out.stderr + out.stdout)
     presses = r["presses"]
     check("two presses", len(presses) == 2)
     check("press phases", [p["phase"] for p in presses] == ["before", "recalibrated"])
