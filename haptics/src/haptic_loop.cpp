@@ -247,6 +247,7 @@ void HapticLoop::command_slave(const TickFacts& f) noexcept {
 }
 
 void HapticLoop::collect_truth() noexcept {
+  if (!trace_) return;  // the truth only ever goes into the trace
   const std::uint64_t version = link_.latest_truth(truth_in_);
   if (version == 0 || version == truth_version_ || truth_in_.seq < 0) return;
   truth_version_ = version;
@@ -254,11 +255,10 @@ void HapticLoop::collect_truth() noexcept {
 }
 
 void HapticLoop::append_trace(const TickFacts& f) noexcept {
-  const bridge::SlaveTruthSample* truth =
-      have_state_ && state_.seq >= 0
-          ? &truths_[static_cast<std::size_t>(state_.seq) % truths_.size()]
-          : nullptr;
-  const bool truth_matches = truth != nullptr && truth_version_ != 0 && truth->seq == state_.seq;
+  // Empty slots hold seq -1, so a slot matches only a truth collected for this state.
+  const bridge::SlaveTruthSample& truth =
+      truths_[static_cast<std::size_t>(std::max<std::int64_t>(state_.seq, 0)) % truths_.size()];
+  const bool truth_matches = have_state_ && state_.seq >= 0 && truth.seq == state_.seq;
   TraceRow row;
   row.t = static_cast<double>(f.now_ns - first_ns_) * 1e-9;
   row.state_seq = have_state_ ? state_.seq : -1;
@@ -275,10 +275,10 @@ void HapticLoop::append_trace(const TickFacts& f) noexcept {
     r.torque_cmd = f.out.torque[j];
     r.x_in = have_state_ ? state_.x_in[j] : nan;
     r.x_out = have_state_ ? state_.x_out[j] : nan;
-    r.true_tau_out = truth_matches ? truth->tau_out[j] : nan;
-    r.true_x_out = truth_matches ? truth->x_out[j] : nan;
-    r.indentation = truth_matches ? truth->indentation[j] : nan;
-    r.contact_force = truth_matches ? truth->contact_force[j] : nan;
+    r.true_tau_out = truth_matches ? truth.tau_out[j] : nan;
+    r.true_x_out = truth_matches ? truth.x_out[j] : nan;
+    r.indentation = truth_matches ? truth.indentation[j] : nan;
+    r.contact_force = truth_matches ? truth.contact_force[j] : nan;
   }
   trace_->append(row);
 }
