@@ -228,6 +228,10 @@ int main(int argc, char** argv) {
   DifferentiatorConfig diff{};
   app.add_option("--jerk-psd", diff.jerk_psd, "Velocity channel jerk PSD (default as deployed)");
   app.add_option("--snap-psd", diff.snap_psd, "Acceleration channel snap PSD");
+  app.add_option("--fine-psd", diff.fine_psd,
+                 "Fine acceleration channel crackle PSD (0: off; smooth sign)");
+  app.add_option("--fine-consistency", diff.fine_consistency,
+                 "smooth sign: the fine channel decides within this many fast sd of it");
   app.add_option("--slow-jerk-psd", diff.slow_jerk_psd,
                  "Slow acceleration channel jerk PSD (0: off, the fast channel alone)");
   app.add_option("--slow-consistency", diff.slow_consistency,

@@ -238,11 +238,11 @@ TEST(Differentiator, ScheduledGainsMatchTheFullRecursionOnceSettled) {
   EXPECT_LT(std::sqrt(se_a / n), 0.1);  // below the estimate's own sd (0.16)
 }
 
-// The steady-state step runs the three channels fused, in vector pairs (the
+// The steady-state step runs the four channels fused, in vector pairs (the
 // 1 kHz loop's hot path); it must compute exactly what each channel's
 // PolyKalman::update_with_gain computes with the gains steady_gains() reports,
 // bit for bit, on uneven intervals across the table (fine and coarse part),
-// in all three sign modes and without the slow channel.
+// in all three sign modes and without the slow or the fine channel.
 TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
   const auto same = [](double a, double b) {
     std::uint64_t x, y;
@@ -251,8 +251,8 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
     return x == y;
   };
   for (const SignMode mode : {SignMode::kSmooth, SignMode::kSmoothFast, SignMode::kHard}) {
-    for (const double slow_psd : {1e-3, 0.0}) {
-      DifferentiatorConfig cfg{.slow_jerk_psd = slow_psd, .sign_mode = mode};
+    for (const auto& [slow_psd, fine_psd] : {std::pair{1e-3, 1e5}, {0.0, 1e5}, {1e-3, 0.0}}) {
+      DifferentiatorConfig cfg{.fine_psd = fine_psd, .slow_jerk_psd = slow_psd, .sign_mode = mode};
       // The sign is rebuilt below from the channels alone; the cruise
       // hypothesis (its own tests) would arm on this input's long gaps.
       cfg.cruise_window = 0.0;
@@ -260,6 +260,8 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
       const double r = cfg.quantum * cfg.quantum / 12.0;
       PolyKalman<3> velocity(cfg.jerk_psd, r), slow(slow_psd > 0.0 ? slow_psd : 1.0, r);
       PolyKalman<4> acceleration(cfg.snap_psd, r);
+      PolyKalman<5> fine(fine_psd > 0.0 ? fine_psd : 1.0, r);
+      const bool use_fine = mode == SignMode::kSmooth && fine_psd > 0.0;
       // A reproducible sequence of intervals (not std::uniform_*, whose
       // output is the library's own): 0.3-1.7 ms, now and then 2-20 ms.
       std::uint64_t lcg = 12345;
@@ -280,6 +282,7 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
           velocity.start(x, {0.0, 10.0, 100.0});
           acceleration.start(x, {0.0, 10.0, 100.0, 1000.0});
           slow.start(x, {0.0, 10.0, 100.0});
+          fine.start(x, {0.0, 10.0, 100.0, 1000.0, 10000.0});
           continue;
         }
         // The first 100 intervals run the full recursion (the settling).
@@ -287,20 +290,28 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
           velocity.update(t - t_prev, x);
           acceleration.update(t - t_prev, x);
           if (mode == SignMode::kSmooth && slow_psd > 0.0) slow.update(t - t_prev, x);
+          if (use_fine) fine.update(t - t_prev, x);
           continue;
         }
         const auto g = d.steady_gains(t - t_prev);
         velocity.update_with_gain(t - t_prev, x, g.velocity);
         acceleration.update_with_gain(t - t_prev, x, g.acceleration);
         slow.update_with_gain(t - t_prev, x, g.slow);
+        fine.update_with_gain(t - t_prev, x, g.fine);
         ++steady;
         if (!same(out.x, velocity.state()[0]) || !same(out.xd, velocity.state()[1]) ||
             !same(out.xdd, acceleration.state()[2]) || !same(out.acc_sd, g.acc_sd))
           ++mismatches;
         if (mode != SignMode::kHard) {
           // Away from rest (the still_time rule decides there): the ramp.
-          const double xdd = acceleration.state()[2];
+          double xdd = acceleration.state()[2];
           double sign = std::clamp(xdd * g.inv_width, -1.0, 1.0);
+          if (use_fine) {
+            const double f_xdd = fine.state()[2];
+            const double k = std::min(1.0, std::fabs(xdd - f_xdd) * g.inv_fine_consistency);
+            sign = k * k * sign + (1.0 - k * k) * std::clamp(f_xdd * g.fine_inv_width, -1.0, 1.0);
+            xdd = k * k * xdd + (1.0 - k * k) * f_xdd;
+          }
           if (mode == SignMode::kSmooth && slow_psd > 0.0) {
             const double s_xdd = slow.state()[2];
             const double k = std::min(1.0, std::fabs(xdd - s_xdd) * g.inv_consistency);
@@ -310,7 +321,8 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
         }
       }
       EXPECT_EQ(steady, 19899);
-      EXPECT_EQ(mismatches, 0) << "mode " << static_cast<int>(mode) << " slow " << slow_psd;
+      EXPECT_EQ(mismatches, 0) << "mode " << static_cast<int>(mode) << " slow " << slow_psd
+                               << " fine " << fine_psd;
     }
   }
 }

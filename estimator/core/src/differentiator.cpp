@@ -48,7 +48,9 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
       velocity_(config.jerk_psd, r_),
       acceleration_(config.snap_psd, r_),
       slow_(config.slow_jerk_psd > 0.0 ? config.slow_jerk_psd : 1.0, r_),
+      fine_(config.fine_psd > 0.0 ? config.fine_psd : 1.0, r_),
       use_slow_(config.sign_mode == SignMode::kSmooth && config.slow_jerk_psd > 0.0),
+      use_fine_(config.sign_mode == SignMode::kSmooth && config.fine_psd > 0.0),
       use_cruise_(config.sign_mode == SignMode::kSmooth && config.cruise_window > 0.0) {
   if (!config.exact_covariance) build_gain_table();
   // The window's sums move every sample while armed: one division less each.
@@ -71,28 +73,39 @@ void Differentiator::build_gain_table() {
   const PolyKalman<3>::Mat* warm_v = nullptr;
   const PolyKalman<4>::Mat* warm_a = nullptr;
   const PolyKalman<3>::Mat* warm_s = nullptr;
+  const PolyKalman<5>::Mat* warm_f = nullptr;
   PolyKalman<3>::Mat pv, ps;
   PolyKalman<4>::Mat pa;
+  PolyKalman<5>::Mat pf;
   for (std::size_t k = 0; k < n; ++k) {
     const double dt = grid_dt(k);
     auto [kv, pv_k] = PolyKalman<3>::steady_state(cfg_.jerk_psd, r_, dt, warm_v);
     auto [ka, pa_k] = PolyKalman<4>::steady_state(cfg_.snap_psd, r_, dt, warm_a);
     auto [ks, ps_k] = use_slow_ ? PolyKalman<3>::steady_state(cfg_.slow_jerk_psd, r_, dt, warm_s)
                                 : std::pair<PolyKalman<3>::Vec, PolyKalman<3>::Mat>{{}, {}};
+    auto [kf, pf_k] = use_fine_ ? PolyKalman<5>::steady_state(cfg_.fine_psd, r_, dt, warm_f)
+                                : std::pair<PolyKalman<5>::Vec, PolyKalman<5>::Mat>{{}, {}};
     pv = pv_k;
     pa = pa_k;
     ps = ps_k;
+    pf = pf_k;
     warm_v = &pv;
     warm_a = &pa;
     warm_s = &ps;
+    warm_f = &pf;
     const double sd = std::sqrt(pa[2][2]);
     GainRow& row = gains_[k].at;
     for (std::size_t i = 0; i < 3; ++i) {
       row[kGainPairs + 2 * i] = kv[i];
       row[kGainPairs + 2 * i + 1] = ks[i];
     }
-    for (std::size_t i = 0; i < 4; ++i)
-      row[kGainAcc + i] = ka[i];
+    for (std::size_t i = 0; i < 4; ++i) {
+      row[kGainAccFine + 2 * i] = ka[i];
+      row[kGainAccFine + 2 * i + 1] = kf[i];
+    }
+    row[kGainFine4] = kf[4];
+    row[kFineInvWidth] = use_fine_ ? 1.0 / (cfg_.smooth_sigmas * std::sqrt(pf[2][2])) : 0.0;
+    row[kInvFineConsistency] = 1.0 / (cfg_.fine_consistency * sd);
     row[kSlowInvWidth] = use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(ps[2][2])) : 0.0;
     row[kInvConsistency] = 1.0 / (cfg_.slow_consistency * sd);
     row[kAccSd] = sd;
@@ -155,8 +168,13 @@ Differentiator::SteadyGains Differentiator::steady_gains(double dt) const noexce
     out.velocity[i] = g[kGainPairs + 2 * i];
     out.slow[i] = g[kGainPairs + 2 * i + 1];
   }
-  for (std::size_t i = 0; i < 4; ++i)
-    out.acceleration[i] = g[kGainAcc + i];
+  for (std::size_t i = 0; i < 4; ++i) {
+    out.acceleration[i] = g[kGainAccFine + 2 * i];
+    out.fine[i] = g[kGainAccFine + 2 * i + 1];
+  }
+  out.fine[4] = g[kGainFine4];
+  out.fine_inv_width = g[kFineInvWidth];
+  out.inv_fine_consistency = g[kInvFineConsistency];
   out.acc_sd = g[kAccSd];
   out.inv_width = g[kInvWidth];
   out.slow_inv_width = g[kSlowInvWidth];
@@ -169,17 +187,21 @@ void Differentiator::enter_steady() noexcept {
     pair_state_[2 * i] = velocity_.state()[i];
     pair_state_[2 * i + 1] = slow_.state()[i];
   }
-  acc_state_ = acceleration_.state();
+  for (std::size_t i = 0; i < 4; ++i) {
+    acc_fine_state_[2 * i] = acceleration_.state()[i];
+    acc_fine_state_[2 * i + 1] = fine_.state()[i];
+  }
+  fine_snap_ = fine_.state()[4];
   steady_ = true;
 }
 
-// gain_for() and PolyKalman::update_with_gain for the three channels at
+// gain_for() and PolyKalman::update_with_gain for the four channels at
 // once, operation for operation (the same results, bit for bit;
 // test_differentiator.cpp pins it), written for the processor rather than
 // per channel: F(dt) is formed once, the velocity and slow channels (the
-// same F) run side by side as Pairs, as do the interpolation of the gains
-// and most of the acceleration channel; nothing goes through memory but the
-// state.
+// same F) run side by side as Pairs, as do the acceleration and fine
+// channels (the fine one's fifth state added to its lane alone) and the
+// interpolation of the gains; nothing goes through memory but the state.
 inline Differentiator::Step Differentiator::steady_step(double dt, double z) noexcept {
   // The interval's gains (gain_for()): node + w (next node - node).
   const double pos = gain_position(dt);
@@ -195,7 +217,8 @@ inline Differentiator::Step Differentiator::steady_step(double dt, double z) noe
   const double c1 = dt;
   const double c2 = c1 * dt * 0.5;
   const double c3 = c2 * dt * (1.0 / 3.0);
-  const Pair zero = splat(0.0), c1s = splat(c1), c2s = splat(c2), zs = splat(z);
+  const double c4 = c3 * dt * 0.25;
+  const Pair zero = splat(0.0), c1s = splat(c1), c2s = splat(c2), c3s = splat(c3), zs = splat(z);
 
   // Velocity and slow channel: {velocity[i], slow[i]}.
   const Pair s0 = load_pair(&pair_state_[0]), s1 = load_pair(&pair_state_[2]),
@@ -208,33 +231,47 @@ inline Differentiator::Step Differentiator::steady_step(double dt, double z) noe
   store_pair(&pair_state_[2], p1 + gain(kGainPairs + 2) * innovation);
   store_pair(&pair_state_[4], p2 + gain(kGainPairs + 4) * innovation);
 
-  // Acceleration channel: {a[0], a[1]} and {a[2], a[3]}; the terms lane 1
-  // has no counterpart for are added to lane 0 alone, in their place in
-  // the sum.
-  const Pair a01 = load_pair(&acc_state_[0]), a23 = load_pair(&acc_state_[2]);
-  const Pair a12 = Pair{a01[1], a23[0]};
-  const double a3 = a23[1];
-  Pair q01 = zero + a01 + c1s * a12 + c2s * a23;
-  q01[0] += c3 * a3;
-  Pair q23 = zero + a23;
-  q23[0] += c1 * a3;
-  const Pair acc_innovation = splat(z - q01[0]);
-  const Pair acc_gain01 = gain(kGainAcc);
-  store_pair(&acc_state_[0], q01 + acc_gain01 * acc_innovation);
-  store_pair(&acc_state_[2], q23 + gain(kGainAcc + 2) * acc_innovation);
+  // Acceleration and fine channel: {acceleration[i], fine[i]}, i < 4; the
+  // fine channel's fifth state (f4) has no counterpart: its terms are added
+  // to lane 1 alone, last, where its place in the sum is.
+  const Pair a0 = load_pair(&acc_fine_state_[0]), a1 = load_pair(&acc_fine_state_[2]),
+             a2 = load_pair(&acc_fine_state_[4]), a3 = load_pair(&acc_fine_state_[6]);
+  const double f4 = fine_snap_;
+  Pair q0 = zero + a0 + c1s * a1 + c2s * a2 + c3s * a3;
+  q0[1] += c4 * f4;
+  Pair q1 = zero + a1 + c1s * a2 + c2s * a3;
+  q1[1] += c3 * f4;
+  Pair q2 = zero + a2 + c1s * a3;
+  q2[1] += c2 * f4;
+  Pair q3 = zero + a3;
+  q3[1] += c1 * f4;
+  const double q4 = 0.0 + f4;
+  const Pair innovations = zs - q0;
+  const Pair gain0 = gain(kGainAccFine);
+  store_pair(&acc_fine_state_[0], q0 + gain0 * innovations);
+  store_pair(&acc_fine_state_[2], q1 + gain(kGainAccFine + 2) * innovations);
+  const Pair xdd = q2 + gain(kGainAccFine + 4) * innovations;
+  store_pair(&acc_fine_state_[4], xdd);
+  store_pair(&acc_fine_state_[6], q3 + gain(kGainAccFine + 6) * innovations);
+  const Pair fine4_width = gain(kGainFine4);
+  fine_snap_ = q4 + fine4_width[0] * innovations[1];
 
-  const Pair slow_consistency = gain(kSlowInvWidth), sd_width = gain(kAccSd);
+  const Pair slow_consistency = gain(kSlowInvWidth), sd_width = gain(kAccSd),
+             fine_consistency = gain(kInvFineConsistency);
   Step step;
   step.x = pair_state_[0];
   step.xd = pair_state_[2];
-  step.xdd = acc_state_[2];
+  step.xdd = xdd[0];
+  step.fine_xdd = xdd[1];
   step.slow_xdd = pair_state_[5];
   step.acc_sd = sd_width[0];
   step.inv_width = sd_width[1];
   step.slow_inv_width = slow_consistency[0];
   step.inv_consistency = slow_consistency[1];
-  step.acc_innovation = acc_innovation[0];
-  step.acc_gain0 = acc_gain01[0];
+  step.fine_inv_width = fine4_width[1];
+  step.inv_fine_consistency = fine_consistency[0];
+  step.acc_innovation = innovations[0];
+  step.acc_gain0 = gain0[0];
   return step;
 }
 
@@ -251,6 +288,7 @@ void Differentiator::start(double t, double x) noexcept {
   velocity_.start(x, {0.0, 10.0, 100.0});
   acceleration_.start(x, {0.0, 10.0, 100.0, 1000.0});
   slow_.start(x, {0.0, 10.0, 100.0});
+  fine_.start(x, {0.0, 10.0, 100.0, 1000.0, 10000.0});
   in_band_ = 0.0;
   last_x_ = x;
   still_ = 0.0;
@@ -267,9 +305,7 @@ void Differentiator::start(double t, double x) noexcept {
   out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
 }
 
-inline double Differentiator::decide_sign(double xdd, double slow_xdd, double sd, double inv_width,
-                                          double slow_inv_width, double inv_consistency,
-                                          double dt) noexcept {
+inline double Differentiator::decide_sign(const Step& step, double dt) noexcept {
   // At rest the true acceleration is exactly 0 and the model's state must
   // not move; the acceleration estimate still rings for a while after a stop
   // (the jerk ends abruptly), so an encoder that has not moved decides.
@@ -281,15 +317,27 @@ inline double Differentiator::decide_sign(double xdd, double slow_xdd, double sd
     // The expected sign across the estimate's uncertainty, as a ramp: no
     // decision delay at a zero crossing and no chatter. The model is linear
     // in sgn(xdd), so a fraction acts as the expected value of both branches.
-    double sign = std::clamp(xdd * inv_width, -1.0, 1.0);
+    double xdd = step.xdd;
+    double sign = std::clamp(xdd * step.inv_width, -1.0, 1.0);
+    if (use_fine_) {
+      // Where the fast estimate agrees with the fine channel's (within the
+      // fast one's noise), the motion is as smooth as the fine channel's
+      // model and its finer estimate decides; where they disagree (a
+      // manoeuvre, which the smoother model follows late) the fast one does.
+      // The blended acceleration is what the slow channel is then held against.
+      const double d = std::min(1.0, std::fabs(xdd - step.fine_xdd) * step.inv_fine_consistency);
+      const double fine = std::clamp(step.fine_xdd * step.fine_inv_width, -1.0, 1.0);
+      sign = d * d * sign + (1.0 - d * d) * fine;
+      xdd = d * d * xdd + (1.0 - d * d) * step.fine_xdd;
+    }
     if (use_slow_) {
       // Where the fast estimate agrees with the slow channel's (within its own
       // noise), the motion's acceleration varies slowly and the slow channel,
       // with a fraction of the noise, tells its sign: in creeping motion the
       // fast channel's noise alone would flip eq. (4)'s drive at random.
       // Where they disagree (a reversal, a stop) the slow one lags: fast decides.
-      const double d = std::min(1.0, std::fabs(xdd - slow_xdd) * inv_consistency);
-      const double slow = std::clamp(slow_xdd * slow_inv_width, -1.0, 1.0);
+      const double d = std::min(1.0, std::fabs(xdd - step.slow_xdd) * step.inv_consistency);
+      const double slow = std::clamp(step.slow_xdd * step.slow_inv_width, -1.0, 1.0);
       sign = d * d * sign + (1.0 - d * d) * slow;
     }
     // After a manoeuvre the acceleration channel could not follow, the motion
@@ -306,8 +354,9 @@ inline double Differentiator::decide_sign(double xdd, double slow_xdd, double sd
   // own uncertainty; a decided sign is held inside the release band for
   // sign_hold (through the end of a deceleration), then 0.
   const bool fixed = cfg_.acc_sign_threshold >= 0.0;
-  const double on = fixed ? cfg_.acc_sign_threshold : cfg_.sign_sigmas * sd;
-  const double off = fixed ? cfg_.acc_sign_threshold : cfg_.sign_release * sd;
+  const double xdd = step.xdd;
+  const double on = fixed ? cfg_.acc_sign_threshold : cfg_.sign_sigmas * step.acc_sd;
+  const double off = fixed ? cfg_.acc_sign_threshold : cfg_.sign_release * step.acc_sd;
   double sign = out_.acc_sign;
   if (sign * xdd < off) {
     in_band_ += dt;
@@ -499,7 +548,7 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     step = full_step(dt, x);
   } else {
     if (!steady_) enter_steady();
-    // Without the slow channel its gains are 0: its lane runs idle.
+    // Without the slow or fine channel its gains are 0: its lane runs idle.
     step = steady_step(dt, x);
   }
   // The acceleration channel's innovation against its predicted variance,
@@ -507,8 +556,7 @@ Derivatives Differentiator::update(double t, double x) noexcept {
   if (use_cruise_) track_consistency(t, x, step.acc_innovation, r_ / (1.0 - step.acc_gain0), dt);
   still_ = x == last_x_ ? still_ + dt : 0.0;
   last_x_ = x;
-  const double sign = decide_sign(step.xdd, step.slow_xdd, step.acc_sd, step.inv_width,
-                                  step.slow_inv_width, step.inv_consistency, dt);
+  const double sign = decide_sign(step, dt);
   // out_ written in 16-byte pairs from registers, the way it is copied to
   // the result: field by field, GCC merged the copy into 16-byte loads of
   // two 8-byte stores, which the processor cannot forward (a stall on the
@@ -537,6 +585,11 @@ Derivatives Differentiator::update(double t, double x) noexcept {
   step.acc_sd = std::sqrt(acceleration_.covariance()[2][2]);
   step.inv_width = 1.0 / (cfg_.smooth_sigmas * step.acc_sd);
   if (use_slow_) slow_.update(dt, x);
+  if (use_fine_) fine_.update(dt, x);
+  step.fine_xdd = fine_.state()[2];
+  step.fine_inv_width =
+      use_fine_ ? 1.0 / (cfg_.smooth_sigmas * std::sqrt(fine_.covariance()[2][2])) : 0.0;
+  step.inv_fine_consistency = 1.0 / (cfg_.fine_consistency * step.acc_sd);
   step.slow_inv_width =
       use_slow_ ? 1.0 / (cfg_.slow_sigmas * std::sqrt(slow_.covariance()[2][2])) : 0.0;
   step.inv_consistency = 1.0 / (cfg_.slow_consistency * step.acc_sd);

@@ -3,18 +3,22 @@
 // acceleration and the sign of the acceleration, causally (the haptic loop
 // and `tsm simulate` run exactly this, sample by sample).
 //
-// Three polynomial Kalman filters on the same samples, each discretised for
+// Four polynomial Kalman filters on the same samples, each discretised for
 // the actual interval (uneven time stamps and dropped samples are exact):
 // - the velocity channel (white jerk, about 12 Hz) gives x and xd;
 // - the acceleration channel (white snap, a few Hz, zero lag on constant
 //   jerk) gives xdd and its own uncertainty;
+// - the fine acceleration channel (white crackle, the fifth derivative: a
+//   smoother motion model that predicts a hand's curving acceleration
+//   further) resolves the accelerations of smooth motion more finely;
 // - the slow acceleration channel (white jerk of tiny density: nearly
 //   constant acceleration) resolves the small, lasting accelerations of slow
 //   motion that the acceleration channel's noise buries.
 // sgn(xdd), on which eq. (4) and the branches of eqs. (5)-(10) switch, is by
-// default the expected sign across the estimate's uncertainty (SignMode), from
-// the slow channel where the two acceleration estimates agree, else from the
-// fast one, and weighted by 1 - P(cruise) for a while after a manoeuvre the
+// default the expected sign across the estimate's uncertainty (SignMode):
+// from the fine channel where it agrees with the fast one, from the slow
+// channel where that agrees too, else from the fast one (a manoeuvre the
+// smoother models lag), and weighted by 1 - P(cruise) for a while after a manoeuvre the
 // acceleration channel could not follow (a reversal: on the stroke after it
 // the true xdd is exactly 0, while that channel rings); exactly 0 once the
 // encoder has been still for `still_time`. Delay, noise and accuracy are
@@ -65,6 +69,16 @@ struct DifferentiatorConfig {
   /// Acceleration channel (xdd and its uncertainty): spectral density of the
   /// snap, (rad/s^4)^2/Hz.
   double snap_psd = 3200.0;
+  /// Fine acceleration channel (white crackle: x, xd, xdd, jerk, snap),
+  /// spectral density of the fifth derivative, (rad/s^5)^2/Hz; 0: off
+  /// (smooth sign only). On smooth motion it resolves the acceleration about
+  /// twice as finely as the snap model; a manoeuvre (a reversal, the start or
+  /// end of a move) it follows late, and there the fast channel decides.
+  double fine_psd = 1e5;
+  /// Smooth sign: the fine channel decides while the fast estimate lies
+  /// within this many of the fast channel's standard deviations of it
+  /// (blended quadratically out to that distance, like slow_consistency).
+  double fine_consistency = 3.0;
   /// Slow acceleration channel (white jerk), (rad/s^3)^2/Hz; 0: off. It
   /// resolves the small, lasting accelerations of slow motion, which decide
   /// the direction of eq. (4)'s drive below |xd| = lambda and which the fast
@@ -149,8 +163,11 @@ class Differentiator {
   struct SteadyGains {
     PolyKalman<3>::Vec velocity{}, slow{};
     PolyKalman<4>::Vec acceleration{};
+    PolyKalman<5>::Vec fine{};
     double acc_sd = 0.0;           ///< sd of xdd, rad/s^2
     double inv_width = 0.0;        ///< 1 / (smooth_sigmas acc_sd)
+    double fine_inv_width = 0.0;   ///< 1 / (smooth_sigmas fine sd); 0 without the fine channel
+    double inv_fine_consistency = 0.0;  ///< 1 / (fine_consistency acc_sd)
     double slow_inv_width = 0.0;   ///< 1 / (slow_sigmas slow sd); 0 without the slow channel
     double inv_consistency = 0.0;  ///< 1 / (slow_consistency acc_sd)
   };
@@ -159,8 +176,8 @@ class Differentiator {
 
  private:
   void start(double t, double x) noexcept;
-  double decide_sign(double xdd, double slow_xdd, double sd, double inv_width,
-                     double slow_inv_width, double inv_consistency, double dt) noexcept;
+  struct Step;
+  double decide_sign(const Step& step, double dt) noexcept;
   void track_consistency(double t, double x, double innovation, double innovation_var,
                          double dt) noexcept;
   double cruise_probability() const noexcept;
@@ -173,22 +190,28 @@ class Differentiator {
   PolyKalman<3> velocity_;
   PolyKalman<4> acceleration_;
   PolyKalman<3> slow_;
-  // The slow channel runs only where it decides something: the smooth sign
-  // with slow_jerk_psd > 0.
+  PolyKalman<5> fine_;
+  // The slow and fine channels run only where they decide something: the
+  // smooth sign with slow_jerk_psd > 0, fine_psd > 0.
   bool use_slow_;
+  bool use_fine_;
   // Steady-state gains by interval (exact_covariance false): node k is for
-  // the interval grid_dt(k); see gain_for(). A row holds the three
+  // the interval grid_dt(k); see gain_for(). A row holds the four
   // channels' gains and what decide_sign() needs; the velocity and slow
   // gains are interleaved ({velocity[i], slow[i]}) because the steady-state
   // step advances those two channels (both white jerk, the same F(dt))
-  // side by side, as pairs of doubles.
-  static constexpr std::size_t kGainPairs = 0;        // 3 pairs {velocity[i], slow[i]}
-  static constexpr std::size_t kGainAcc = 6;          // acceleration[0..3]
-  static constexpr std::size_t kSlowInvWidth = 10;    // 1 / (slow_sigmas slow sd)
-  static constexpr std::size_t kInvConsistency = 11;  // 1 / (slow_consistency acc_sd)
-  static constexpr std::size_t kAccSd = 12;
-  static constexpr std::size_t kInvWidth = 13;  // 1 / (smooth_sigmas acc_sd)
-  static constexpr std::size_t kGainFields = 14;
+  // side by side, as pairs of doubles; so are the acceleration and fine
+  // channels' first four ({acceleration[i], fine[i]}).
+  static constexpr std::size_t kGainPairs = 0;       // 3 pairs {velocity[i], slow[i]}
+  static constexpr std::size_t kGainAccFine = 6;     // 4 pairs {acceleration[i], fine[i]}
+  static constexpr std::size_t kGainFine4 = 14;      // fine[4]
+  static constexpr std::size_t kFineInvWidth = 15;   // 1 / (smooth_sigmas fine sd)
+  static constexpr std::size_t kSlowInvWidth = 16;   // 1 / (slow_sigmas slow sd)
+  static constexpr std::size_t kInvConsistency = 17; // 1 / (slow_consistency acc_sd)
+  static constexpr std::size_t kAccSd = 18;
+  static constexpr std::size_t kInvWidth = 19;  // 1 / (smooth_sigmas acc_sd)
+  static constexpr std::size_t kInvFineConsistency = 20;  // 1 / (fine_consistency acc_sd)
+  static constexpr std::size_t kGainFields = 22;  // one spare: fields are read in pairs
   using GainRow = std::array<double, kGainFields>;
   // A node's row and the step to the next node's (next - this, as the
   // interpolation would form it): interpolating is then one multiply-add per
@@ -209,20 +232,23 @@ class Differentiator {
   GainRow gain_for(double dt) const noexcept;
   // One sample's filtered values and what decide_sign() needs.
   struct Step {
-    double x, xd, xdd, slow_xdd;
+    double x, xd, xdd, slow_xdd, fine_xdd;
     double acc_sd, inv_width, slow_inv_width, inv_consistency;
+    double fine_inv_width, inv_fine_consistency;
     // The acceleration channel's innovation and K[0] (the cruise test).
     double acc_innovation, acc_gain0;
   };
   Step full_step(double dt, double x) noexcept;
   // The filters' state while the steady-state gains run: the velocity and
-  // slow channels interleaved like their gains, then the acceleration
-  // channel. The full recursion keeps it in the PolyKalman objects; it is
-  // copied here once, when the gains take over (steady_).
+  // slow channels interleaved like their gains, then the acceleration and
+  // fine channels likewise, then the fine channel's fifth. The full
+  // recursion keeps it in the PolyKalman objects; it is copied here once,
+  // when the gains take over (steady_).
   void enter_steady() noexcept;
   Step steady_step(double dt, double z) noexcept;
   alignas(16) std::array<double, 6> pair_state_{};
-  alignas(16) std::array<double, 4> acc_state_{};
+  alignas(16) std::array<double, 8> acc_fine_state_{};
+  double fine_snap_ = 0.0;
   bool steady_ = false;
   // The cruise hypothesis (smooth sign, cruise_window > 0): the last samples
   // (a ring, newest at window_head_), the acceleration channel's normalised
