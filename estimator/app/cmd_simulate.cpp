@@ -22,6 +22,7 @@ struct SimulateOptions {
   estimator::DerivativeSource derivatives = estimator::DerivativeSource::kAutomatic;
   estimator::SignMode sign = estimator::SignMode::kSmooth;
   double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
+  double fine_psd = estimator::DifferentiatorConfig{}.fine_psd;
   estimator::StartState start = estimator::StartState::kFreeTip;
 };
 
@@ -33,6 +34,7 @@ std::vector<double> causal_friction(const estimator::FrictionModel& model,
   const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m);
   estimator::DifferentiatorConfig diff{.sign_mode = o.sign};
   diff.cruise_window = o.cruise_window;
+  diff.fine_psd = o.fine_psd;
   estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0, diff, o.start);
   std::vector<double> f(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i)
@@ -105,6 +107,10 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "smooth sign: window of the cruise hypothesis, s (haptic-server's default; 0: "
                   "off, the estimator before issue 13)")
       ->check(CLI::Range(0.0, 0.12));
+  cmd->add_option("--fine-psd", opts->fine_psd,
+                  "smooth sign: crackle spectral density of the fine acceleration channel, "
+                  "(rad/s^5)^2/Hz (haptic-server's default; 0: off, the estimator before it)")
+      ->check(CLI::Range(0.0, 1e9));
   const std::map<std::string, estimator::StartState> starts{
       {"free_tip", estimator::StartState::kFreeTip}, {"zero", estimator::StartState::kZero}};
   cmd->add_option("--start-state", opts->start,

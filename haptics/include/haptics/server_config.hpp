@@ -32,6 +32,9 @@ struct JointConfig {
   /// Smooth sign: the window of the differentiator's cruise hypothesis, s
   /// (0: off), as `tsm simulate --cruise-window`.
   double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
+  /// Smooth sign: the differentiator's fine acceleration channel, its
+  /// crackle spectral density (0: off), as `tsm simulate --fine-psd`.
+  double fine_psd = estimator::DifferentiatorConfig{}.fine_psd;
   /// The estimator's friction state at start: tip assumed free (default) or zero.
   estimator::StartState start_state = estimator::StartState::kFreeTip;
 };
