@@ -115,12 +115,12 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   // The fine acceleration channel: the differentiator's default, 0 turns it
   // off, a negative density is an error naming the key.
   EXPECT_DOUBLE_EQ(c.joints[0].fine_psd, estimator::DifferentiatorConfig{}.fine_psd);
-  EXPECT_DOUBLE_EQ(parse_server_config(
-                       "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, fine_psd: 0}\n",
-                       "server.yaml", "/cfg")
-                       .joints[0]
-                       .fine_psd,
-                   0.0);
+  EXPECT_DOUBLE_EQ(
+      parse_server_config("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, fine_psd: 0}\n",
+                          "server.yaml", "/cfg")
+          .joints[0]
+          .fine_psd,
+      0.0);
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, fine_psd: -1}\n")
                 .find("joints[0].fine_psd"),
             std::string::npos);

@@ -164,12 +164,12 @@ class Differentiator {
     PolyKalman<3>::Vec velocity{}, slow{};
     PolyKalman<4>::Vec acceleration{};
     PolyKalman<5>::Vec fine{};
-    double acc_sd = 0.0;           ///< sd of xdd, rad/s^2
-    double inv_width = 0.0;        ///< 1 / (smooth_sigmas acc_sd)
-    double fine_inv_width = 0.0;   ///< 1 / (smooth_sigmas fine sd); 0 without the fine channel
+    double acc_sd = 0.0;                ///< sd of xdd, rad/s^2
+    double inv_width = 0.0;             ///< 1 / (smooth_sigmas acc_sd)
+    double fine_inv_width = 0.0;        ///< 1 / (smooth_sigmas fine sd); 0 without the fine channel
     double inv_fine_consistency = 0.0;  ///< 1 / (fine_consistency acc_sd)
-    double slow_inv_width = 0.0;   ///< 1 / (slow_sigmas slow sd); 0 without the slow channel
-    double inv_consistency = 0.0;  ///< 1 / (slow_consistency acc_sd)
+    double slow_inv_width = 0.0;        ///< 1 / (slow_sigmas slow sd); 0 without the slow channel
+    double inv_consistency = 0.0;       ///< 1 / (slow_consistency acc_sd)
   };
   SteadyGains steady_gains(double dt) const noexcept;
   const Derivatives& last() const { return out_; }
@@ -202,16 +202,16 @@ class Differentiator {
   // step advances those two channels (both white jerk, the same F(dt))
   // side by side, as pairs of doubles; so are the acceleration and fine
   // channels' first four ({acceleration[i], fine[i]}).
-  static constexpr std::size_t kGainPairs = 0;       // 3 pairs {velocity[i], slow[i]}
-  static constexpr std::size_t kGainAccFine = 6;     // 4 pairs {acceleration[i], fine[i]}
-  static constexpr std::size_t kGainFine4 = 14;      // fine[4]
-  static constexpr std::size_t kFineInvWidth = 15;   // 1 / (smooth_sigmas fine sd)
-  static constexpr std::size_t kSlowInvWidth = 16;   // 1 / (slow_sigmas slow sd)
-  static constexpr std::size_t kInvConsistency = 17; // 1 / (slow_consistency acc_sd)
+  static constexpr std::size_t kGainPairs = 0;        // 3 pairs {velocity[i], slow[i]}
+  static constexpr std::size_t kGainAccFine = 6;      // 4 pairs {acceleration[i], fine[i]}
+  static constexpr std::size_t kGainFine4 = 14;       // fine[4]
+  static constexpr std::size_t kFineInvWidth = 15;    // 1 / (smooth_sigmas fine sd)
+  static constexpr std::size_t kSlowInvWidth = 16;    // 1 / (slow_sigmas slow sd)
+  static constexpr std::size_t kInvConsistency = 17;  // 1 / (slow_consistency acc_sd)
   static constexpr std::size_t kAccSd = 18;
-  static constexpr std::size_t kInvWidth = 19;  // 1 / (smooth_sigmas acc_sd)
+  static constexpr std::size_t kInvWidth = 19;            // 1 / (smooth_sigmas acc_sd)
   static constexpr std::size_t kInvFineConsistency = 20;  // 1 / (fine_consistency acc_sd)
-  static constexpr std::size_t kGainFields = 22;  // one spare: fields are read in pairs
+  static constexpr std::size_t kGainFields = 22;          // one spare: fields are read in pairs
   using GainRow = std::array<double, kGainFields>;
   // A node's row and the step to the next node's (next - this, as the
   // interpolation would form it): interpolating is then one multiply-add per
