@@ -23,6 +23,7 @@ struct SimulateOptions {
   estimator::SignMode sign = estimator::SignMode::kSmooth;
   double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
   double fine_psd = estimator::DifferentiatorConfig{}.fine_psd;
+  double hindsight_lag = estimator::DifferentiatorConfig{}.hindsight_lag;
   estimator::StartState start = estimator::StartState::kFreeTip;
 };
 
@@ -35,6 +36,7 @@ std::vector<double> causal_friction(const estimator::FrictionModel& model,
   estimator::DifferentiatorConfig diff{.sign_mode = o.sign};
   diff.cruise_window = o.cruise_window;
   diff.fine_psd = o.fine_psd;
+  diff.hindsight_lag = o.hindsight_lag;
   estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0, diff, o.start);
   std::vector<double> f(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i)
@@ -111,6 +113,10 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "smooth sign: crackle spectral density of the fine acceleration channel, "
                   "(rad/s^5)^2/Hz (haptic-server's default; 0: off, the estimator before it)")
       ->check(CLI::Range(0.0, 1e9));
+  cmd->add_option("--hindsight-lag", opts->hindsight_lag,
+                  "smooth sign with the fine channel: lag of the hindsight correction, s "
+                  "(haptic-server's default; 0: off)")
+      ->check(CLI::Range(0.0, 0.1));
   const std::map<std::string, estimator::StartState> starts{
       {"free_tip", estimator::StartState::kFreeTip}, {"zero", estimator::StartState::kZero}};
   cmd->add_option("--start-state", opts->start,

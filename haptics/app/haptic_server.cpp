@@ -414,8 +414,10 @@ std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> make_estimators(
     try {
       estimators.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
           estimator::load_model(j.params), j.radius_m,
-          estimator::DifferentiatorConfig{
-              .fine_psd = j.fine_psd, .cruise_window = j.cruise_window, .sign_mode = j.sign},
+          estimator::DifferentiatorConfig{.fine_psd = j.fine_psd,
+                                          .cruise_window = j.cruise_window,
+                                          .sign_mode = j.sign,
+                                          .hindsight_lag = j.hindsight_lag},
           j.start_state));
     } catch (const std::exception& e) {
       throw haptics::ConfigError(cfg.source + ": joint '" + j.name + "': " + e.what());

@@ -46,6 +46,10 @@ void run_estimator(benchmark::State& state, const Samples& s) {
     benchmark::DoNotOptimize(e);
     if (++i == s.t.size()) i = 0, t_offset += 100.0;
   }
+  // The hindsight correction steps the model again after a corrected
+  // sample: its share of the mean time per step.
+  state.counters["resteps_per_step"] = benchmark::Counter(
+      static_cast<double>(est.hindsight_resteps()), benchmark::Counter::kAvgIterations);
 }
 
 void BM_EstimatorStep(benchmark::State& state) {

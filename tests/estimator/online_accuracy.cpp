@@ -230,6 +230,16 @@ int main(int argc, char** argv) {
   app.add_option("--snap-psd", diff.snap_psd, "Acceleration channel snap PSD");
   app.add_option("--fine-psd", diff.fine_psd,
                  "Fine acceleration channel crackle PSD (0: off; smooth sign)");
+  app.add_option("--hindsight-lag", diff.hindsight_lag,
+                 "Hindsight correction: lag, s (0: off; smooth sign with the fine channel)");
+  app.add_option("--hindsight-sure", diff.hindsight_sure, "... |xdd| where it starts to count");
+  app.add_option("--hindsight-certain", diff.hindsight_certain, "... |xdd| where it decides");
+  app.add_option("--hindsight-guard", diff.hindsight_guard,
+                 "... none within this long (s) of a manoeuvre");
+  app.add_option("--hindsight-sure-armed", diff.hindsight_sure_armed,
+                 "... |xdd| where it starts to count shortly after a manoeuvre");
+  app.add_option("--hindsight-certain-armed", diff.hindsight_certain_armed,
+                 "... |xdd| where it decides shortly after a manoeuvre");
   app.add_option("--fine-consistency", diff.fine_consistency,
                  "smooth sign: the fine channel decides within this many fast sd of it");
   app.add_option("--slow-jerk-psd", diff.slow_jerk_psd,

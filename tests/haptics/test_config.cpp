@@ -124,6 +124,20 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, fine_psd: -1}\n")
                 .find("joints[0].fine_psd"),
             std::string::npos);
+  // The hindsight correction's lag: the default, 0 turns it off, beyond the
+  // history's 0.1 s is an error naming the key.
+  EXPECT_DOUBLE_EQ(c.joints[0].hindsight_lag, estimator::DifferentiatorConfig{}.hindsight_lag);
+  EXPECT_DOUBLE_EQ(
+      parse_server_config(
+          "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, hindsight_lag: 0}\n",
+          "server.yaml", "/cfg")
+          .joints[0]
+          .hindsight_lag,
+      0.0);
+  EXPECT_NE(
+      error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, hindsight_lag: 0.5}\n")
+          .find("joints[0].hindsight_lag"),
+      std::string::npos);
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, start_state: x}\n")
                 .find("joints[0].start_state"),
             std::string::npos);

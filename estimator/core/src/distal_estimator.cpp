@@ -1,5 +1,6 @@
 #include "estimator/distal_estimator.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -13,12 +14,16 @@ DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> m
   if (!model_) throw std::invalid_argument("estimator: no friction model");
   if (!(radius_m > 0.0) || !std::isfinite(radius_m))
     throw std::invalid_argument("estimator: radius_m must be a finite number > 0");
+  DynamicsState probe;
+  hindsight_ = diff.hindsight_lag > 0.0 && diff.sign_mode == SignMode::kSmooth &&
+               diff.fine_psd > 0.0 && model_->save_state(probe);
 }
 
 void DistalTorqueEstimator::reset() noexcept {
   model_->reset();
   diff_.reset();
   started_ = false;
+  size_ = pending_ = 0;
 }
 
 Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noexcept {
@@ -26,7 +31,85 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
     return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
   const Derivatives d = diff_.update(t, x_in);
   if (!d.valid) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
-  return finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
+  // A gap that restarts the differentiator breaks the history as well.
+  const bool restart = !started_ || t - t_prev_ > diff_.config().max_gap;
+  const double dt = started_ ? t - t_prev_ : 0.0;
+  Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
+  if (!hindsight_) return e;
+  if (restart) size_ = pending_ = 0;
+  newest_ = size_ == 0 ? 0 : (newest_ + 1) % kHistory;
+  Sample& s = history_[newest_];
+  s.m = Motion{t, x_in, d.xd, d.xdd, d.acc_sign, std::fabs(tau_in) / radius_};
+  s.dt = dt;
+  s.friction = e.friction;
+  model_->save_state(s.state);
+  size_ = std::min(size_ + 1, kHistory);
+  if (size_ > 1) ++pending_;
+  look_back(t);
+  if (s.friction != e.friction) {
+    e.friction = s.friction;
+    e.tau_out_est = tau_in - radius_ * s.friction;
+    e.friction_level = model_->sliding_friction();
+  }
+  return e;
+}
+
+// The samples hindsight_lag old are looked at again with what the fine
+// channel has seen since: where that settles sgn(xdd) differently, the model
+// steps that sample again from the state before it, and every sample after
+// it, to now. The causal sign decided late or wrongly around a zero crossing
+// of the acceleration; its effect on the friction state would otherwise last
+// until the next saturation (0.3 s and more at low speed). At most one
+// sample per call, but for a faster sample rate than the history holds.
+void DistalTorqueEstimator::look_back(double t) noexcept {
+  const DifferentiatorConfig& c = diff_.config();
+  bool touched = false;
+  while (pending_ > 0) {
+    const std::size_t j = (newest_ + kHistory - (pending_ - 1)) % kHistory;
+    Sample& s = history_[j];
+    const double back = t - s.m.t;
+    if (back < c.hindsight_lag && pending_ < kHistory - 1) break;
+    --pending_;
+    Motion m = s.m;
+    if (c.still_time > 0.0 && diff_.still_duration() >= back + c.still_time) {
+      // The encoder has not changed since before this sample: at rest.
+      m.xd = m.xdd = m.acc_sign = 0.0;
+    } else {
+      // Close to a manoeuvre the fine channel's polynomial model rings: the
+      // causal sign (with the cruise hypothesis) stands.
+      const double since = diff_.time_since_manoeuvre();
+      if (since <= back + c.hindsight_guard) continue;
+      const double a = diff_.fine_acceleration_before(back);
+      if (!std::isfinite(a)) continue;
+      const bool armed = since <= back + c.cruise_armed_time;
+      const double sure = armed ? c.hindsight_sure_armed : c.hindsight_sure;
+      const double certain = armed ? c.hindsight_certain_armed : c.hindsight_certain;
+      const double w = certain > sure
+                           ? std::clamp((std::fabs(a) - sure) / (certain - sure), 0.0, 1.0)
+                           : (std::fabs(a) >= certain ? 1.0 : 0.0);
+      m.acc_sign = w * sign_of(a) + (1.0 - w) * s.m.acc_sign;
+    }
+    // Hindsight agrees (a sign within 2 % moves the state too little to matter).
+    if (m.xd == s.m.xd && m.xdd == s.m.xdd && std::fabs(m.acc_sign - s.m.acc_sign) < 0.02) continue;
+    touched = true;
+    model_->restore_state(history_[(j + kHistory - 1) % kHistory].state);
+    const double f = model_->step(m, s.dt);
+    const double level = model_->sliding_friction();
+    const double tolerance = 1e-4 * (std::isfinite(level) ? std::max(level, 1.0) : 1.0);
+    if (std::fabs(f - s.friction) <= tolerance) continue;
+    s.m = m;
+    s.friction = f;
+    model_->save_state(s.state);
+    ++resteps_;
+    for (std::size_t k = (j + 1) % kHistory;; k = (k + 1) % kHistory) {
+      if (k == (newest_ + 1) % kHistory) break;
+      Sample& later = history_[k];
+      later.friction = model_->step(later.m, later.dt);
+      model_->save_state(later.state);
+      ++resteps_;
+    }
+  }
+  if (touched) model_->restore_state(history_[newest_].state);
 }
 
 Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, double xdd,

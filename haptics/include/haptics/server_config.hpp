@@ -35,6 +35,9 @@ struct JointConfig {
   /// Smooth sign: the differentiator's fine acceleration channel, its
   /// crackle spectral density (0: off), as `tsm simulate --fine-psd`.
   double fine_psd = estimator::DifferentiatorConfig{}.fine_psd;
+  /// Smooth sign with the fine channel: the estimator's hindsight
+  /// correction, its lag in s (0: off), as `tsm simulate --hindsight-lag`.
+  double hindsight_lag = estimator::DifferentiatorConfig{}.hindsight_lag;
   /// The estimator's friction state at start: tip assumed free (default) or zero.
   estimator::StartState start_state = estimator::StartState::kFreeTip;
 };

@@ -127,6 +127,31 @@ struct DifferentiatorConfig {
   double still_time = 0.04;
   /// A gap longer than this (s) restarts the filters at the new sample.
   double max_gap = 0.05;
+  /// Hindsight correction (DistalTorqueEstimator, smooth sign with the fine
+  /// channel and a model whose state can be saved): `hindsight_lag` s after
+  /// each sample, the fine channel, having seen what followed, knows that
+  /// sample's acceleration about ten times more finely than it did at once
+  /// (its state now, extrapolated back). Where that settles sgn(xdd)
+  /// differently from the sign the model was given, the model is stepped
+  /// again from that sample to now. Why: below |xd| = lambda a sign decided
+  /// late or wrongly moves the friction state the wrong way, and the error
+  /// lasts until the next saturation (0.3 s and more); the correction ends it
+  /// after hindsight_lag. 0: off; at most 0.1 s (the history holds 127
+  /// samples: at higher rates the lag is shorter).
+  /// The sign from hindsight counts with weight clamp((|xdd| - sure) /
+  /// (certain - sure), 0, 1) (rad/s^2), the rest is the causal sign; within
+  /// cruise_armed_time of a manoeuvre (the acceleration channel's cruise_nis
+  /// test) the `_armed` pair, since the true xdd may be exactly 0 there, and
+  /// within hindsight_guard (s) of one none at all: the fine channel's
+  /// polynomial model rings after a jerk step. A sample after which the
+  /// encoder has not changed for still_time is at rest (sign and speed 0).
+  /// Measured in docs/friction-model.md.
+  double hindsight_lag = 0.05;
+  double hindsight_sure = 0.02;
+  double hindsight_certain = 0.05;
+  double hindsight_sure_armed = 0.05;
+  double hindsight_certain_armed = 0.15;
+  double hindsight_guard = 0.3;
   /// true: the full Kalman recursion every sample (covariance propagated for
   /// the actual interval). false: each channel's steady-state gain for the
   /// actual interval, from a table made at construction (interpolated in
@@ -173,6 +198,18 @@ class Differentiator {
   };
   SteadyGains steady_gains(double dt) const noexcept;
   const Derivatives& last() const { return out_; }
+
+  /// The fine channel's acceleration `back` s before the last sample,
+  /// extrapolated from its state now (xdd - back jerk + back^2 / 2 snap):
+  /// in hindsight, well inside the channel's memory, where its estimate is
+  /// best. NaN without the fine channel or before the first sample.
+  double fine_acceleration_before(double back) const noexcept;
+  /// Time since the acceleration channel's innovations last exceeded
+  /// cruise_nis (a manoeuvre its model could not follow), s; infinity
+  /// without the cruise hypothesis.
+  double time_since_manoeuvre() const noexcept { return since_inconsistent_; }
+  /// How long the encoder reading has not changed, s.
+  double still_duration() const noexcept { return still_; }
 
  private:
   void start(double t, double x) noexcept;

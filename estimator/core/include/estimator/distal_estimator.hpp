@@ -5,6 +5,8 @@
 //   F      = friction model         (eqs. 4-12), driven by the differentiated angle
 //   tau_out_est = tau_in - R F      (eq. 3)
 
+#include <array>
+#include <cstddef>
 #include <limits>
 #include <memory>
 
@@ -58,6 +60,13 @@ class DistalTorqueEstimator {
 
   void reset() noexcept;
   double radius() const { return radius_; }
+  /// Whether the hindsight correction runs (DifferentiatorConfig::
+  /// hindsight_lag > 0, the smooth sign with the fine channel, and a model
+  /// whose state can be saved).
+  bool hindsight() const { return hindsight_; }
+  /// Samples the hindsight correction stepped the model again for (the
+  /// corrected sample and every later one), since construction.
+  std::size_t hindsight_resteps() const { return resteps_; }
   const FrictionDynamics& model() const { return *model_; }
   /// The model's level scales (FrictionDynamics::set_level_scales): false when
   /// the model has none. Never allocates or throws.
@@ -68,6 +77,23 @@ class DistalTorqueEstimator {
  private:
   Estimate finish(double t, double x, double xd, double xdd, double acc_sign,
                   double tau_in) noexcept;
+  void look_back(double t) noexcept;
+
+  // The hindsight correction's history: the last samples as the model was
+  // stepped with them, newest at newest_; the oldest `pending_` of the newest
+  // are not yet past hindsight_lag. The sample before the oldest pending one
+  // is kept too: its state is where a correction steps again from.
+  struct Sample {
+    Motion m;
+    double dt = 0.0;
+    double friction = 0.0;
+    DynamicsState state;
+  };
+  static constexpr std::size_t kHistory = 128;
+  std::array<Sample, kHistory> history_{};
+  std::size_t newest_ = 0, size_ = 0, pending_ = 0;
+  bool hindsight_ = false;
+  std::size_t resteps_ = 0;
 
   std::unique_ptr<FrictionDynamics> model_;
   double radius_;

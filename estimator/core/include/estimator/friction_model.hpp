@@ -7,6 +7,7 @@
 // - FrictionModel, what identification and the params files add: the
 //   model's family, its parameters and how to set them, copies.
 
+#include <array>
 #include <limits>
 #include <memory>
 #include <span>
@@ -26,6 +27,13 @@ struct Parameter {
   double upper = 0.0;
   bool fixed = false;  ///< excluded from identification (e.g. the paper's integer n)
   std::string unit;
+};
+
+/// A model's internal state as a value: what step() changes, so that a
+/// stretch of samples can be stepped again from an earlier state (the
+/// estimator's hindsight correction). Its meaning is the model's own.
+struct DynamicsState {
+  std::array<double, 6> v{};
 };
 
 /// The real-time face of a model: a stateful value object stepped once per
@@ -71,6 +79,11 @@ class FrictionDynamics {
   }
   /// The same scale both ways.
   bool set_level_scale(double k) noexcept { return set_level_scales(k, k); }
+  /// Copies the internal state into `out`; false (nothing written) for
+  /// models that do not support it. Never allocates or throws.
+  virtual bool save_state(DynamicsState& /*out*/) const noexcept { return false; }
+  /// Sets the internal state to one save_state() wrote for this model.
+  virtual void restore_state(const DynamicsState& /*state*/) noexcept {}
 };
 
 /// The identification face: what a fit searches and a params file holds.

@@ -73,6 +73,18 @@ class TsmFrictionModel final : public FrictionModel {
     return negative ? level_scale_negative_ : level_scale_positive_;
   }
   std::unique_ptr<FrictionModel> clone() const override;
+  bool save_state(DynamicsState& out) const noexcept override {
+    out.v = {z_, z1_, z2_, level_, xd_prev_, started_ ? 1.0 : 0.0};
+    return true;
+  }
+  void restore_state(const DynamicsState& s) noexcept override {
+    z_ = s.v[0];
+    z1_ = s.v[1];
+    z2_ = s.v[2];
+    level_ = s.v[3];
+    xd_prev_ = s.v[4];
+    started_ = s.v[5] != 0.0;
+  }
 
   const TsmModelSpec& spec() const { return spec_; }
   /// Ff at motion m (eq. 5 with the configured terms), floored at kMinSlidingLevel.
