@@ -530,15 +530,6 @@ double Differentiator::cruise_probability() const noexcept {
   return 1.0 / (1.0 + inverse_odds);
 }
 
-double Differentiator::fine_acceleration_before(double back) const noexcept {
-  if (!use_fine_ || !started_) return std::numeric_limits<double>::quiet_NaN();
-  const bool steady = steady_ && !cfg_.exact_covariance;
-  const double xdd = steady ? acc_fine_state_[5] : fine_.state()[2];
-  const double jerk = steady ? acc_fine_state_[7] : fine_.state()[3];
-  const double snap = steady ? fine_snap_ : fine_.state()[4];
-  return xdd - back * jerk + 0.5 * back * back * snap;
-}
-
 Derivatives Differentiator::update(double t, double x) noexcept {
   if (!std::isfinite(t) || !std::isfinite(x)) return invalidated(out_);
   if (!started_) {

@@ -17,6 +17,12 @@ DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> m
   DynamicsState probe;
   hindsight_ = diff.hindsight_lag > 0.0 && diff.sign_mode == SignMode::kSmooth &&
                diff.fine_psd > 0.0 && model_->save_state(probe);
+  // certain <= sure: a step at `sure` (the weight is 1 beyond it).
+  const auto inverse_span = [](double sure, double certain) {
+    return certain > sure ? 1.0 / (certain - sure) : std::numeric_limits<double>::infinity();
+  };
+  inv_span_ = inverse_span(diff.hindsight_sure, diff.hindsight_certain);
+  inv_span_armed_ = inverse_span(diff.hindsight_sure_armed, diff.hindsight_certain_armed);
 }
 
 void DistalTorqueEstimator::reset() noexcept {
@@ -73,43 +79,48 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
     Motion m = s.m;
     if (c.still_time > 0.0 && diff_.still_duration() >= back + c.still_time) {
       // The encoder has not changed since before this sample: at rest.
+      if (m.xd == 0.0 && m.xdd == 0.0 && m.acc_sign == 0.0) continue;
       m.xd = m.xdd = m.acc_sign = 0.0;
     } else {
       // Close to a manoeuvre the fine channel's polynomial model rings: the
       // causal sign (with the cruise hypothesis) stands.
       const double since = diff_.time_since_manoeuvre();
       if (since <= back + c.hindsight_guard) continue;
-      const double a = diff_.fine_acceleration_before(back);
-      if (!std::isfinite(a)) continue;
+      const double xdd = diff_.fine_acceleration_before(back);
+      const double a = std::fabs(xdd);
       const bool armed = since <= back + c.cruise_armed_time;
       const double sure = armed ? c.hindsight_sure_armed : c.hindsight_sure;
-      const double certain = armed ? c.hindsight_certain_armed : c.hindsight_certain;
-      const double w = certain > sure
-                           ? std::clamp((std::fabs(a) - sure) / (certain - sure), 0.0, 1.0)
-                           : (std::fabs(a) >= certain ? 1.0 : 0.0);
-      m.acc_sign = w * sign_of(a) + (1.0 - w) * s.m.acc_sign;
+      if (!(a > sure)) continue;  // hindsight cannot tell either (or NaN)
+      const double w = std::min(1.0, (a - sure) * (armed ? inv_span_armed_ : inv_span_));
+      const double sign = xdd > 0.0 ? 1.0 : -1.0;
+      // A sign within 2 % moves the state too little to matter.
+      if (std::fabs(sign - s.m.acc_sign) * w < 0.02) continue;
+      m.acc_sign = w * sign + (1.0 - w) * s.m.acc_sign;
     }
-    // Hindsight agrees (a sign within 2 % moves the state too little to matter).
-    if (m.xd == s.m.xd && m.xdd == s.m.xdd && std::fabs(m.acc_sign - s.m.acc_sign) < 0.02) continue;
     touched = true;
-    model_->restore_state(history_[(j + kHistory - 1) % kHistory].state);
-    const double f = model_->step(m, s.dt);
-    const double level = model_->sliding_friction();
-    const double tolerance = 1e-4 * (std::isfinite(level) ? std::max(level, 1.0) : 1.0);
-    if (std::fabs(f - s.friction) <= tolerance) continue;
-    s.m = m;
-    s.friction = f;
-    model_->save_state(s.state);
-    ++resteps_;
-    for (std::size_t k = (j + 1) % kHistory;; k = (k + 1) % kHistory) {
-      if (k == (newest_ + 1) % kHistory) break;
-      Sample& later = history_[k];
-      later.friction = model_->step(later.m, later.dt);
-      model_->save_state(later.state);
-      ++resteps_;
-    }
+    step_again(j, m);
   }
   if (touched) model_->restore_state(history_[newest_].state);
+}
+
+// Out of line: rare, and the per-sample decision above stays compact.
+[[gnu::noinline]] void DistalTorqueEstimator::step_again(std::size_t j, const Motion& m) noexcept {
+  Sample& s = history_[j];
+  model_->restore_state(history_[(j + kHistory - 1) % kHistory].state);
+  const double f = model_->step(m, s.dt);
+  const double level = model_->sliding_friction();
+  const double tolerance = 1e-4 * (std::isfinite(level) ? std::max(level, 1.0) : 1.0);
+  if (std::fabs(f - s.friction) <= tolerance) return;
+  s.m = m;
+  s.friction = f;
+  model_->save_state(s.state);
+  ++resteps_;
+  for (std::size_t k = (j + 1) % kHistory; k != (newest_ + 1) % kHistory; k = (k + 1) % kHistory) {
+    Sample& later = history_[k];
+    later.friction = model_->step(later.m, later.dt);
+    model_->save_state(later.state);
+    ++resteps_;
+  }
 }
 
 Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, double xdd,
@@ -120,8 +131,9 @@ Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, d
   return finish(t, x_in, xd, xdd, sign_of(xdd), tau_in);
 }
 
-Estimate DistalTorqueEstimator::finish(double t, double x, double xd, double xdd, double acc_sign,
-                                       double tau_in) noexcept {
+[[gnu::always_inline]] inline Estimate DistalTorqueEstimator::finish(double t, double x, double xd,
+                                                                     double xdd, double acc_sign,
+                                                                     double tau_in) noexcept {
   const double dt = started_ ? t - t_prev_ : 0.0;
   const Motion m{t, x, xd, xdd, acc_sign, std::fabs(tau_in) / radius_};
   if (!started_ && start_ == StartState::kFreeTip) model_->preset(tau_in / radius_, m);

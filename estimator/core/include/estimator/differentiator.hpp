@@ -26,6 +26,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <string_view>
@@ -203,7 +204,14 @@ class Differentiator {
   /// extrapolated from its state now (xdd - back jerk + back^2 / 2 snap):
   /// in hindsight, well inside the channel's memory, where its estimate is
   /// best. NaN without the fine channel or before the first sample.
-  double fine_acceleration_before(double back) const noexcept;
+  double fine_acceleration_before(double back) const noexcept {
+    if (!use_fine_ || !started_) return std::numeric_limits<double>::quiet_NaN();
+    // steady_: the steady-state gains run (never with exact_covariance).
+    const double xdd = steady_ ? acc_fine_state_[5] : fine_.state()[2];
+    const double jerk = steady_ ? acc_fine_state_[7] : fine_.state()[3];
+    const double snap = steady_ ? fine_snap_ : fine_.state()[4];
+    return xdd - back * jerk + 0.5 * back * back * snap;
+  }
   /// Time since the acceleration channel's innovations last exceeded
   /// cruise_nis (a manoeuvre its model could not follow), s; infinity
   /// without the cruise hypothesis.

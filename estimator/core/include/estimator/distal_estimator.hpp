@@ -78,6 +78,9 @@ class DistalTorqueEstimator {
   Estimate finish(double t, double x, double xd, double xdd, double acc_sign,
                   double tau_in) noexcept;
   void look_back(double t) noexcept;
+  // Steps sample j again with the motion m, and every later one if that
+  // changed its friction (the model then holds the newest state).
+  void step_again(std::size_t j, const Motion& m) noexcept;
 
   // The hindsight correction's history: the last samples as the model was
   // stepped with them, newest at newest_; the oldest `pending_` of the newest
@@ -93,6 +96,7 @@ class DistalTorqueEstimator {
   std::array<Sample, kHistory> history_{};
   std::size_t newest_ = 0, size_ = 0, pending_ = 0;
   bool hindsight_ = false;
+  double inv_span_ = 0.0, inv_span_armed_ = 0.0;  // 1 / (certain - sure)
   std::size_t resteps_ = 0;
 
   std::unique_ptr<FrictionDynamics> model_;
