@@ -282,6 +282,7 @@ void Differentiator::reset() noexcept {
 
 void Differentiator::start(double t, double x) noexcept {
   started_ = true;
+  restarted_ = true;
   t_ = t;
   // Prior spread of the rates at start: generous for a hand or a motor
   // (rad/s, rad/s^2, rad/s^3), so the first samples dominate.
@@ -542,6 +543,7 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     start(t, x);
     return out_;
   }
+  restarted_ = false;
   t_ = t;
   Step step;
   if (cfg_.exact_covariance || settling_ > 0) {

@@ -38,15 +38,13 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   const Derivatives d = diff_.update(t, x_in);
   if (!d.valid) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
   // A gap that restarts the differentiator breaks the history as well.
-  const bool restart = !started_ || t - t_prev_ > diff_.config().max_gap;
-  const double dt = started_ ? t - t_prev_ : 0.0;
+  const bool restart = diff_.restarted();
   Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
   if (!hindsight_) return e;
   if (restart) size_ = pending_ = 0;
   newest_ = size_ == 0 ? 0 : (newest_ + 1) % kHistory;
   Sample& s = history_[newest_];
   s.m = Motion{t, x_in, d.xd, d.xdd, d.acc_sign, std::fabs(tau_in) / radius_};
-  s.dt = dt;
   s.friction = e.friction;
   model_->save_state(s.state);
   size_ = std::min(size_ + 1, kHistory);
@@ -106,8 +104,10 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
 // Out of line: rare, and the per-sample decision above stays compact.
 [[gnu::noinline]] void DistalTorqueEstimator::step_again(std::size_t j, const Motion& m) noexcept {
   Sample& s = history_[j];
-  model_->restore_state(history_[(j + kHistory - 1) % kHistory].state);
-  const double f = model_->step(m, s.dt);
+  const Sample& before = history_[(j + kHistory - 1) % kHistory];
+  model_->restore_state(before.state);
+  // The interval as finish() formed it: this sample's time less the last one's.
+  const double f = model_->step(m, m.t - before.m.t);
   const double level = model_->sliding_friction();
   const double tolerance = 1e-4 * (std::isfinite(level) ? std::max(level, 1.0) : 1.0);
   if (std::fabs(f - s.friction) <= tolerance) return;
@@ -117,7 +117,7 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
   ++resteps_;
   for (std::size_t k = (j + 1) % kHistory; k != (newest_ + 1) % kHistory; k = (k + 1) % kHistory) {
     Sample& later = history_[k];
-    later.friction = model_->step(later.m, later.dt);
+    later.friction = model_->step(later.m, later.m.t - history_[(k + kHistory - 1) % kHistory].m.t);
     model_->save_state(later.state);
     ++resteps_;
   }

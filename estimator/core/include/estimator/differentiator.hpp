@@ -218,6 +218,9 @@ class Differentiator {
   double time_since_manoeuvre() const noexcept { return since_inconsistent_; }
   /// How long the encoder reading has not changed, s.
   double still_duration() const noexcept { return still_; }
+  /// Whether the last accepted sample (re)started the filters: the first
+  /// one, or one after a gap longer than max_gap.
+  bool restarted() const noexcept { return restarted_; }
 
  private:
   void start(double t, double x) noexcept;
@@ -317,6 +320,7 @@ class Differentiator {
   double last_x_ = 0.0;   // last encoder reading
   double still_ = 0.0;    // how long it has not changed, s
   bool started_ = false;
+  bool restarted_ = false;
   double t_ = 0.0;
   Derivatives out_;
 };

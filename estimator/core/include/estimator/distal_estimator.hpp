@@ -87,8 +87,7 @@ class DistalTorqueEstimator {
   // are not yet past hindsight_lag. The sample before the oldest pending one
   // is kept too: its state is where a correction steps again from.
   struct Sample {
-    Motion m;
-    double dt = 0.0;
+    Motion m;  // its interval: m.t less the previous sample's
     double friction = 0.0;
     DynamicsState state;
   };
