@@ -98,46 +98,35 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: soft}\n")
                 .find("joints[0].sign"),
             std::string::npos);
-  // The cruise hypothesis' window: the differentiator's default, 0 turns it
-  // off, beyond the window's 0.12 s capacity is an error naming the key.
-  EXPECT_DOUBLE_EQ(c.joints[0].cruise_window, estimator::DifferentiatorConfig{}.cruise_window);
-  EXPECT_DOUBLE_EQ(
-      parse_server_config(
-          "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, cruise_window: 0}\n",
-          "server.yaml", "/cfg")
-          .joints[0]
-          .cruise_window,
-      0.0);
-  EXPECT_NE(
-      error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, cruise_window: 0.5}\n")
-          .find("joints[0].cruise_window"),
-      std::string::npos);
-  // The fine acceleration channel: the differentiator's default, 0 turns it
-  // off, a negative density is an error naming the key.
-  EXPECT_DOUBLE_EQ(c.joints[0].fine_psd, estimator::DifferentiatorConfig{}.fine_psd);
-  EXPECT_DOUBLE_EQ(
-      parse_server_config("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, fine_psd: 0}\n",
-                          "server.yaml", "/cfg")
-          .joints[0]
-          .fine_psd,
-      0.0);
-  EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, fine_psd: -1}\n")
-                .find("joints[0].fine_psd"),
-            std::string::npos);
-  // The hindsight correction's lag: the default, 0 turns it off, beyond the
-  // history's 0.1 s is an error naming the key.
-  EXPECT_DOUBLE_EQ(c.joints[0].hindsight_lag, estimator::DifferentiatorConfig{}.hindsight_lag);
-  EXPECT_DOUBLE_EQ(
-      parse_server_config(
-          "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, hindsight_lag: 0}\n",
-          "server.yaml", "/cfg")
-          .joints[0]
-          .hindsight_lag,
-      0.0);
-  EXPECT_NE(
-      error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, hindsight_lag: 0.5}\n")
-          .find("joints[0].hindsight_lag"),
-      std::string::npos);
+  // The differentiator's per-joint keys: each defaults to the
+  // differentiator's own value, 0 turns it off, and a value out of range is
+  // an error naming the key (the cruise window beyond its 0.12 s capacity, a
+  // negative crackle density, a hindsight lag beyond the history's 0.1 s).
+  struct DifferentiatorKey {
+    const char* name;
+    double JointConfig::*member;
+    double default_value;
+    const char* bad_value;
+  };
+  const estimator::DifferentiatorConfig defaults{};
+  for (const DifferentiatorKey& key :
+       {DifferentiatorKey{"cruise_window", &JointConfig::cruise_window, defaults.cruise_window,
+                          "0.5"},
+        DifferentiatorKey{"fine_psd", &JointConfig::fine_psd, defaults.fine_psd, "-1"},
+        DifferentiatorKey{"hindsight_lag", &JointConfig::hindsight_lag, defaults.hindsight_lag,
+                          "0.5"}}) {
+    const auto yaml = [&](const std::string& value) {
+      return "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, " + std::string(key.name) +
+             ": " + value + "}\n";
+    };
+    EXPECT_DOUBLE_EQ(c.joints[0].*key.member, key.default_value) << key.name;
+    EXPECT_DOUBLE_EQ(parse_server_config(yaml("0"), "server.yaml", "/cfg").joints[0].*key.member,
+                     0.0)
+        << key.name;
+    EXPECT_NE(error_of(yaml(key.bad_value)).find("joints[0]." + std::string(key.name)),
+              std::string::npos)
+        << key.name;
+  }
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, start_state: x}\n")
                 .find("joints[0].start_state"),
             std::string::npos);
