@@ -230,6 +230,8 @@ int main(int argc, char** argv) {
   app.add_option("--snap-psd", diff.snap_psd, "Acceleration channel snap PSD");
   app.add_option("--fine-psd", diff.fine_psd,
                  "Fine acceleration channel crackle PSD (0: off; smooth sign)");
+  app.add_option("--fine-consistency", diff.fine_consistency,
+                 "smooth sign: the fine channel decides within this many fast sd of it");
   app.add_option("--hindsight-lag", diff.hindsight_lag,
                  "Hindsight correction: lag, s (0: off; smooth sign with the fine channel)");
   app.add_option("--hindsight-sure", diff.hindsight_sure, "... |xdd| where it starts to count");
@@ -240,8 +242,6 @@ int main(int argc, char** argv) {
                  "... |xdd| where it starts to count shortly after a manoeuvre");
   app.add_option("--hindsight-certain-armed", diff.hindsight_certain_armed,
                  "... |xdd| where it decides shortly after a manoeuvre");
-  app.add_option("--fine-consistency", diff.fine_consistency,
-                 "smooth sign: the fine channel decides within this many fast sd of it");
   app.add_option("--slow-jerk-psd", diff.slow_jerk_psd,
                  "Slow acceleration channel jerk PSD (0: off, the fast channel alone)");
   app.add_option("--slow-consistency", diff.slow_consistency,
