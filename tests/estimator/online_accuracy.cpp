@@ -256,6 +256,8 @@ int main(int argc, char** argv) {
   app.add_option("--cruise-nis", diff.cruise_nis,
                  "... armed when the acceleration channel's NIS (5 ms) exceeds this");
   app.add_option("--cruise-armed-time", diff.cruise_armed_time, "... for this long, s");
+  app.add_option("--cruise-noise", diff.cruise_noise,
+                 "... its samples' error variance in quantisation variances");
   std::string sign_mode = "smooth";
   app.add_option("--sign-mode", sign_mode, "smooth (deployed), smooth-fast or hard");
   app.add_flag("--exact-covariance", diff.exact_covariance, "full Kalman recursion every sample");

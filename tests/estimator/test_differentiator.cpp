@@ -389,8 +389,9 @@ struct ReversalTrace {
   double min_sign_mid_reversal = 0.0;   // -sign in the reversal's middle 30 ms
 };
 
-ReversalTrace run_reversal(double cruise_window, bool jitter, double dt = 1e-3) {
-  constexpr double kStart = 1.0, kDuration = 0.06, kV = 1.0;
+ReversalTrace run_reversal(double cruise_window, bool jitter, double dt = 1e-3, double kV = 1.0,
+                           double cruise_noise = DifferentiatorConfig{}.cruise_noise) {
+  constexpr double kStart = 1.0, kDuration = 0.06;
   constexpr double kOmega = std::numbers::pi / kDuration;
   const auto position = [&](double t) {
     if (t < kStart) return kV * t;
@@ -404,6 +405,7 @@ ReversalTrace run_reversal(double cruise_window, bool jitter, double dt = 1e-3) 
   std::uniform_real_distribution<double> wobble(-2e-4, 2e-4);
   DifferentiatorConfig config;
   config.cruise_window = cruise_window;
+  config.cruise_noise = cruise_noise;
   Differentiator d(config);
   ReversalTrace r;
   const double end = kStart + kDuration;
@@ -454,6 +456,29 @@ TEST(Differentiator, CruiseHypothesisAtAHighSampleRate) {
                  std::to_string(with.mean_abs_sign_cruising));
   EXPECT_LT(with.mean_abs_sign_cruising, 0.15);
   EXPECT_EQ(with.min_sign_mid_reversal, 1.0);
+}
+
+TEST(Differentiator, CruiseTestToleratesTheEncodersSawtooth) {
+  // At 0.4584 rad/s the encoder advances 2.988 counts per sample: its error
+  // is a sawtooth slipping by a count every 80 ms, not white noise. Taken as
+  // white (cruise_noise 1) each slip made the test reject the cruise and the
+  // ringing sign came back; the deployed cruise_noise takes the slips
+  // (mean |sign| on the stroke 0.14 against 0.42).
+  const double window = DifferentiatorConfig{}.cruise_window;
+  for (bool jitter : {false, true}) {
+    const ReversalTrace tolerant = run_reversal(window, jitter, 1e-3, 0.4584);
+    const ReversalTrace white = run_reversal(window, jitter, 1e-3, 0.4584, 1.0);
+    const std::string tag = jitter ? "_jittered" : "";
+    RecordProperty("sawtooth_mean_abs_sign_cruising" + tag,
+                   std::to_string(tolerant.mean_abs_sign_cruising));
+    RecordProperty("sawtooth_mean_abs_sign_cruising_white" + tag,
+                   std::to_string(white.mean_abs_sign_cruising));
+    // Sampling jitter makes the error whiter: both settle there, and the
+    // tolerant test no worse than within 0.1 of sign.
+    EXPECT_LT(tolerant.mean_abs_sign_cruising, jitter ? 0.1 : 0.5 * white.mean_abs_sign_cruising)
+        << tag;
+    EXPECT_GT(tolerant.min_sign_mid_reversal, 0.9) << tag;
+  }
 }
 
 TEST(Differentiator, CruiseHypothesisLeavesSmoothMotionAlone) {

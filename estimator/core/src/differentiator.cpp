@@ -512,9 +512,10 @@ double Differentiator::cruise_probability() const noexcept {
   // Acceleration and jerk at the newest sample, and their covariance.
   const double w2 = 1.0 / (window * window), w3 = w2 / window;
   const double acc = 2.0 * c2 * w2, jerk = 6.0 * c3 * w3;
-  const double caa = r_ * 4.0 * i00 * w2 * w2;
-  const double caj = r_ * 12.0 * i01 * w2 * w3;
-  const double cjj = r_ * 36.0 * i11 * w3 * w3;
+  const double r = r_ * cfg_.cruise_noise;
+  const double caa = r * 4.0 * i00 * w2 * w2;
+  const double caj = r * 12.0 * i01 * w2 * w3;
+  const double cjj = r * 36.0 * i11 * w3 * w3;
   // Bayes factor of "acceleration and jerk exactly 0" against "Gaussian with
   // the spread of a moving hand": N(e; 0, C) / N(e; 0, C + Pr).
   const double det0 = caa * cjj - caj * caj;

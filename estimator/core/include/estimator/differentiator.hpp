@@ -107,6 +107,13 @@ struct DifferentiatorConfig {
   double cruise_prior = 0.1;
   double cruise_nis = 16.0;
   double cruise_armed_time = 1.0;
+  /// The cruise test takes the samples' error as this many times the
+  /// quantisation variance q^2/12. At constant speed the encoder's error is
+  /// not white but a sawtooth that slips by one count every 1 / frac(counts
+  /// per sample) samples (every 80 ms at 0.458 rad/s, 2.988 counts/ms): as
+  /// white noise, each slip made the test reject a true cruise for 20-50 ms
+  /// and the ringing sign came back. Measured in docs/friction-model.md.
+  double cruise_noise = 5.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
   double quantum = 2.0 * std::numbers::pi / 40960.0;
