@@ -88,7 +88,7 @@ struct DifferentiatorConfig {
   /// Smooth sign: the slow channel decides while the fast estimate lies
   /// within this many of its standard deviations of the slow one (blended
   /// quadratically out to that distance); beyond it, the fast channel.
-  double slow_consistency = 3.0;
+  double slow_consistency = 1.5;
   /// Smooth sign from the slow channel: +-1 beyond this many of its sd.
   double slow_sigmas = 1.0;
   /// Smooth sign, the cruise hypothesis: after a manoeuvre the acceleration
