@@ -238,6 +238,8 @@ int main(int argc, char** argv) {
   app.add_option("--hindsight-certain", diff.hindsight_certain, "... |xdd| where it decides");
   app.add_option("--hindsight-guard", diff.hindsight_guard,
                  "... none within this long (s) of a manoeuvre");
+  app.add_option("--hindsight-ahead", diff.hindsight_ahead,
+                 "... after a correction, samples up to this much younger (s) in the same pass");
   app.add_option("--hindsight-sure-armed", diff.hindsight_sure_armed,
                  "... |xdd| where it starts to count shortly after a manoeuvre");
   app.add_option("--hindsight-certain-armed", diff.hindsight_certain_armed,

@@ -63,46 +63,65 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
 // steps that sample again from the state before it, and every sample after
 // it, to now. The causal sign decided late or wrongly around a zero crossing
 // of the acceleration; its effect on the friction state would otherwise last
-// until the next saturation (0.3 s and more at low speed). At most one
-// sample per call, but for a faster sample rate than the history holds.
+// until the next saturation (0.3 s and more at low speed). One sample per
+// call (more at a faster sample rate than the history holds); after a
+// correction, also those up to hindsight_ahead younger, so that one pass
+// to now serves them all.
 void DistalTorqueEstimator::look_back(double t) noexcept {
   const DifferentiatorConfig& c = diff_.config();
-  bool touched = false;
+  bool touched = false;  // the model left the newest state
+  bool dirty = false;    // the samples after `frontier` are to be stepped again
+  std::size_t frontier = 0;
   while (pending_ > 0) {
     const std::size_t j = (newest_ + kHistory - (pending_ - 1)) % kHistory;
     Sample& s = history_[j];
     const double back = t - s.m.t;
-    if (back < c.hindsight_lag && pending_ < kHistory - 1) break;
+    if (back < c.hindsight_lag && pending_ < kHistory - 1 &&
+        !(dirty && back >= c.hindsight_lag - c.hindsight_ahead))
+      break;
     --pending_;
     Motion m = s.m;
+    bool corrected = false;
     if (c.still_time > 0.0 && diff_.still_duration() >= back + c.still_time) {
       // The encoder has not changed since before this sample: at rest.
-      if (m.xd == 0.0 && m.xdd == 0.0 && m.acc_sign == 0.0) continue;
+      corrected = m.xd != 0.0 || m.xdd != 0.0 || m.acc_sign != 0.0;
       m.xd = m.xdd = m.acc_sign = 0.0;
     } else {
       // Close to a manoeuvre the fine channel's polynomial model rings: the
       // causal sign (with the cruise hypothesis) stands.
       const double since = diff_.time_since_manoeuvre();
-      if (since <= back + c.hindsight_guard) continue;
-      const double xdd = diff_.fine_acceleration_before(back);
-      const double a = std::fabs(xdd);
-      const bool armed = since <= back + c.cruise_armed_time;
-      const double sure = armed ? c.hindsight_sure_armed : c.hindsight_sure;
-      if (!(a > sure)) continue;  // hindsight cannot tell either (or NaN)
-      const double w = std::min(1.0, (a - sure) * (armed ? inv_span_armed_ : inv_span_));
-      const double sign = xdd > 0.0 ? 1.0 : -1.0;
-      // A sign within 2 % moves the state too little to matter.
-      if (std::fabs(sign - s.m.acc_sign) * w < 0.02) continue;
-      m.acc_sign = w * sign + (1.0 - w) * s.m.acc_sign;
+      if (since > back + c.hindsight_guard) {
+        const double xdd = diff_.fine_acceleration_before(back);
+        const double a = std::fabs(xdd);
+        const bool armed = since <= back + c.cruise_armed_time;
+        const double sure = armed ? c.hindsight_sure_armed : c.hindsight_sure;
+        if (a > sure) {  // hindsight can tell (a NaN cannot)
+          const double w = std::min(1.0, (a - sure) * (armed ? inv_span_armed_ : inv_span_));
+          const double sign = xdd > 0.0 ? 1.0 : -1.0;
+          // A sign within 2 % moves the state too little to matter.
+          if (std::fabs(sign - s.m.acc_sign) * w >= 0.02) {
+            m.acc_sign = w * sign + (1.0 - w) * s.m.acc_sign;
+            corrected = true;
+          }
+        }
+      }
     }
+    if (!corrected && !dirty) continue;
+    // While dirty, every sample is stepped again from the corrected path.
     touched = true;
-    step_again(j, m);
+    dirty = step_again(j, m, dirty) || dirty;
+    frontier = j;
   }
-  if (touched) model_->restore_state(history_[newest_].state);
+  if (dirty) {
+    catch_up(frontier);  // the model ends at the newest sample
+  } else if (touched) {
+    model_->restore_state(history_[newest_].state);
+  }
 }
 
 // Out of line: rare, and the per-sample decision above stays compact.
-[[gnu::noinline]] void DistalTorqueEstimator::step_again(std::size_t j, const Motion& m) noexcept {
+[[gnu::noinline]] bool DistalTorqueEstimator::step_again(std::size_t j, const Motion& m,
+                                                         bool dirty) noexcept {
   Sample& s = history_[j];
   const Sample& before = history_[(j + kHistory - 1) % kHistory];
   model_->restore_state(before.state);
@@ -110,14 +129,22 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
   const double f = model_->step(m, m.t - before.m.t);
   const double level = model_->sliding_friction();
   const double tolerance = 1e-4 * (std::isfinite(level) ? std::max(level, 1.0) : 1.0);
-  if (std::fabs(f - s.friction) <= tolerance) return;
+  const bool changed = std::fabs(f - s.friction) > tolerance;
+  // A correction too small to matter on the uncorrected path is dropped.
+  if (!changed && !dirty) return false;
   s.m = m;
   s.friction = f;
   model_->save_state(s.state);
   ++resteps_;
-  for (std::size_t k = (j + 1) % kHistory; k != (newest_ + 1) % kHistory; k = (k + 1) % kHistory) {
+  return changed;
+}
+
+[[gnu::noinline]] void DistalTorqueEstimator::catch_up(std::size_t from) noexcept {
+  for (std::size_t k = (from + 1) % kHistory; k != (newest_ + 1) % kHistory;
+       k = (k + 1) % kHistory) {
     Sample& later = history_[k];
-    later.friction = model_->step(later.m, later.m.t - history_[(k + kHistory - 1) % kHistory].m.t);
+    const double t_before = history_[(k + kHistory - 1) % kHistory].m.t;
+    later.friction = model_->step(later.m, later.m.t - t_before);
     model_->save_state(later.state);
     ++resteps_;
   }

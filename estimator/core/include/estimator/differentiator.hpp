@@ -160,6 +160,12 @@ struct DifferentiatorConfig {
   double hindsight_sure_armed = 0.05;
   double hindsight_certain_armed = 0.15;
   double hindsight_guard = 0.3;
+  /// When a sample's sign is corrected, the samples up to this much younger
+  /// (s) are looked at again in the same pass, a little before their
+  /// hindsight_lag, so that the few corrections around one zero crossing of
+  /// the acceleration (1-5 samples apart) step the model again to now once
+  /// instead of once each. 0: each at its lag.
+  double hindsight_ahead = 0.005;
   /// true: the full Kalman recursion every sample (covariance propagated for
   /// the actual interval). false: each channel's steady-state gain for the
   /// actual interval, from a table made at construction (interpolated in

@@ -78,9 +78,14 @@ class DistalTorqueEstimator {
   Estimate finish(double t, double x, double xd, double xdd, double acc_sign,
                   double tau_in) noexcept;
   void look_back(double t) noexcept;
-  // Steps sample j again with the motion m, and every later one if that
-  // changed its friction (the model then holds the newest state).
-  void step_again(std::size_t j, const Motion& m) noexcept;
+  // Steps sample j again with the motion m from the state before it (on the
+  // corrected path when `dirty`): true when that changed its friction, so
+  // that the samples after it must be stepped again. Kept unless the change
+  // is too small to matter and the path is not dirty.
+  bool step_again(std::size_t j, const Motion& m, bool dirty) noexcept;
+  // Steps every sample after `from` to the newest again, from the state the
+  // model holds (from's): the model then holds the corrected newest state.
+  void catch_up(std::size_t from) noexcept;
 
   // The hindsight correction's history: the last samples as the model was
   // stepped with them, newest at newest_; the oldest `pending_` of the newest
