@@ -209,9 +209,9 @@ TEST(DistalEstimator, HindsightAheadStepsAgainOncePerZeroCrossing) {
   for (const std::uint64_t seed : {1u, 7u}) {
     const HindsightRun ahead = run_on_synthetic(MotionKind::kMultisine, seed, {});
     const HindsightRun one_by_one = run_on_synthetic(MotionKind::kMultisine, seed, each);
-    RecordProperty("multisine_seed_" + std::to_string(seed) + "_resteps",
-                   std::to_string(ahead.resteps) + " (one by one " +
-                       std::to_string(one_by_one.resteps) + ")");
+    RecordProperty(
+        "multisine_seed_" + std::to_string(seed) + "_resteps",
+        std::to_string(ahead.resteps) + " (one by one " + std::to_string(one_by_one.resteps) + ")");
     EXPECT_GT(ahead.resteps, 0u) << "seed " << seed;
     EXPECT_LT(ahead.resteps, one_by_one.resteps / 2) << "seed " << seed;
     EXPECT_LT(ahead.rmse_percent, one_by_one.rmse_percent + 0.05) << "seed " << seed;
