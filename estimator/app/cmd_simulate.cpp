@@ -2,6 +2,7 @@
 // Runs a friction model over recorded (or synthetic) motion: OUT has t,F, and
 // tau_out_est when the input has tau_in (or T1, T3) and a radius is known.
 
+#include <cstdlib>
 #include <iostream>
 #include <map>
 
@@ -24,6 +25,7 @@ struct SimulateOptions {
   double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
   double fine_psd = estimator::DifferentiatorConfig{}.fine_psd;
   double hindsight_lag = estimator::DifferentiatorConfig{}.hindsight_lag;
+  double encoder_quantum = estimator::DifferentiatorConfig{}.quantum;
   estimator::StartState start = estimator::StartState::kFreeTip;
 };
 
@@ -37,6 +39,7 @@ std::vector<double> causal_friction(const estimator::FrictionModel& model,
   diff.cruise_window = o.cruise_window;
   diff.fine_psd = o.fine_psd;
   diff.hindsight_lag = o.hindsight_lag;
+  diff.quantum = o.encoder_quantum;
   estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0, diff, o.start);
   std::vector<double> f(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i)
@@ -117,6 +120,15 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "smooth sign with the fine channel: lag of the hindsight correction, s "
                   "(haptic-server's default; 0: off)")
       ->check(CLI::Range(0.0, 0.1));
+  cmd->add_option("--encoder-quantum", opts->encoder_quantum,
+                  "resolution of x_in, rad: the differentiator's measurement noise "
+                  "(haptic-server's encoder_quantum_rad; default 2 pi / 40960)")
+      ->check(CLI::Validator(
+          [](std::string& value) -> std::string {
+            const double q = std::strtod(value.c_str(), nullptr);
+            return q > 0.0 && q <= 0.1 ? "" : "must be within (0, 0.1] rad, got " + value;
+          },
+          "(0, 0.1]"));
   const std::map<std::string, estimator::StartState> starts{
       {"free_tip", estimator::StartState::kFreeTip}, {"zero", estimator::StartState::kZero}};
   cmd->add_option("--start-state", opts->start,

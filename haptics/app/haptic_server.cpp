@@ -416,6 +416,7 @@ std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> make_estimators(
           estimator::load_model(j.params), j.radius_m,
           estimator::DifferentiatorConfig{.fine_psd = j.fine_psd,
                                           .cruise_window = j.cruise_window,
+                                          .quantum = j.encoder_quantum_rad,
                                           .sign_mode = j.sign,
                                           .hindsight_lag = j.hindsight_lag},
           j.start_state));

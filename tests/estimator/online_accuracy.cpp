@@ -112,9 +112,12 @@ class CausalPolyFit {
 // `tsm fit` uses (a Rauch-Tung-Striebel smoother over the whole record, future
 // included; offline_derivatives.hpp) drive the same model. Not causal: a
 // limit for the causal figure, never used online.
-std::vector<double> offline_friction(const FrictionModel& truth, const Recording& rec) {
+std::vector<double> offline_friction(const FrictionModel& truth, const Recording& rec,
+                                     double quantum) {
   auto model = truth.clone();
-  return simulate_friction(*model, offline_motion(rec));
+  OfflineDerivativeConfig config;
+  config.quantum = quantum;
+  return simulate_friction(*model, offline_motion(rec, config));
 }
 
 Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
@@ -131,6 +134,7 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
   sc.jitter_s = jitter;
   sc.drop_fraction = drops;
   sc.from_rest = true;
+  sc.quantum = diff.quantum;
   const SyntheticData data = make_synthetic(truth, sc);
   const Recording& rec = data.recording;
 
@@ -165,7 +169,7 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
     f_polyfit[i] =
         polyfit.update_exact(rec.t[i], rec.x_in[i], xd_fit, xdd_fit, rec.tau_in[i]).friction;
   }
-  const std::vector<double> f_offline = offline_friction(truth, rec);
+  const std::vector<double> f_offline = offline_friction(truth, rec, diff.quantum);
   if (!trace.empty()) {
     // One recording sample by sample, to look at where the error sits.
     std::FILE* f = std::fopen(dump_path.c_str(), "w");
@@ -226,6 +230,14 @@ int main(int argc, char** argv) {
                  "Oracle limit: exact derivatives, acceleration below this (rad/s^2) taken as 0")
       ->check(CLI::NonNegativeNumber);
   DifferentiatorConfig diff{};
+  app.add_option("--encoder-quantum", diff.quantum,
+                 "Encoder resolution of x_in, rad: the recordings' and the differentiator's")
+      ->check(CLI::Validator(
+          [](std::string& value) -> std::string {
+            const double q = std::strtod(value.c_str(), nullptr);
+            return q > 0.0 && q <= 0.1 ? "" : "must be within (0, 0.1] rad, got " + value;
+          },
+          "(0, 0.1]"));
   app.add_option("--jerk-psd", diff.jerk_psd, "Velocity channel jerk PSD (default as deployed)");
   app.add_option("--snap-psd", diff.snap_psd, "Acceleration channel snap PSD");
   app.add_option("--fine-psd", diff.fine_psd,

@@ -127,6 +127,20 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
               std::string::npos)
         << key.name;
   }
+  // The encoder's resolution: the differentiator's measurement noise; 0 has
+  // no meaning there (no noise at all), so it is refused with the rest.
+  EXPECT_DOUBLE_EQ(c.joints[0].encoder_quantum_rad, defaults.quantum);
+  const auto quantum_yaml = [](const std::string& value) {
+    return "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, encoder_quantum_rad: " +
+           value + "}\n";
+  };
+  EXPECT_DOUBLE_EQ(parse_server_config(quantum_yaml("3.8e-4"), "server.yaml", "/cfg")
+                       .joints[0]
+                       .encoder_quantum_rad,
+                   3.8e-4);
+  for (const char* bad : {"0", "-1e-4", "0.5"})
+    EXPECT_NE(error_of(quantum_yaml(bad)).find("joints[0].encoder_quantum_rad"), std::string::npos)
+        << bad;
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, start_state: x}\n")
                 .find("joints[0].start_state"),
             std::string::npos);
