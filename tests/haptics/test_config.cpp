@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <thread>
+#include <vector>
 
 #include "haptics/evaluation.hpp"
 #include "haptics/server_config.hpp"
@@ -99,48 +100,53 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
                 .find("joints[0].sign"),
             std::string::npos);
   // The differentiator's per-joint keys: each defaults to the
-  // differentiator's own value, 0 turns it off, and a value out of range is
-  // an error naming the key (the cruise window beyond its 0.12 s capacity, a
-  // negative crackle density, a hindsight lag beyond the history's 0.1 s).
+  // differentiator's own value, takes a valid value as given (0 turns the
+  // first three off), and a value out of range is an error naming the key
+  // (the cruise window beyond its 0.12 s capacity, a negative crackle
+  // density, a hindsight lag beyond the history's 0.1 s; an encoder quantum
+  // of 0, which would mean no measurement noise at all, or out of (0, 0.1]).
   struct DifferentiatorKey {
     const char* name;
     double JointConfig::*member;
     double default_value;
-    const char* bad_value;
+    const char* valid_value;
+    double parsed_value;
+    std::vector<const char*> bad_values;
   };
   const estimator::DifferentiatorConfig defaults{};
   for (const DifferentiatorKey& key :
-       {DifferentiatorKey{"cruise_window", &JointConfig::cruise_window, defaults.cruise_window,
-                          "0.5"},
-        DifferentiatorKey{"fine_psd", &JointConfig::fine_psd, defaults.fine_psd, "-1"},
-        DifferentiatorKey{"hindsight_lag", &JointConfig::hindsight_lag, defaults.hindsight_lag,
-                          "0.5"}}) {
+       {DifferentiatorKey{"cruise_window",
+                          &JointConfig::cruise_window,
+                          defaults.cruise_window,
+                          "0",
+                          0.0,
+                          {"0.5"}},
+        DifferentiatorKey{"fine_psd", &JointConfig::fine_psd, defaults.fine_psd, "0", 0.0, {"-1"}},
+        DifferentiatorKey{"hindsight_lag",
+                          &JointConfig::hindsight_lag,
+                          defaults.hindsight_lag,
+                          "0",
+                          0.0,
+                          {"0.5"}},
+        DifferentiatorKey{"encoder_quantum_rad",
+                          &JointConfig::encoder_quantum_rad,
+                          defaults.quantum,
+                          "3.8e-4",
+                          3.8e-4,
+                          {"0", "-1e-4", "0.5"}}}) {
     const auto yaml = [&](const std::string& value) {
       return "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, " + std::string(key.name) +
              ": " + value + "}\n";
     };
     EXPECT_DOUBLE_EQ(c.joints[0].*key.member, key.default_value) << key.name;
-    EXPECT_DOUBLE_EQ(parse_server_config(yaml("0"), "server.yaml", "/cfg").joints[0].*key.member,
-                     0.0)
+    EXPECT_DOUBLE_EQ(
+        parse_server_config(yaml(key.valid_value), "server.yaml", "/cfg").joints[0].*key.member,
+        key.parsed_value)
         << key.name;
-    EXPECT_NE(error_of(yaml(key.bad_value)).find("joints[0]." + std::string(key.name)),
-              std::string::npos)
-        << key.name;
+    for (const char* bad : key.bad_values)
+      EXPECT_NE(error_of(yaml(bad)).find("joints[0]." + std::string(key.name)), std::string::npos)
+          << key.name << ' ' << bad;
   }
-  // The encoder's resolution: the differentiator's measurement noise; 0 has
-  // no meaning there (no noise at all), so it is refused with the rest.
-  EXPECT_DOUBLE_EQ(c.joints[0].encoder_quantum_rad, defaults.quantum);
-  const auto quantum_yaml = [](const std::string& value) {
-    return "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, encoder_quantum_rad: " +
-           value + "}\n";
-  };
-  EXPECT_DOUBLE_EQ(parse_server_config(quantum_yaml("3.8e-4"), "server.yaml", "/cfg")
-                       .joints[0]
-                       .encoder_quantum_rad,
-                   3.8e-4);
-  for (const char* bad : {"0", "-1e-4", "0.5"})
-    EXPECT_NE(error_of(quantum_yaml(bad)).find("joints[0].encoder_quantum_rad"), std::string::npos)
-        << bad;
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, start_state: x}\n")
                 .find("joints[0].start_state"),
             std::string::npos);
