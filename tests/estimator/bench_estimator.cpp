@@ -1,6 +1,7 @@
 // One estimator step for one joint, differentiation included: the work the
 // haptic loop does per joint per tick. Target (issue 13): median <= 60 ns.
-// Measured figures and what bounds them: docs/friction-model.md, Benchmark.
+// Measured figures and what bounds them: docs/friction-model.md, Benchmark;
+// BM_EstimatorStepWithoutHindsight prints the cost of the hindsight correction.
 // Run: build/bin/bench_estimator (or scripts/bench estimator).
 #include <benchmark/benchmark.h>
 
@@ -37,8 +38,9 @@ Samples encoder_samples(std::size_t n) {
 
 // One estimator step per iteration over the samples, repeated with a time
 // offset so that time keeps increasing.
-void run_estimator(benchmark::State& state, const Samples& s) {
-  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
+void run_estimator(benchmark::State& state, const Samples& s,
+                   const DifferentiatorConfig& diff = {}) {
+  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01, diff);
   std::size_t i = 0;
   double t_offset = 0.0;
   for (auto _ : state) {
@@ -56,6 +58,18 @@ void BM_EstimatorStep(benchmark::State& state) {
   run_estimator(state, encoder_samples(1 << 16));
 }
 BENCHMARK(BM_EstimatorStep)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
+// The same without the hindsight correction (haptic-server's
+// `hindsight_lag: 0`): what the correction costs, beside the figure above.
+void BM_EstimatorStepWithoutHindsight(benchmark::State& state) {
+  DifferentiatorConfig diff;
+  diff.hindsight_lag = 0.0;
+  run_estimator(state, encoder_samples(1 << 16), diff);
+}
+BENCHMARK(BM_EstimatorStepWithoutHindsight)
     ->Repetitions(15)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);

@@ -188,9 +188,9 @@ TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVeloci
         ++moving;
         transitions += der.acc_sign != last;
       }
-      // At rest the encoder stops changing; after still_time (40 ms) the
-      // sign is exactly 0, so lambda sgn(xdd) cannot drive eq. (4).
-      if (i > 10040 && der.acc_sign != 0.0) {
+      // At rest the encoder stops changing; after still_time the sign is
+      // exactly 0, so lambda sgn(xdd) cannot drive eq. (4).
+      if (t > 10.0 + d.config().still_time && der.acc_sign != 0.0) {
         ++nonzero_at_rest;
       }
       last = der.acc_sign;

@@ -131,8 +131,10 @@ struct DifferentiatorConfig {
   /// uncertainty-scaled one (negative: scaled, the default).
   double acc_sign_threshold = -1.0;
   /// The encoder has not changed for this long (s): the joint is at rest and
-  /// sgn(xdd) is 0 (0: off).
-  double still_time = 0.04;
+  /// sgn(xdd) is 0 (0: off). Too short and a hand still creeping into a stop
+  /// below one count is frozen early; too long and the ringing after a stop
+  /// drives the state (docs/friction-model.md, "The stop").
+  double still_time = 0.05;
   /// A gap longer than this (s) restarts the filters at the new sample.
   double max_gap = 0.05;
   /// Hindsight correction (DistalTorqueEstimator, smooth sign with the fine
