@@ -111,22 +111,26 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
   cmd->add_option("--cruise-window", opts->cruise_window,
                   "smooth sign: window of the cruise hypothesis, s (haptic-server's default; 0: "
                   "off, the estimator before issue 13)")
-      ->check(CLI::Range(0.0, 0.12));
+      ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kCruiseWindow));
   cmd->add_option("--fine-psd", opts->fine_psd,
                   "smooth sign: crackle spectral density of the fine acceleration channel, "
                   "(rad/s^5)^2/Hz (haptic-server's default; 0: off, the estimator before it)")
-      ->check(CLI::Range(0.0, 1e9));
+      ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kFinePsd));
   cmd->add_option("--hindsight-lag", opts->hindsight_lag,
                   "smooth sign with the fine channel: lag of the hindsight correction, s "
                   "(haptic-server's default; 0: off)")
-      ->check(CLI::Range(0.0, 0.1));
+      ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kHindsightLag));
   cmd->add_option("--encoder-quantum", opts->encoder_quantum,
                   "resolution of x_in, rad: the differentiator's measurement noise "
                   "(haptic-server's encoder_quantum_rad; default 2 pi / 40960)")
       ->check(CLI::Validator(
           [](std::string& value) -> std::string {
+            static_assert(estimator::DifferentiatorLimits::kEncoderQuantum == 0.1,
+                          "the text below");
             const double q = std::strtod(value.c_str(), nullptr);
-            return q > 0.0 && q <= 0.1 ? "" : "must be within (0, 0.1] rad, got " + value;
+            return q > 0.0 && q <= estimator::DifferentiatorLimits::kEncoderQuantum
+                       ? ""
+                       : "must be within (0, 0.1] rad, got " + value;
           },
           "(0, 0.1]"));
   const std::map<std::string, estimator::StartState> starts{

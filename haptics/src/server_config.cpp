@@ -176,11 +176,12 @@ void parse_joint(FieldReader& j, std::size_t i, const std::filesystem::path& bas
   const auto sign = estimator::sign_mode_from_name(j.get_string("sign", "smooth"));
   if (!sign) j.fail("sign", "must be smooth, smooth-fast or hard");
   jc.sign = *sign;
-  jc.cruise_window = in_range(j, "cruise_window", jc.cruise_window, 0.0, 0.12);
-  jc.fine_psd = in_range(j, "fine_psd", jc.fine_psd, 0.0, 1e9);
-  jc.hindsight_lag = in_range(j, "hindsight_lag", jc.hindsight_lag, 0.0, 0.1);
-  jc.encoder_quantum_rad =
-      in_range(j, "encoder_quantum_rad", jc.encoder_quantum_rad, 0.0, 0.1, /*lo_open=*/true);
+  using Limits = estimator::DifferentiatorLimits;
+  jc.cruise_window = in_range(j, "cruise_window", jc.cruise_window, 0.0, Limits::kCruiseWindow);
+  jc.fine_psd = in_range(j, "fine_psd", jc.fine_psd, 0.0, Limits::kFinePsd);
+  jc.hindsight_lag = in_range(j, "hindsight_lag", jc.hindsight_lag, 0.0, Limits::kHindsightLag);
+  jc.encoder_quantum_rad = in_range(j, "encoder_quantum_rad", jc.encoder_quantum_rad, 0.0,
+                                    Limits::kEncoderQuantum, /*lo_open=*/true);
   const std::string start = j.get_string("start_state", "free_tip");
   if (start != "free_tip" && start != "zero") j.fail("start_state", "must be free_tip or zero");
   jc.start_state = start == "zero" ? estimator::StartState::kZero : estimator::StartState::kFreeTip;

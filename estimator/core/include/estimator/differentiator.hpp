@@ -177,6 +177,20 @@ struct DifferentiatorConfig {
   bool exact_covariance = false;
 };
 
+/// The largest values of the per-joint settings a user may change, shared by
+/// haptic-server's keys and `tsm simulate`'s options so that both accept the
+/// same configurations (each is >= 0, encoder_quantum > 0).
+struct DifferentiatorLimits {
+  /// s; at 1 kHz the window's ring (127 samples) holds all of it.
+  static constexpr double kCruiseWindow = 0.12;
+  /// (rad/s^5)^2/Hz
+  static constexpr double kFinePsd = 1e9;
+  /// s; at 1 kHz the estimator's history (127 samples) holds all of it.
+  static constexpr double kHindsightLag = 0.1;
+  /// rad
+  static constexpr double kEncoderQuantum = 0.1;
+};
+
 struct Derivatives {
   double x = 0.0;       ///< filtered angle, rad
   double xd = 0.0;      ///< rad/s
