@@ -282,7 +282,9 @@ int main(int argc, char** argv) {
   app.add_option("--sign-mode", sign_mode, "smooth (deployed), smooth-fast or hard");
   app.add_flag("--exact-covariance", diff.exact_covariance, "full Kalman recursion every sample");
   app.add_option("--smooth-sigmas", diff.smooth_sigmas, "smooth sign: width in sd");
-  app.add_option("--still-time", diff.still_time, "encoder unchanged this long: rest");
+  app.add_option("--still-time", diff.still_time,
+                 "encoder unchanged this long (s): rest (default automatic: 50 ms at 2 pi/40960 "
+                 "rad, with the cube root of the quantum)");
   CLI11_PARSE(app, argc, argv);
   const auto mode = sign_mode_from_name(sign_mode);
   if (!mode) {

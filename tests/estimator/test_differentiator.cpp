@@ -190,7 +190,7 @@ TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVeloci
       }
       // At rest the encoder stops changing; after still_time the sign is
       // exactly 0, so lambda sgn(xdd) cannot drive eq. (4).
-      if (t > 10.0 + d.config().still_time && der.acc_sign != 0.0) {
+      if (t > 10.0 + d.still_time() && der.acc_sign != 0.0) {
         ++nonzero_at_rest;
       }
       last = der.acc_sign;
@@ -206,6 +206,21 @@ TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVeloci
       EXPECT_LE(transitions, 2);
     }
   }
+}
+
+// The rest time: automatic by default, kRestTime at kReferenceQuantum and
+// with the cube root of the quantum elsewhere; a value given is used as is,
+// 0 turns it off.
+TEST(Differentiator, RestTimeIsAutomaticUnlessGiven) {
+  EXPECT_EQ(Differentiator{}.still_time(), kRestTime);
+  EXPECT_DOUBLE_EQ(
+      Differentiator(DifferentiatorConfig{.quantum = 8.0 * kReferenceQuantum}).still_time(),
+      2.0 * kRestTime);
+  EXPECT_DOUBLE_EQ(
+      Differentiator(DifferentiatorConfig{.quantum = kReferenceQuantum / 27.0}).still_time(),
+      kRestTime / 3.0);
+  EXPECT_EQ(Differentiator(DifferentiatorConfig{.still_time = 0.02}).still_time(), 0.02);
+  EXPECT_EQ(Differentiator(DifferentiatorConfig{.still_time = 0.0}).still_time(), 0.0);
 }
 
 TEST(Differentiator, ScheduledGainsMatchTheFullRecursionOnceSettled) {

@@ -146,6 +146,7 @@ HindsightRun run_on_synthetic(MotionKind kind, std::uint64_t seed,
   SyntheticConfig sc;
   sc.motion = kind;
   sc.seed = seed;
+  sc.quantum = diff.quantum;
   sc.exact_derivatives = true;
   sc.from_rest = true;
   const SyntheticData data = make_synthetic(truth, sc);
@@ -195,13 +196,34 @@ TEST(DistalEstimator, HindsightCorrectsTheStartsAndStopsOfMoves) {
 TEST(DistalEstimator, RestIsNotDeclaredBeforeACreepingHandHasStopped) {
   DifferentiatorConfig early;
   early.still_time = 0.04;
-  ASSERT_GT(DifferentiatorConfig{}.still_time, early.still_time);
+  ASSERT_GT(Differentiator{}.still_time(), early.still_time);
   for (const std::uint64_t seed : {2u, 9u}) {
     const double deployed = run_on_synthetic(MotionKind::kSurgeon, seed, {}).rmse_percent;
     const double at_40ms = run_on_synthetic(MotionKind::kSurgeon, seed, early).rmse_percent;
     RecordProperty("surgeon_seed_" + std::to_string(seed),
                    std::to_string(deployed) + " % (40 ms: " + std::to_string(at_40ms) + " %)");
     EXPECT_LT(deployed, 0.95 * at_40ms) << "seed " << seed;
+  }
+}
+
+// With a finer encoder the last count comes closer to the stop: the
+// automatic rest time shrinks with the cube root of the quantum (33.9 ms at
+// 2 pi/131072) and freezes the stop later than the 50 ms chosen at
+// 2 pi/40960 would, which declares rest after the hand has stopped and lets
+// the channels' ringing drive the state (measured on the surgeon's seeds
+// 1-10, 101-110 and 1401-1410: lower on 28 of 30, docs/friction-model.md).
+TEST(DistalEstimator, RestTimeFollowsTheEncodersResolution) {
+  DifferentiatorConfig automatic;
+  automatic.quantum = 2.0 * std::numbers::pi / 131072.0;
+  DifferentiatorConfig fixed = automatic;
+  fixed.still_time = kRestTime;
+  ASSERT_NEAR(Differentiator(automatic).still_time(), 0.0339, 1e-4);
+  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    const double a = run_on_synthetic(MotionKind::kSurgeon, seed, automatic).rmse_percent;
+    const double f = run_on_synthetic(MotionKind::kSurgeon, seed, fixed).rmse_percent;
+    RecordProperty("surgeon_seed_" + std::to_string(seed),
+                   std::to_string(a) + " % (50 ms: " + std::to_string(f) + " %)");
+    EXPECT_LT(a, 0.85 * f) << "seed " << seed;
   }
 }
 

@@ -55,6 +55,9 @@ Differentiator::Differentiator(const DifferentiatorConfig& config)
   if (!config.exact_covariance) build_gain_table();
   // The window's sums move every sample while armed: one division less each.
   if (use_cruise_) inv_cruise_window_ = 1.0 / config.cruise_window;
+  still_time_ = config.still_time >= 0.0
+                    ? config.still_time
+                    : kRestTime * std::cbrt(config.quantum / kReferenceQuantum);
   reset();
 }
 
@@ -310,7 +313,7 @@ inline double Differentiator::decide_sign(const Step& step, double dt) noexcept 
   // At rest the true acceleration is exactly 0 and the model's state must
   // not move; the acceleration estimate still rings for a while after a stop
   // (the jerk ends abruptly), so an encoder that has not moved decides.
-  if (cfg_.still_time > 0.0 && still_ >= cfg_.still_time) {
+  if (still_time_ > 0.0 && still_ >= still_time_) {
     in_band_ = 0.0;
     return 0.0;
   }

@@ -82,7 +82,8 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
     --pending_;
     Motion m = s.m;
     bool corrected = false;
-    if (c.still_time > 0.0 && diff_.still_duration() >= back + c.still_time) {
+    const double still_time = diff_.still_time();
+    if (still_time > 0.0 && diff_.still_duration() >= back + still_time) {
       // The encoder has not changed since before this sample: at rest.
       corrected = m.xd != 0.0 || m.xdd != 0.0 || m.acc_sign != 0.0;
       m.xd = m.xdd = m.acc_sign = 0.0;

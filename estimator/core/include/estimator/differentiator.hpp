@@ -63,6 +63,12 @@ inline std::optional<SignMode> sign_mode_from_name(std::string_view name) {
   return std::nullopt;
 }
 
+/// The encoder resolution the differentiator's settings were chosen for,
+/// rad (40960 counts per turn).
+inline constexpr double kReferenceQuantum = 2.0 * std::numbers::pi / 40960.0;
+/// The automatic rest time at kReferenceQuantum, s (DifferentiatorConfig::still_time).
+inline constexpr double kRestTime = 0.05;
+
 struct DifferentiatorConfig {
   /// Velocity channel (x, xd): spectral density of the jerk, (rad/s^3)^2/Hz.
   /// Larger follows faster motion with less lag and more noise.
@@ -116,7 +122,7 @@ struct DifferentiatorConfig {
   double cruise_noise = 5.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
-  double quantum = 2.0 * std::numbers::pi / 40960.0;
+  double quantum = kReferenceQuantum;
   /// Additional white measurement noise on the angle, rad (standard deviation).
   double position_noise = 0.0;
   SignMode sign_mode = SignMode::kSmooth;
@@ -133,8 +139,13 @@ struct DifferentiatorConfig {
   /// The encoder has not changed for this long (s): the joint is at rest and
   /// sgn(xdd) is 0 (0: off). Too short and a hand still creeping into a stop
   /// below one count is frozen early; too long and the ringing after a stop
-  /// drives the state (docs/friction-model.md, "The stop").
-  double still_time = 0.05;
+  /// drives the state. Negative (the default): automatic, kRestTime at
+  /// kReferenceQuantum, scaled with the cube root of `quantum`: a hand
+  /// ending a move smoothly (velocity and acceleration reaching 0 together)
+  /// covers its last count in a time proportional to quantum^(1/3)
+  /// (docs/friction-model.md, "The stop"). Differentiator::still_time()
+  /// gives the value in use.
+  double still_time = -1.0;
   /// A gap longer than this (s) restarts the filters at the new sample.
   double max_gap = 0.05;
   /// Hindsight correction (DistalTorqueEstimator, smooth sign with the fine
@@ -247,6 +258,9 @@ class Differentiator {
   double time_since_manoeuvre() const noexcept { return since_inconsistent_; }
   /// How long the encoder reading has not changed, s.
   double still_duration() const noexcept { return still_; }
+  /// The rest time in use, s (DifferentiatorConfig::still_time, resolved
+  /// when automatic; 0: off).
+  double still_time() const noexcept { return still_time_; }
   /// Whether the last accepted sample (re)started the filters: the first
   /// one, or one after a gap longer than max_gap.
   bool restarted() const noexcept { return restarted_; }
@@ -333,6 +347,7 @@ class Differentiator {
   // exceeded cruise_nis.
   bool use_cruise_;
   double inv_cruise_window_ = 0.0;  // 1 / cruise_window
+  double still_time_ = 0.0;         // the rest time in use, s
   static constexpr std::size_t kWindowCapacity = 128;
   std::array<double, kWindowCapacity> window_t_{}, window_x_{};
   std::size_t window_head_ = 0, window_size_ = 0;
