@@ -121,7 +121,7 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "(haptic-server's default; 0: off)")
       ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kHindsightLag));
   cmd->add_option("--encoder-quantum", opts->encoder_quantum,
-                  "resolution of x_in, rad: the differentiator's measurement noise "
+                  "resolution of x_in, rad: the differentiator's measurement noise and rest time "
                   "(haptic-server's encoder_quantum_rad; default 2 pi / 40960)")
       ->check(CLI::Validator(
           [](std::string& value) -> std::string {

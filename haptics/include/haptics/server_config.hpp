@@ -40,7 +40,8 @@ struct JointConfig {
   double hindsight_lag = estimator::DifferentiatorConfig{}.hindsight_lag;
   /// Resolution of the motor angle x_in as the slave reports it, rad (the
   /// encoder's count through any gearing): the differentiator's measurement
-  /// noise, quantum^2/12. As `tsm simulate --encoder-quantum`.
+  /// noise, quantum^2/12, and its rest time (DifferentiatorConfig::
+  /// still_time, automatic). As `tsm simulate --encoder-quantum`.
   double encoder_quantum_rad = estimator::DifferentiatorConfig{}.quantum;
   /// The estimator's friction state at start: tip assumed free (default) or zero.
   estimator::StartState start_state = estimator::StartState::kFreeTip;
