@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -165,6 +166,23 @@ HindsightRun run_on_synthetic(MotionKind kind, std::uint64_t seed,
   return {100.0 * std::sqrt(se / static_cast<double>(n)) / peak, est.hindsight_resteps()};
 }
 
+// On each seed of the surgeon's motion, the estimator configured by `config`
+// below `bound` times its RMSE configured by `baseline` (named in the
+// recorded property).
+void expect_lower_on_surgeon(const DifferentiatorConfig& config,
+                             const DifferentiatorConfig& baseline,
+                             std::initializer_list<std::uint64_t> seeds, double bound,
+                             const std::string& baseline_name) {
+  for (const std::uint64_t seed : seeds) {
+    const double with = run_on_synthetic(MotionKind::kSurgeon, seed, config).rmse_percent;
+    const double base = run_on_synthetic(MotionKind::kSurgeon, seed, baseline).rmse_percent;
+    ::testing::Test::RecordProperty(
+        "surgeon_seed_" + std::to_string(seed),
+        std::to_string(with) + " % (" + baseline_name + ": " + std::to_string(base) + " %)");
+    EXPECT_LT(with, bound * base) << "seed " << seed;
+  }
+}
+
 }  // namespace
 
 // Point-to-point moves between holds: each move's first encoder count comes
@@ -197,13 +215,7 @@ TEST(DistalEstimator, RestIsNotDeclaredBeforeACreepingHandHasStopped) {
   DifferentiatorConfig early;
   early.still_time = 0.04;
   ASSERT_GT(Differentiator{}.still_time(), early.still_time);
-  for (const std::uint64_t seed : {2u, 9u}) {
-    const double deployed = run_on_synthetic(MotionKind::kSurgeon, seed, {}).rmse_percent;
-    const double at_40ms = run_on_synthetic(MotionKind::kSurgeon, seed, early).rmse_percent;
-    RecordProperty("surgeon_seed_" + std::to_string(seed),
-                   std::to_string(deployed) + " % (40 ms: " + std::to_string(at_40ms) + " %)");
-    EXPECT_LT(deployed, 0.95 * at_40ms) << "seed " << seed;
-  }
+  expect_lower_on_surgeon({}, early, {2u, 9u}, 0.95, "40 ms");
 }
 
 // With a finer encoder the last count comes closer to the stop: the
@@ -218,13 +230,7 @@ TEST(DistalEstimator, RestTimeFollowsTheEncodersResolution) {
   DifferentiatorConfig fixed = automatic;
   fixed.still_time = kRestTime;
   ASSERT_NEAR(Differentiator(automatic).still_time(), 0.0339, 1e-4);
-  for (const std::uint64_t seed : {1u, 2u, 3u}) {
-    const double a = run_on_synthetic(MotionKind::kSurgeon, seed, automatic).rmse_percent;
-    const double f = run_on_synthetic(MotionKind::kSurgeon, seed, fixed).rmse_percent;
-    RecordProperty("surgeon_seed_" + std::to_string(seed),
-                   std::to_string(a) + " % (50 ms: " + std::to_string(f) + " %)");
-    EXPECT_LT(a, 0.85 * f) << "seed " << seed;
-  }
+  expect_lower_on_surgeon(automatic, fixed, {1u, 2u, 3u}, 0.85, "50 ms");
 }
 
 // On smooth motion it must not cost accuracy: multisine within 1.2x of the
