@@ -197,7 +197,8 @@ SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& 
   if (!(c.duration_s > 0.0) || !(c.rate_hz > 0.0) || !(c.radius_m > 0.0) || c.components < 1 ||
       !(c.f_low_hz > 0.0) || !(c.f_high_hz >= c.f_low_hz) || c.substeps < 1 ||
       c.torque_noise < 0.0 || c.quantum < 0.0 || !(c.jitter_s >= 0.0) ||
-      !(c.jitter_s < 0.5 / c.rate_hz) || !(c.drop_fraction >= 0.0) || !(c.drop_fraction <= 0.5)) {
+      !(c.jitter_s < 0.5 / c.rate_hz) || !(c.drop_fraction >= 0.0) || !(c.drop_fraction <= 0.5) ||
+      !(c.tremor_rad >= 0.0) || !(c.tremor_hz > 0.0)) {
     throw std::invalid_argument("make_synthetic: unusable configuration");
   }
   std::mt19937_64 rng(c.seed);
@@ -256,6 +257,12 @@ SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& 
       m.x = e * s;
       m.xd = ed * s + e * sd;
       m.xdd = edd * s + 2.0 * ed * sd + e * sdd;
+    }
+    if (c.tremor_rad > 0.0) {
+      const double w = kTwoPi * c.tremor_hz;
+      m.x += c.tremor_rad * std::sin(w * t);
+      m.xd += c.tremor_rad * w * std::cos(w * t);
+      m.xdd -= c.tremor_rad * w * w * std::sin(w * t);
     }
     m.acc_sign = sign_of(m.xdd);
     const double tau_out = c.load_offset + c.load_amplitude * e * l;

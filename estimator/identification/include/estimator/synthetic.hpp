@@ -65,6 +65,13 @@ struct SyntheticConfig {
   /// Record the 1 s pre-roll too (times from -1 s), so the recording starts
   /// at rest with the friction state at zero, as an online estimator does.
   bool from_rest = false;
+  /// A tremor added to the motion: tremor_rad sin(2 pi tremor_hz t), exact
+  /// derivatives included (0: none). At 1e-12 rad it changes no encoder
+  /// sample, yet it gives the acceleration a sign wherever the motion's own
+  /// acceleration is smaller than tremor_rad (2 pi tremor_hz)^2: in holds and
+  /// cruises, where eq. (4)'s lambda sgn(xdd) then drives the true state.
+  double tremor_rad = 0.0;
+  double tremor_hz = 10.0;
   std::uint64_t seed = 1;
 };
 
