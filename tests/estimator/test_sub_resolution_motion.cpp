@@ -1,9 +1,10 @@
 // What no estimator from the encoder can decide. Eq. (4) switches on the sign
 // of the acceleration however small it is, so in holds and cruises, where the
-// generator's acceleration is exactly zero, a tremor of 1e-12 rad (which no
-// encoder sample shows) sets the true friction state. Two worlds with the
-// same samples and different truths bound every estimator from below: on one
-// of them it is off by at least half the RMSE between the truths.
+// generator's acceleration is exactly zero, a tremor of 1e-12 rad or a
+// constant acceleration of +-1e-16 rad/s^2 (which no encoder sample shows)
+// sets the true friction state. Two worlds with the same samples and
+// different truths bound every estimator from below: on one of them it is
+// off by at least half the RMSE between the truths.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,9 +21,10 @@ namespace tsmh::estimator {
 namespace {
 
 constexpr double kTremor = 1e-12;  // rad, at the default 10 Hz
+constexpr double kDrift = 1e-16;   // rad/s^2
 
 struct World {
-  SyntheticData still, shaken;
+  SyntheticData still, shaken, faster, slower;
 };
 
 World worlds(MotionKind kind, std::uint64_t seed) {
@@ -32,33 +34,46 @@ World worlds(MotionKind kind, std::uint64_t seed) {
   config.seed = seed;
   config.f_low_hz = 0.2;
   config.f_high_hz = 1.0;
-  World w{make_synthetic(truth, config), {}};
+  World w{make_synthetic(truth, config), {}, {}, {}};
   config.tremor_rad = kTremor;
   w.shaken = make_synthetic(truth, config);
+  config.tremor_rad = 0.0;
+  config.drift_acc = kDrift;
+  w.faster = make_synthetic(truth, config);
+  config.drift_acc = -kDrift;
+  w.slower = make_synthetic(truth, config);
   return w;
 }
 
-// Half the RMSE between the two truths, % of the first one's peak.
-double ambiguity_percent(const World& w) {
+// Half the RMSE between two truths, % of the generator's peak.
+double ambiguity_percent(const World& w, const SyntheticData& a, const SyntheticData& b) {
   double peak = 0.0, se = 0.0;
-  const auto& a = w.still.true_friction;
-  const auto& b = w.shaken.true_friction;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    peak = std::max(peak, std::fabs(a[i]));
-    se += (a[i] - b[i]) * (a[i] - b[i]);
+  for (std::size_t i = 0; i < a.true_friction.size(); ++i) {
+    peak = std::max(peak, std::fabs(w.still.true_friction[i]));
+    const double d = a.true_friction[i] - b.true_friction[i];
+    se += d * d;
   }
-  return 50.0 * std::sqrt(se / static_cast<double>(a.size())) / peak;
+  return 50.0 * std::sqrt(se / static_cast<double>(a.true_friction.size())) / peak;
+}
+double tremor_ambiguity(const World& w) {
+  return ambiguity_percent(w, w.still, w.shaken);
+}
+double drift_ambiguity(const World& w) {
+  return ambiguity_percent(w, w.faster, w.slower);
 }
 
-TEST(SubResolutionTremor, ChangesNoEncoderSample) {
-  for (MotionKind kind : {MotionKind::kSurgeon, MotionKind::kCreep, MotionKind::kMultisine}) {
+TEST(SubResolutionMotion, ChangesNoEncoderSample) {
+  for (MotionKind kind :
+       {MotionKind::kSurgeon, MotionKind::kCreep, MotionKind::kReversals, MotionKind::kMultisine}) {
     const World w = worlds(kind, 1);
-    ASSERT_EQ(w.still.recording.size(), w.shaken.recording.size());
-    EXPECT_EQ(w.still.recording.x_in, w.shaken.recording.x_in) << motion_kind_name(kind);
+    for (const SyntheticData* other : {&w.shaken, &w.faster, &w.slower}) {
+      ASSERT_EQ(w.still.recording.size(), other->recording.size());
+      EXPECT_EQ(w.still.recording.x_in, other->recording.x_in) << motion_kind_name(kind);
+    }
   }
 }
 
-TEST(SubResolutionTremor, LeavesTheFrictionEstimateUnchanged) {
+TEST(SubResolutionMotion, LeavesTheFrictionEstimateUnchanged) {
   // The paper's model has no load term: after the start, the friction
   // estimate depends on the encoder alone, although the proximal torque
   // carries the other truth. (The server's default start tares the state
@@ -80,25 +95,36 @@ TEST(SubResolutionTremor, LeavesTheFrictionEstimateUnchanged) {
   EXPECT_TRUE(torque_differs);
 }
 
-TEST(SubResolutionTremor, DecidesTheTruthInHoldsAndCruisesOnly) {
-  // Measured: surgeon 2.6-3.9 %, creep 14-17 % on seeds 1-3 (1.8 % and 13 %
-  // the least over 100 seeds): above the 1 % target, so no estimator reaches
-  // it on both worlds. Without holds (multisine) the tremor's acceleration
-  // only outweighs the motion's at isolated zero crossings.
+TEST(SubResolutionMotion, DecidesTheTruthInHoldsAndCruisesOnly) {
+  // Measured by online_accuracy on seeds 1-3 (tremor / drift): surgeon 2.6-3.9 / 59-62 %, creep
+  // 14-17 / 67-77 %, reversals 0.6-0.9 / 4.3-7.7 %: with the drift above the
+  // 1 % target on all three, so no estimator reaches it on both worlds of a
+  // pair. Without holds or cruises (multisine) the perturbations' sign only
+  // outweighs the motion's at isolated zero crossings of the acceleration.
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    EXPECT_GT(ambiguity_percent(worlds(MotionKind::kSurgeon, seed)), 1.5) << seed;
-    EXPECT_GT(ambiguity_percent(worlds(MotionKind::kCreep, seed)), 10.0) << seed;
-    EXPECT_LT(ambiguity_percent(worlds(MotionKind::kMultisine, seed)), 0.01) << seed;
+    const World surgeon = worlds(MotionKind::kSurgeon, seed);
+    EXPECT_GT(tremor_ambiguity(surgeon), 1.5) << seed;
+    EXPECT_GT(drift_ambiguity(surgeon), 30.0) << seed;
+    const World creep = worlds(MotionKind::kCreep, seed);
+    EXPECT_GT(tremor_ambiguity(creep), 10.0) << seed;
+    EXPECT_GT(drift_ambiguity(creep), 30.0) << seed;
+    EXPECT_GT(drift_ambiguity(worlds(MotionKind::kReversals, seed)), 2.0) << seed;
+    const World multisine = worlds(MotionKind::kMultisine, seed);
+    EXPECT_LT(tremor_ambiguity(multisine), 0.01) << seed;
+    EXPECT_LT(drift_ambiguity(multisine), 0.01) << seed;
   }
 }
 
-TEST(SubResolutionTremor, RefusesANegativeTremor) {
+TEST(SubResolutionMotion, RefusesAnUnusablePerturbation) {
   const TsmFrictionModel truth(paper_spec());
   SyntheticConfig config;
   config.tremor_rad = -1e-12;
   EXPECT_THROW(make_synthetic(truth, config), std::invalid_argument);
   config.tremor_rad = 1e-12;
   config.tremor_hz = 0.0;
+  EXPECT_THROW(make_synthetic(truth, config), std::invalid_argument);
+  config.tremor_hz = 10.0;
+  config.drift_acc = std::nan("");
   EXPECT_THROW(make_synthetic(truth, config), std::invalid_argument);
 }
 

@@ -198,7 +198,7 @@ SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& 
       !(c.f_low_hz > 0.0) || !(c.f_high_hz >= c.f_low_hz) || c.substeps < 1 ||
       c.torque_noise < 0.0 || c.quantum < 0.0 || !(c.jitter_s >= 0.0) ||
       !(c.jitter_s < 0.5 / c.rate_hz) || !(c.drop_fraction >= 0.0) || !(c.drop_fraction <= 0.5) ||
-      !(c.tremor_rad >= 0.0) || !(c.tremor_hz > 0.0)) {
+      !(c.tremor_rad >= 0.0) || !(c.tremor_hz > 0.0) || !std::isfinite(c.drift_acc)) {
     throw std::invalid_argument("make_synthetic: unusable configuration");
   }
   std::mt19937_64 rng(c.seed);
@@ -263,6 +263,12 @@ SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& 
       m.x += c.tremor_rad * std::sin(w * t);
       m.xd += c.tremor_rad * w * std::cos(w * t);
       m.xdd -= c.tremor_rad * w * w * std::sin(w * t);
+    }
+    if (c.drift_acc != 0.0) {
+      const double since = t + fade;  // from the start of the pre-roll
+      m.x += 0.5 * c.drift_acc * since * since;
+      m.xd += c.drift_acc * since;
+      m.xdd += c.drift_acc;
     }
     m.acc_sign = sign_of(m.xdd);
     const double tau_out = c.load_offset + c.load_amplitude * e * l;

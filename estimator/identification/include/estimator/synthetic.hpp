@@ -72,6 +72,10 @@ struct SyntheticConfig {
   /// cruises, where eq. (4)'s lambda sgn(xdd) then drives the true state.
   double tremor_rad = 0.0;
   double tremor_hz = 10.0;
+  /// A constant acceleration added to the motion, rad/s^2 (x += a t^2 / 2
+  /// from t = 0 of the pre-roll on). At +-1e-16 it moves no encoder sample in
+  /// 40 s, yet holds and cruises then accelerate (or decelerate) throughout.
+  double drift_acc = 0.0;
   std::uint64_t seed = 1;
 };
 
