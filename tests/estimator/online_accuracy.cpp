@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -52,10 +53,16 @@ struct Score {
   double rmse = 0.0, p2p = 0.0, max_abs = 0.0;  // % of peak |F_true|
 };
 
-Score score(const std::vector<double>& est, const std::vector<double>& truth) {
-  double peak = 0.0, se = 0.0, lo = 0.0, hi = 0.0;
-  for (double v : truth)
-    peak = std::max(peak, std::fabs(v));
+double peak_abs(const std::vector<double>& v) {
+  double peak = 0.0;
+  for (double x : v)
+    peak = std::max(peak, std::fabs(x));
+  return peak;
+}
+
+// est against truth, in % of `peak`.
+Score score(const std::vector<double>& est, const std::vector<double>& truth, double peak) {
+  double se = 0.0, lo = 0.0, hi = 0.0;
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const double e = est[i] - truth[i];
     se += e * e;
@@ -64,6 +71,10 @@ Score score(const std::vector<double>& est, const std::vector<double>& truth) {
   }
   return {100.0 * std::sqrt(se / static_cast<double>(truth.size())) / peak,
           100.0 * (hi - lo) / peak, 100.0 * std::max(hi, -lo) / peak};
+}
+
+Score score(const std::vector<double>& est, const std::vector<double>& truth) {
+  return score(est, truth, peak_abs(truth));
 }
 
 struct Row {
@@ -202,15 +213,11 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
       row.invisible_changed += other->recording.x_in[i] != rec.x_in[i] ? 1 : 0;
   }
   const auto shaken_tail = tail(shaken.true_friction);
-  // Scored against this recording's peak, as every other figure.
-  const auto half_rmse = [&](const std::vector<double>& a, const std::vector<double>& b) {
-    std::vector<double> difference(a.size());
-    for (std::size_t i = 0; i < a.size(); ++i)
-      difference[i] = truth_tail[i] + (a[i] - b[i]);
-    return 0.5 * score(difference, truth_tail).rmse;
-  };
-  row.ambiguity_tremor = half_rmse(shaken_tail, truth_tail);
-  row.ambiguity_drift = half_rmse(tail(faster.true_friction), tail(slower.true_friction));
+  // In % of this recording's peak, as every other figure.
+  const double peak = peak_abs(truth_tail);
+  row.ambiguity_tremor = 0.5 * score(shaken_tail, truth_tail, peak).rmse;
+  row.ambiguity_drift =
+      0.5 * score(tail(faster.true_friction), tail(slower.true_friction), peak).rmse;
   row.causal_tremor = score(tail(f_causal), shaken_tail);
   return row;
 }
@@ -242,8 +249,8 @@ int main(int argc, char** argv) {
                  "Oracle limit: exact derivatives, acceleration below this (rad/s^2) taken as 0")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--tremor", tremor,
-                 "Ambiguity: the same motion with this tremor (rad, 10 Hz) added, which changes "
-                 "no encoder sample (0: off)")
+                 "Ambiguity: the same motion with this tremor (rad, at --tremor-hz) added, which "
+                 "changes no encoder sample (0: off)")
       ->check(CLI::Range(0.0, 1e-6));
   app.add_option("--tremor-hz", tremor_hz, "... its frequency, Hz")->check(CLI::Range(0.1, 100.0));
   app.add_option("--drift", drift,
@@ -362,20 +369,22 @@ int main(int argc, char** argv) {
   }
   for (const auto& r : rows) {
     const auto seed = static_cast<unsigned long long>(r.seed);
+    const double values[] = {r.causal.rmse,     r.causal.p2p,        r.causal.max_abs,
+                             r.offline.rmse,    r.resolved.rmse,     r.exact.rmse,
+                             r.exact.p2p,       r.polyfit.rmse,      r.ambiguity_tremor,
+                             r.ambiguity_drift, r.causal_tremor.rmse};
+    const int decimals[] = {3, 2, 2, 3, 3, 3, 3, 3, 3, 3, 3};
     if (markdown)
-      std::printf(
-          "| %s | %llu | %.3f | %.2f | %.2f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | "
-          "%.3f |\n",
-          r.kind.c_str(), seed, r.causal.rmse, r.causal.p2p, r.causal.max_abs, r.offline.rmse,
-          r.resolved.rmse, r.exact.rmse, r.exact.p2p, r.polyfit.rmse, r.ambiguity_tremor,
-          r.ambiguity_drift, r.causal_tremor.rmse);
+      std::printf("| %s | %llu |", r.kind.c_str(), seed);
     else
-      std::printf(
-          "%-15s %5llu %12.3f %12.2f %12.2f %12.3f %12.3f %12.3f %12.3f %12.3f %12.3f %12.3f "
-          "%12.3f\n",
-          r.kind.c_str(), seed, r.causal.rmse, r.causal.p2p, r.causal.max_abs, r.offline.rmse,
-          r.resolved.rmse, r.exact.rmse, r.exact.p2p, r.polyfit.rmse, r.ambiguity_tremor,
-          r.ambiguity_drift, r.causal_tremor.rmse);
+      std::printf("%-15s %5llu", r.kind.c_str(), seed);
+    for (std::size_t k = 0; k < std::size(values); ++k) {
+      if (markdown)
+        std::printf(" %.*f |", decimals[k], values[k]);
+      else
+        std::printf(" %12.*f", decimals[k], values[k]);
+    }
+    std::printf("\n");
   }
   std::size_t changed = 0;
   for (const auto& r : rows)
