@@ -125,12 +125,9 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "(haptic-server's encoder_quantum_rad; default 2 pi / 40960)")
       ->check(CLI::Validator(
           [](std::string& value) -> std::string {
-            static_assert(estimator::DifferentiatorLimits::kEncoderQuantum == 0.1,
-                          "the text below");
-            const double q = std::strtod(value.c_str(), nullptr);
-            return q > 0.0 && q <= estimator::DifferentiatorLimits::kEncoderQuantum
-                       ? ""
-                       : "must be within (0, 0.1] rad, got " + value;
+            const char* problem = estimator::DifferentiatorLimits::encoder_quantum_problem(
+                std::strtod(value.c_str(), nullptr));
+            return problem == nullptr ? "" : std::string(problem) + ", got " + value;
           },
           "(0, 0.1]"));
   const std::map<std::string, estimator::StartState> starts{

@@ -262,11 +262,9 @@ int main(int argc, char** argv) {
                  "Encoder resolution of x_in, rad: the recordings' and the differentiator's")
       ->check(CLI::Validator(
           [](std::string& value) -> std::string {
-            static_assert(DifferentiatorLimits::kEncoderQuantum == 0.1, "the text below");
-            const double q = std::strtod(value.c_str(), nullptr);
-            return q > 0.0 && q <= DifferentiatorLimits::kEncoderQuantum
-                       ? ""
-                       : "must be within (0, 0.1] rad, got " + value;
+            const char* problem =
+                DifferentiatorLimits::encoder_quantum_problem(std::strtod(value.c_str(), nullptr));
+            return problem == nullptr ? "" : std::string(problem) + ", got " + value;
           },
           "(0, 0.1]"));
   app.add_option("--jerk-psd", diff.jerk_psd, "Velocity channel jerk PSD (default as deployed)");

@@ -200,6 +200,12 @@ struct DifferentiatorLimits {
   static constexpr double kHindsightLag = 0.1;
   /// rad
   static constexpr double kEncoderQuantum = 0.1;
+  /// What is wrong with `q` as an encoder quantum, rad, for a command line's
+  /// message; nullptr when it is usable.
+  static constexpr const char* encoder_quantum_problem(double q) noexcept {
+    static_assert(kEncoderQuantum == 0.1, "the text below");
+    return q > 0.0 && q <= kEncoderQuantum ? nullptr : "must be within (0, 0.1] rad";
+  }
 };
 
 struct Derivatives {
