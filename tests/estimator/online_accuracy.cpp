@@ -281,6 +281,9 @@ int main(int argc, char** argv) {
                  "... none within this long (s) of a manoeuvre");
   app.add_option("--hindsight-ahead", diff.hindsight_ahead,
                  "... after a correction, samples up to this much younger (s) in the same pass");
+  app.add_option("--settle-reversals", diff.settle_reversals,
+                 "... a still stretch the encoder leaves back the way it came: the samples at rest "
+                 "there get the new direction's sign (true/false)");
   app.add_option("--hindsight-sure-armed", diff.hindsight_sure_armed,
                  "... |xdd| where it starts to count shortly after a manoeuvre");
   app.add_option("--hindsight-certain-armed", diff.hindsight_certain_armed,

@@ -264,6 +264,71 @@ TEST(DistalEstimator, HindsightAheadStepsAgainOncePerZeroCrossing) {
   }
 }
 
+// A reversal too slow for the encoder (constant acceleration 0.1 rad/s^2
+// through xd = 0; the encoder stands still for about 110 ms): the
+// estimator declares rest after still_time, while eq. (4) drives the true
+// state with lambda sgn(xdd) = +lambda. When the encoder moves again, back
+// the way it came, the stretch's samples at rest get the new direction's
+// sign: after it the estimate follows the truth, without it the state
+// stays behind until the next saturation.
+TEST(DistalEstimator, SettlesTheSignOfAReversalTheEncoderDoesNotShow) {
+  const double q = kReferenceQuantum, a = 0.1, tv = 1.0;
+  DifferentiatorConfig off;
+  off.settle_reversals = false;
+  auto make = [](const DifferentiatorConfig& c) {
+    return DistalTorqueEstimator(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01, c,
+                                 StartState::kZero);
+  };
+  DistalTorqueEstimator settled = make({}), unsettled = make(off), truth = make({});
+  double err_on = 0.0, err_off = 0.0, peak = 0.0;
+  int still = 0, longest_still = 0;
+  double x_prev = std::nan("");
+  for (int i = 0; i <= 1400; ++i) {
+    const double t = i * 1e-3, u = t - tv;
+    // xd = a u, -0.1 to +0.04 rad/s; the turning point just inside a
+    // count, so that the encoder stands still for about 110 ms.
+    const double x = (-651.49 + 0.5 * a * u * u / q) * q;
+    const double x_in = std::round(x / q) * q;
+    still = x_in == x_prev ? still + 1 : 0;
+    longest_still = std::max(longest_still, still);
+    x_prev = x_in;
+    const double f_true = truth.update_exact(t, x, a * u, a, 0.0).friction;
+    const double f_on = settled.update(t, x_in, 0.0).friction;
+    const double f_off = unsettled.update(t, x_in, 0.0).friction;
+    peak = std::max(peak, std::fabs(f_true));
+    if (t > tv + 0.06 && t < tv + 0.3) {
+      err_on = std::max(err_on, std::fabs(f_on - f_true));
+      err_off = std::max(err_off, std::fabs(f_off - f_true));
+    }
+  }
+  RecordProperty("largest_error_after_the_reversal",
+                 std::to_string(err_on) + " N (not settled: " + std::to_string(err_off) + " N)");
+  // The case is real: the encoder stands still past still_time (50 ms) and
+  // within the history (127 samples), and the state left at rest is off.
+  EXPECT_GT(longest_still, 60);
+  EXPECT_LT(longest_still, 120);
+  EXPECT_GT(err_off, 0.03 * peak);
+  EXPECT_LT(err_on, 0.5 * err_off);
+}
+
+// An encoder flickering between two counts at rest is not a reversal: the
+// rule needs two counts the other way before the still stretch. (The first
+// step back after a move of two counts or more is one: it cannot be told
+// from a reversal of one count.)
+TEST(DistalEstimator, AFlickeringCountIsNotSettledAsAReversal) {
+  DifferentiatorConfig off;
+  off.settle_reversals = false;
+  DistalTorqueEstimator on(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
+  DistalTorqueEstimator no(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01, off);
+  for (int i = 0; i < 3000; ++i) {
+    const double t = i * 1e-3;
+    // Flickers by one count, each count held for 20-100 ms.
+    const int period = 20 + 10 * ((i / 100) % 9);
+    const double x = (651.0 + (i / period) % 2) * kReferenceQuantum;
+    ASSERT_EQ(on.update(t, x, 0.02).friction, no.update(t, x, 0.02).friction) << "t " << t;
+  }
+}
+
 // Turned off (or a sign mode without the fine channel), the estimator is the
 // causal one alone: the same output bit for bit as with no history at all.
 TEST(DistalEstimator, HindsightOffIsTheCausalEstimatorExactly) {

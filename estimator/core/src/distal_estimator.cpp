@@ -29,7 +29,7 @@ void DistalTorqueEstimator::reset() noexcept {
   model_->reset();
   diff_.reset();
   started_ = false;
-  size_ = pending_ = 0;
+  size_ = pending_ = counts_seen_ = repeats_ = 0;
 }
 
 Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noexcept {
@@ -41,14 +41,28 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   const bool restart = diff_.restarted();
   Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
   if (!hindsight_) return e;
-  if (restart) size_ = pending_ = 0;
+  if (restart) size_ = pending_ = counts_seen_ = 0;
+  // The encoder moves again after standing still for two samples or more:
+  // settle_reversal() looks at that stretch (in motion it moves every
+  // sample or two, and this costs a comparison).
+  bool settle = false;
+  if (counts_seen_ > 0 && x_in == counts_[0]) {
+    ++repeats_;
+  } else {
+    settle = repeats_ > 0 && diff_.config().settle_reversals;
+    counts_ = {x_in, counts_[0], counts_[1], counts_[2]};
+    counts_seen_ = std::min<std::size_t>(counts_seen_ + 1, 4);
+    repeats_ = 0;
+  }
   newest_ = size_ == 0 ? 0 : (newest_ + 1) % kHistory;
   Sample& s = history_[newest_];
   s.m = Motion{t, x_in, d.xd, d.xdd, d.acc_sign, std::fabs(tau_in) / radius_};
   s.friction = e.friction;
+  s.settled = false;
   model_->save_state(s.state);
   size_ = std::min(size_ + 1, kHistory);
   if (size_ > 1) ++pending_;
+  if (settle) settle_reversal();
   look_back(t);
   if (s.friction != e.friction) {
     e.friction = s.friction;
@@ -83,7 +97,9 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
     Motion m = s.m;
     bool corrected = false;
     const double still_time = diff_.still_time();
-    if (still_time > 0.0 && diff_.still_duration() >= back + still_time) {
+    if (s.settled) {
+      // settle_reversal() decided it
+    } else if (still_time > 0.0 && diff_.still_duration() >= back + still_time) {
       // The encoder has not changed since before this sample: at rest.
       corrected = m.xd != 0.0 || m.xdd != 0.0 || m.acc_sign != 0.0;
       m.xd = m.xdd = m.acc_sign = 0.0;
@@ -118,6 +134,50 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
   } else if (touched) {
     model_->restore_state(history_[newest_].state);
   }
+}
+
+// When the encoder moves again after standing still for at least two
+// samples, and moves back the way it came (after two counts the other way:
+// a move, not a count flickering), the joint reversed in that stretch: its
+// velocity went from one sign to the other, so on the whole its
+// acceleration had the new direction's sign there, however small. Where
+// the estimator had declared rest (sign 0; the fine channel's
+// extrapolation resolves only accelerations of a few hundredths of a
+// rad/s^2), eq. (4) drove the true state with lambda sgn(xdd) all that
+// time. Those samples get the new direction's sign and the model is
+// stepped again from the first of them to now. Samples with a sign of
+// their own keep it: the acceleration may have turned again before the
+// encoder showed the reversal (a dip: two reversals in quick succession).
+[[gnu::noinline]] void DistalTorqueEstimator::settle_reversal() noexcept {
+  if (size_ < 4 || counts_seen_ < 4) return;
+  const auto at = [&](std::size_t back) -> Sample& {
+    return history_[(newest_ + kHistory - back) % kHistory];
+  };
+  const double x_new = at(0).m.x, x_run = at(1).m.x;
+  if (x_new == x_run || at(2).m.x != x_run) return;
+  const double after = x_new > x_run ? 1.0 : -1.0;
+  // Came the other way over the two counts before (a move, not a flicker).
+  if ((counts_[1] > counts_[2] ? 1.0 : -1.0) == after ||
+      (counts_[2] > counts_[3] ? 1.0 : -1.0) == after)
+    return;
+  // The stretch: samples 1 .. n back at x_run.
+  std::size_t n = 2;
+  while (n + 1 < size_ && at(n + 1).m.x == x_run)
+    ++n;
+  if (n + 1 >= size_) return;  // its start is no longer held
+  std::size_t first = 0;       // back of the oldest sample whose sign changes
+  for (std::size_t b = n; b >= 1; --b) {
+    Sample& s = at(b);
+    if (s.m.acc_sign != 0.0) continue;
+    s.m.acc_sign = after;
+    s.settled = true;
+    if (first == 0) first = b;
+  }
+  if (first == 0) return;
+  const std::size_t j = (newest_ + kHistory - first) % kHistory;
+  Motion m = history_[j].m;
+  step_again(j, m, true);
+  catch_up(j);
 }
 
 // Out of line: rare, and the per-sample decision above stays compact.

@@ -179,6 +179,16 @@ struct DifferentiatorConfig {
   /// the acceleration (1-5 samples apart) step the model again to now once
   /// instead of once each. 0: each at its lag.
   double hindsight_ahead = 0.005;
+  /// Hindsight correction: when the encoder moves again after standing
+  /// still, back the way it came (after two counts the other way), the
+  /// samples of that stretch the estimator had at rest (sign 0) get the new
+  /// direction's sign and the model is stepped again to now: the joint
+  /// reversed there, too slowly for the encoder to show (velocity below one
+  /// count per still_time), and eq. (4) drove the state with lambda
+  /// sgn(xdd) meanwhile. Only for a stretch the history still holds.
+  /// Measured in docs/friction-model.md ("Reversals the encoder does not
+  /// see"). false: off.
+  bool settle_reversals = true;
   /// true: the full Kalman recursion every sample (covariance propagated for
   /// the actual interval). false: each channel's steady-state gain for the
   /// actual interval, from a table made at construction (interpolated in

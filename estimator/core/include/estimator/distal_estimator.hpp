@@ -86,6 +86,11 @@ class DistalTorqueEstimator {
   // Steps every sample after `from` to the newest again, from the state the
   // model holds (from's): the model then holds the corrected newest state.
   void catch_up(std::size_t from) noexcept;
+  void settle_reversal() noexcept;
+  // The last four distinct encoder readings, newest first, and how many
+  // samples since repeated the newest (settle_reversal).
+  std::array<double, 4> counts_{};
+  std::size_t counts_seen_ = 0, repeats_ = 0;
 
   // The hindsight correction's history: the last samples as the model was
   // stepped with them, newest at newest_; the oldest `pending_` of the newest
@@ -94,6 +99,7 @@ class DistalTorqueEstimator {
   struct Sample {
     Motion m;  // its interval: m.t less the previous sample's
     double friction = 0.0;
+    bool settled = false;  // its sign set by settle_reversal()
     DynamicsState state;
   };
   static constexpr std::size_t kHistory = 128;
