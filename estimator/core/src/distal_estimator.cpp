@@ -41,7 +41,7 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   const bool restart = diff_.restarted();
   Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
   if (!hindsight_) return e;
-  if (restart) size_ = pending_ = counts_seen_ = 0;
+  if (restart) size_ = pending_ = counts_seen_ = repeats_ = 0;
   // The encoder moves again after standing still for two samples or more:
   // settle_reversal() looks at that stretch (in motion it moves every
   // sample or two, and this costs a comparison).
