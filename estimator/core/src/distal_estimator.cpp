@@ -148,21 +148,22 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
 // stepped again from the first of them to now. Samples with a sign of
 // their own keep it: the acceleration may have turned again before the
 // encoder showed the reversal (a dip: two reversals in quick succession).
+// update() calls it when the newest sample, counts_[0], left a reading,
+// counts_[1], that the samples before it had repeated.
 [[gnu::noinline]] void DistalTorqueEstimator::settle_reversal() noexcept {
-  if (size_ < 4 || counts_seen_ < 4) return;
+  // Four readings seen since the (re)start: as many samples in the history.
+  if (counts_seen_ < 4) return;
   const auto at = [&](std::size_t back) -> Sample& {
     return history_[(newest_ + kHistory - back) % kHistory];
   };
-  const double x_new = at(0).m.x, x_run = at(1).m.x;
-  if (x_new == x_run || at(2).m.x != x_run) return;
-  const double after = x_new > x_run ? 1.0 : -1.0;
+  const double after = counts_[0] > counts_[1] ? 1.0 : -1.0;
   // Came the other way over the two counts before (a move, not a flicker).
   if ((counts_[1] > counts_[2] ? 1.0 : -1.0) == after ||
       (counts_[2] > counts_[3] ? 1.0 : -1.0) == after)
     return;
-  // The stretch: samples 1 .. n back at x_run.
-  std::size_t n = 2;
-  while (n + 1 < size_ && at(n + 1).m.x == x_run)
+  // The stretch: samples 1 .. n back at counts_[1].
+  std::size_t n = 1;
+  while (n + 1 < size_ && at(n + 1).m.x == counts_[1])
     ++n;
   if (n + 1 >= size_) return;  // its start is no longer held
   std::size_t first = 0;       // back of the oldest sample whose sign changes
