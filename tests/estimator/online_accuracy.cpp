@@ -126,17 +126,18 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
   sc.quantum = diff.quantum;
   const SyntheticData data = make_synthetic(truth, sc);
   const Recording& rec = data.recording;
-  // A motion with a tremor of its own gets the invisible one added to it, at
-  // its frequency.
-  sc.tremor_rad = c.tremor_rad + tremor;
-  sc.tremor_hz = c.tremor_rad > 0.0 ? c.tremor_hz : tremor_hz;
-  const SyntheticData shaken = tremor > 0.0 ? make_synthetic(truth, sc) : data;
-  sc.tremor_rad = c.tremor_rad;
-  sc.tremor_hz = c.tremor_hz;
-  sc.drift_acc = drift;
-  const SyntheticData faster = drift > 0.0 ? make_synthetic(truth, sc) : data;
-  sc.drift_acc = -drift;
-  const SyntheticData slower = drift > 0.0 ? make_synthetic(truth, sc) : data;
+  // The same motion with one of the invisible changes.
+  const auto changed = [&](double add_tremor, double drift_acc) {
+    SyntheticConfig v = sc;
+    v.tremor_rad += add_tremor;
+    // A motion with a tremor of its own gets the invisible one at its frequency.
+    if (c.tremor_rad == 0.0) v.tremor_hz = tremor_hz;
+    v.drift_acc = drift_acc;
+    return make_synthetic(truth, v);
+  };
+  const SyntheticData shaken = tremor > 0.0 ? changed(tremor, 0.0) : data;
+  const SyntheticData faster = drift > 0.0 ? changed(0.0, drift) : data;
+  const SyntheticData slower = drift > 0.0 ? changed(0.0, -drift) : data;
 
   // The recordings start at rest with the true friction state at zero, so
   // the estimators start there too (the server's default tares the state
