@@ -25,6 +25,7 @@
 #include <iterator>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -135,9 +136,13 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
     v.drift_acc = drift_acc;
     return make_synthetic(truth, v);
   };
-  const SyntheticData shaken = tremor > 0.0 ? changed(tremor, 0.0) : data;
-  const SyntheticData faster = drift > 0.0 ? changed(0.0, drift) : data;
-  const SyntheticData slower = drift > 0.0 ? changed(0.0, -drift) : data;
+  // A change that is off leaves the recording itself in its place.
+  std::optional<SyntheticData> own_shaken, own_faster, own_slower;
+  if (tremor > 0.0) own_shaken = changed(tremor, 0.0);
+  if (drift > 0.0) own_faster = changed(0.0, drift), own_slower = changed(0.0, -drift);
+  const SyntheticData& shaken = own_shaken ? *own_shaken : data;
+  const SyntheticData& faster = own_faster ? *own_faster : data;
+  const SyntheticData& slower = own_slower ? *own_slower : data;
 
   // The recordings start at rest with the true friction state at zero, so
   // the estimators start there too (the server's default tares the state

@@ -27,12 +27,12 @@
 #include <array>
 #include <cstddef>
 #include <limits>
-#include <numbers>
 #include <optional>
 #include <string_view>
 #include <vector>
 
 #include "estimator/poly_kalman.hpp"
+#include "estimator/reference_encoder.hpp"
 
 namespace tsmh::estimator {
 
@@ -63,9 +63,6 @@ inline std::optional<SignMode> sign_mode_from_name(std::string_view name) {
   return std::nullopt;
 }
 
-/// The encoder resolution the differentiator's settings were chosen for,
-/// rad (40960 counts per turn).
-inline constexpr double kReferenceQuantum = 2.0 * std::numbers::pi / 40960.0;
 /// The automatic rest time at kReferenceQuantum, s (DifferentiatorConfig::still_time).
 inline constexpr double kRestTime = 0.05;
 

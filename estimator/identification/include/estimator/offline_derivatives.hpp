@@ -11,12 +11,12 @@
 // model's sgn(xdd). The parameters found are then the physical ones, which
 // the online estimator uses as they are. Measurements: docs/identification.md.
 
-#include <numbers>
 #include <span>
 #include <vector>
 
 #include "estimator/motion.hpp"
 #include "estimator/recording.hpp"
+#include "estimator/reference_encoder.hpp"
 
 namespace tsmh::estimator {
 
@@ -26,7 +26,7 @@ struct OfflineDerivativeConfig {
   /// has the sweep that chose it).
   double jerk_psd = 10.0;
   /// Encoder quantum, rad (uniform error quantum^2/12 is the measurement noise).
-  double quantum = 2.0 * std::numbers::pi / 40960.0;
+  double quantum = kReferenceQuantum;
   /// Additional white measurement noise on the angle, rad (standard deviation).
   double position_noise = 0.0;
   /// sgn(xdd) is 0 while |xdd| is below this many standard deviations of the

@@ -15,13 +15,13 @@
 // the friction it causes).
 
 #include <cstdint>
-#include <numbers>
 #include <optional>
 #include <string_view>
 #include <vector>
 
 #include "estimator/friction_model.hpp"
 #include "estimator/recording.hpp"
+#include "estimator/reference_encoder.hpp"
 
 namespace tsmh::estimator {
 
@@ -41,7 +41,7 @@ struct SyntheticConfig {
   /// Standard deviation of the white noise on each torque channel, N m.
   double torque_noise = 0.003;
   /// Encoder quantum of x_in, rad (0: unquantised).
-  double quantum = 2.0 * std::numbers::pi / 40960.0;
+  double quantum = kReferenceQuantum;
   /// Largest |x_in| of the multi-sine, rad.
   double amplitude_rad = 1.0;
   /// Lowest and highest frequency of the multi-sine, Hz (log-spaced components).
