@@ -287,6 +287,14 @@ int main(int argc, char** argv) {
                  "... none within this long (s) of a manoeuvre");
   app.add_option("--hindsight-ahead", diff.hindsight_ahead,
                  "... after a correction, samples up to this much younger (s) in the same pass");
+  app.add_option("--settle-span", diff.settle_span,
+                 "... the counts a start or stop is estimated from span this long, s");
+  app.add_option("--settle-stops", diff.settle_stops,
+                 "... a move running out into a hold: after its last count, decelerating until its "
+                 "estimated stop, at rest after (true/false)");
+  app.add_option("--settle-starts", diff.settle_starts,
+                 "... a move leaving a hold: once its counts span --settle-span, the samples at "
+                 "rest since its estimated start get its sign (true/false)");
   app.add_option("--settle-reversals", diff.settle_reversals,
                  "... a still stretch the encoder leaves back the way it came: the samples at rest "
                  "there get the new direction's sign (true/false)");

@@ -29,7 +29,32 @@ void DistalTorqueEstimator::reset() noexcept {
   model_->reset();
   diff_.reset();
   started_ = false;
-  size_ = pending_ = counts_seen_ = repeats_ = 0;
+  size_ = pending_ = counts_seen_ = repeats_ = crossings_.run = 0;
+  stop_known_ = false;
+}
+
+// Inline: it runs at nearly every sample in motion, and a call would make
+// update() save its registers around it.
+[[gnu::always_inline]] inline bool DistalTorqueEstimator::record_crossing(double t,
+                                                                          double x_in) noexcept {
+  const Motion& last = history_[newest_].m;
+  const double direction = x_in > last.x ? 1.0 : -1.0;
+  Crossings& c = crossings_;
+  if (repeats_ > 0 && last.acc_sign == 0.0) {
+    // Leaving a reading the estimator had at rest: a move from rest.
+    c.run = 1, c.start_open = diff_.config().settle_starts;
+  } else if (direction == c.direction && c.run > 0) {
+    ++c.run;
+  } else {
+    c.run = 1, c.start_open = false;
+  }
+  c.direction = direction;
+  stop_known_ = false;
+  c.newest = (c.newest + 1) % kCrossings;
+  c.t[c.newest] = 0.5 * (last.t + t);
+  // A start is settled once its counts span settle_span (at least three).
+  return c.start_open && c.run >= 3 &&
+         (c.t[c.newest] - c.at(c.run - 1) >= diff_.config().settle_span || c.run == kCrossings);
 }
 
 Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noexcept {
@@ -41,15 +66,18 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   const bool restart = diff_.restarted();
   Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
   if (!hindsight_) return e;
-  if (restart) size_ = pending_ = counts_seen_ = repeats_ = 0;
+  if (restart) size_ = pending_ = counts_seen_ = repeats_ = crossings_.run = 0, stop_known_ = false;
   // The encoder moves again after standing still for two samples or more:
   // settle_reversal() looks at that stretch (in motion it moves every
   // sample or two, and this costs a comparison).
   bool settle = false;
+  bool start = false;  // settle_start() is due
   if (counts_seen_ > 0 && x_in == counts_[0]) {
     ++repeats_;
   } else {
-    settle = repeats_ > 0 && diff_.config().settle_reversals;
+    const DifferentiatorConfig& c = diff_.config();
+    settle = repeats_ > 0 && c.settle_reversals;
+    if (size_ > 0) start = record_crossing(t, x_in);
     counts_ = {x_in, counts_[0], counts_[1], counts_[2]};
     counts_seen_ = std::min<std::size_t>(counts_seen_ + 1, 4);
     repeats_ = 0;
@@ -63,6 +91,7 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   size_ = std::min(size_ + 1, kHistory);
   if (size_ > 1) ++pending_;
   if (settle) settle_reversal();
+  if (start) settle_start();
   look_back(t);
   if (s.friction != e.friction) {
     e.friction = s.friction;
@@ -83,6 +112,12 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
 // to now serves them all.
 void DistalTorqueEstimator::look_back(double t) noexcept {
   const DifferentiatorConfig& c = diff_.config();
+  // The estimated stop of a move running out (settle_stops): once per
+  // still stretch, when its first sample is looked at as one at rest.
+  const auto stop_time = [&] {
+    if (!stop_known_) stop_ = estimated_stop(), stop_known_ = true;
+    return stop_;
+  };
   bool touched = false;  // the model left the newest state
   bool dirty = false;    // the samples after `frontier` are to be stepped again
   std::size_t frontier = 0;
@@ -98,11 +133,15 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
     bool corrected = false;
     const double still_time = diff_.still_time();
     if (s.settled) {
-      // settle_reversal() decided it
+      // settle_reversal() or settle_start() decided it
     } else if (still_time > 0.0 && diff_.still_duration() >= back + still_time) {
-      // The encoder has not changed since before this sample: at rest.
-      corrected = m.xd != 0.0 || m.xdd != 0.0 || m.acc_sign != 0.0;
-      m.xd = m.xdd = m.acc_sign = 0.0;
+      // The encoder has not changed since before this sample: at rest;
+      // unless a move running out stops after it (settle_stops: its last
+      // count came more than still_time before its stop), then decelerating.
+      const double sign = c.settle_stops && s.m.t < stop_time() ? -crossings_.direction : 0.0;
+      corrected = m.xd != 0.0 || m.xdd != 0.0 || m.acc_sign != sign;
+      m.xd = m.xdd = 0.0;
+      m.acc_sign = sign;
     } else {
       // Close to a manoeuvre the fine channel's polynomial model rings: the
       // causal sign (with the cruise hypothesis) stands.
@@ -163,16 +202,99 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
     return;
   // The stretch: samples 1 .. n back at counts_[1].
   std::size_t n = 1;
-  while (n + 1 < size_ && at(n + 1).m.x == counts_[1])
+  const std::size_t span = std::min(size_, kReversalSpan);
+  while (n + 1 < span && at(n + 1).m.x == counts_[1])
     ++n;
-  if (n + 1 >= size_) return;  // its start is no longer held
-  std::size_t first = 0;       // back of the oldest sample whose sign changes
+  if (n + 1 >= span) return;  // its start is no longer held, or a hold
+  std::size_t first = 0;      // back of the oldest sample whose sign changes
   for (std::size_t b = n; b >= 1; --b) {
     Sample& s = at(b);
     if (s.m.acc_sign != 0.0) continue;
     s.m.acc_sign = after;
     s.settled = true;
     if (first == 0) first = b;
+  }
+  if (first == 0) return;
+  const std::size_t j = (newest_ + kHistory - first) % kHistory;
+  Motion m = history_[j].m;
+  step_again(j, m, true);
+  catch_up(j);
+}
+
+// From rest at constant jerk (a hand starting a reach, or running out
+// into a hold) the velocity grows as the square of the time since the
+// start (until the stop), so r = sqrt(1 / interval), the square root of an
+// interval's mean velocity in counts, falls on a line through zero there.
+namespace {
+// The time the line fitted to the intervals between `n` count times `c`
+// (oldest first) reaches r = 0: weighted least squares, each interval's r
+// at its midpoint, weight interval^2 (the sample clock's +-0.5 ms on a
+// count time is a larger part of a short interval). `rising`: r must grow
+// (a start), else fall (a stop); NaN when it does not.
+double zero_of_root_velocity(const double* c, std::size_t n, bool rising) noexcept {
+  const double ref = c[n - 1];
+  double sw = 0.0, sm = 0.0, sr = 0.0, smm = 0.0, smr = 0.0;
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double d = c[k + 1] - c[k], w = d * d, m = 0.5 * (c[k] + c[k + 1]) - ref;
+    const double r = std::sqrt(1.0 / d);
+    sw += w, sm += w * m, sr += w * r, smm += w * m * m, smr += w * m * r;
+  }
+  const double det = sw * smm - sm * sm;
+  if (!(det > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  const double slope = (sw * smr - sm * sr) / det, r0 = (sr - slope * sm) / sw;
+  if (rising ? !(slope > 0.0) : !(slope < 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return ref - r0 / slope;
+}
+}  // namespace
+
+double DistalTorqueEstimator::estimated_stop() const noexcept {
+  const Crossings& c = crossings_;
+  if (c.run < 3) return std::numeric_limits<double>::quiet_NaN();
+  const double last = c.t[c.newest], span = diff_.config().settle_span;
+  std::size_t n = 3;
+  while (n < std::min(c.run, kCrossings) && last - c.at(n) <= span)
+    ++n;
+  std::array<double, kCrossings> times;
+  for (std::size_t k = 0; k < n; ++k)
+    times[k] = c.at(n - 1 - k);
+  const double stop = zero_of_root_velocity(times.data(), n, false);
+  if (std::isnan(stop)) return stop;
+  // The same bound as for a start, the other way.
+  return std::min(stop, last + 2.5 * (last - times[n - 3]));
+}
+
+// A move from rest has shown counts over settle_span (record_crossing()):
+// its start t0 is estimated from their timing, and the samples before its
+// first count back to t0 that the estimator had at rest get the move's
+// sign (those the hindsight has given it already keep theirs; one with the
+// other sign ends the stretch). The model is then stepped again from the
+// first of them to now.
+[[gnu::noinline]] void DistalTorqueEstimator::settle_start() noexcept {
+  Crossings& c = crossings_;
+  c.start_open = false;
+  std::array<double, kCrossings> times;
+  for (std::size_t k = 0; k < c.run; ++k)
+    times[k] = c.at(c.run - 1 - k);
+  const double t_first = times[0], direction = c.direction;
+  // At constant jerk the first count comes at most 2.3 (t3 - t1) after
+  // the start (the reading at rest a whole count from the first change).
+  double t0 = zero_of_root_velocity(times.data(), c.run, true);
+  if (std::isnan(t0)) return;
+  t0 = std::max(t0, t_first - 2.5 * (times[2] - t_first));
+  const auto at = [&](std::size_t back) -> Sample& {
+    return history_[(newest_ + kHistory - back) % kHistory];
+  };
+  std::size_t b = 1;  // back to the last sample before the first count
+  while (b + 1 < size_ && at(b).m.t > t_first)
+    ++b;
+  std::size_t first = 0;  // back of the oldest sample whose sign changes
+  for (; b + 1 < size_; ++b) {
+    Sample& s = at(b);
+    if (s.m.t < t0 || s.m.acc_sign * direction < 0.0) break;
+    if (s.m.acc_sign != 0.0) continue;
+    s.m.acc_sign = direction;
+    s.settled = true;
+    first = b;
   }
   if (first == 0) return;
   const std::size_t j = (newest_ + kHistory - first) % kHistory;

@@ -87,6 +87,30 @@ class DistalTorqueEstimator {
   // model holds (from's): the model then holds the corrected newest state.
   void catch_up(std::size_t from) noexcept;
   void settle_reversal() noexcept;
+  // Records a change of the encoder reading at t, to x_in (before the
+  // sample joins the history): true when a move from rest has shown enough
+  // counts to tell when it started (settle_start() is then due).
+  bool record_crossing(double t, double x_in) noexcept;
+  void settle_start() noexcept;
+  // When the last changes went the same way and slowed down (a move
+  // running out), the time it stops (settle_stops), else NaN.
+  double estimated_stop() const noexcept;
+  // The encoder reading's changes in the current run (in a row the same
+  // way), each taken halfway between the samples before and at it; the
+  // newest kCrossings of them.
+  static constexpr std::size_t kCrossings = 16;
+  struct Crossings {
+    std::array<double, kCrossings> t{};
+    std::size_t newest = 0;
+    std::size_t run = 0;      // changes in the run (0: none since the (re)start)
+    double direction = 0.0;   // the run's: +1 or -1
+    bool start_open = false;  // a run from rest whose start is still to settle
+    double at(std::size_t back) const { return t[(newest + kCrossings - back) % kCrossings]; }
+  };
+  Crossings crossings_;
+  // estimated_stop() for the current still stretch, once looked up.
+  double stop_ = 0.0;
+  bool stop_known_ = false;
   // The last four distinct encoder readings, newest first, and how many
   // samples since repeated the newest (settle_reversal).
   std::array<double, 4> counts_{};
@@ -99,10 +123,15 @@ class DistalTorqueEstimator {
   struct Sample {
     Motion m;  // its interval: m.t less the previous sample's
     double friction = 0.0;
-    bool settled = false;  // its sign set by settle_reversal()
+    bool settled = false;  // its sign set by settle_reversal() or settle_start()
     DynamicsState state;
   };
-  static constexpr std::size_t kHistory = 128;
+  // 256 ms at 1 kHz: a slow start is settled up to about 150 ms after the
+  // move began (settle_start(), once its counts span settle_span).
+  static constexpr std::size_t kHistory = 256;
+  // settle_reversal() looks at still stretches of at most this many
+  // samples; a longer one is a hold (settle_start()).
+  static constexpr std::size_t kReversalSpan = 128;
   std::array<Sample, kHistory> history_{};
   std::size_t newest_ = 0, size_ = 0, pending_ = 0;
   bool hindsight_ = false;
