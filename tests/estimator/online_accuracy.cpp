@@ -287,6 +287,10 @@ int main(int argc, char** argv) {
                  "... none within this long (s) of a manoeuvre");
   app.add_option("--hindsight-ahead", diff.hindsight_ahead,
                  "... after a correction, samples up to this much younger (s) in the same pass");
+  app.add_option("--settle-turns", diff.settle_turns,
+                 "... a turn after a manoeuvre whose new way's counts speed up: the samples from "
+                 "the old way's last count get the new way's sign where the fine channel cannot "
+                 "correct them (true/false)");
   app.add_option("--settle-span", diff.settle_span,
                  "... the counts a start or stop is estimated from span this long, s");
   app.add_option("--settle-stops", diff.settle_stops,

@@ -442,6 +442,21 @@ TEST(DistalEstimator, SettlingStartsAndStopsLowersTheSurgeonsError) {
   expect_lower_on_surgeon({}, neither, {1u, 5u, 9u}, 0.95, "neither rule");
 }
 
+// Surgeon seed 307 at t = 30.3 s: a fast move (5 rad/s) ends in a turn
+// straight into the next move, the acceleration near 0 at the turn. The
+// causal sign there rings the old way and the fine channel, within
+// hindsight_guard of the manoeuvre, cannot correct it; most of the seed's
+// error came from it. settle_turns gives those samples the new way's sign
+// once the new way's counts have sped up over settle_span. On smooth motion
+// (no manoeuvre) it changes nothing, bit for bit.
+TEST(DistalEstimator, SettlesATurnAfterAManoeuvre) {
+  DifferentiatorConfig off;
+  off.settle_turns = false;
+  expect_lower_on_surgeon({}, off, {307u}, 0.75, "without settle_turns");
+  EXPECT_EQ(run_on_synthetic(MotionKind::kMultisine, 1, {}).rmse_percent,
+            run_on_synthetic(MotionKind::kMultisine, 1, off).rmse_percent);
+}
+
 // Turned off (or a sign mode without the fine channel), the estimator is the
 // causal one alone: the same output bit for bit as with no history at all.
 TEST(DistalEstimator, HindsightOffIsTheCausalEstimatorExactly) {

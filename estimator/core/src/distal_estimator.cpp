@@ -46,14 +46,17 @@ void DistalTorqueEstimator::reset() noexcept {
   } else if (direction == c.direction && c.run > 0) {
     ++c.run;
   } else {
+    // A turn after two counts or more the old way (not a count flickering).
+    c.turn_open = c.run >= 2 && diff_.config().settle_turns;
+    c.turn_from = c.t[c.newest];
     c.run = 1, c.start_open = false;
   }
   c.direction = direction;
   stop_known_ = false;
   c.newest = (c.newest + 1) % kCrossings;
   c.t[c.newest] = 0.5 * (last.t + t);
-  // A start is settled once its counts span settle_span (at least three).
-  return c.start_open && c.run >= 3 &&
+  // A start or turn is settled once its counts span settle_span (at least three).
+  return (c.start_open || c.turn_open) && c.run >= 3 &&
          (c.t[c.newest] - c.at(c.run - 1) >= diff_.config().settle_span || c.run == kCrossings);
 }
 
@@ -91,7 +94,7 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   size_ = std::min(size_ + 1, kHistory);
   if (size_ > 1) ++pending_;
   if (settle) settle_reversal();
-  if (start) settle_start();
+  if (start) crossings_.start_open ? settle_start() : settle_turn();
   look_back(t);
   if (s.friction != e.friction) {
     e.friction = s.friction;
@@ -292,6 +295,40 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
     Sample& s = at(b);
     if (s.m.t < t0 || s.m.acc_sign * direction < 0.0) break;
     if (s.m.acc_sign != 0.0) continue;
+    s.m.acc_sign = direction;
+    s.settled = true;
+    first = b;
+  }
+  if (first == 0) return;
+  const std::size_t j = (newest_ + kHistory - first) % kHistory;
+  Motion m = history_[j].m;
+  step_again(j, m, true);
+  catch_up(j);
+}
+
+// A run of counts from a turn has spanned settle_span (record_crossing()):
+// if they speed up, the joint accelerated out of the turn, and decelerated
+// into it. From the old way's last count to now the acceleration had the
+// new way's sign; the samples there that the fine channel could not
+// correct (within hindsight_guard after a manoeuvre, where look_back()
+// leaves the causal sign) get it, unless at rest.
+[[gnu::noinline]] void DistalTorqueEstimator::settle_turn() noexcept {
+  Crossings& c = crossings_;
+  c.turn_open = false;
+  std::array<double, kCrossings> times;
+  for (std::size_t k = 0; k < c.run; ++k)
+    times[k] = c.at(c.run - 1 - k);
+  if (std::isnan(zero_of_root_velocity(times.data(), c.run, true))) return;
+  const double direction = c.direction, t_now = history_[newest_].m.t;
+  const double since = diff_.time_since_manoeuvre(), guard = diff_.config().hindsight_guard;
+  const auto at = [&](std::size_t back) -> Sample& {
+    return history_[(newest_ + kHistory - back) % kHistory];
+  };
+  std::size_t first = 0;
+  for (std::size_t b = 1; b + 1 < size_ && at(b).m.t >= c.turn_from; ++b) {
+    Sample& s = at(b);
+    if (since > t_now - s.m.t + guard) break;  // the fine channel's to correct
+    if (s.m.acc_sign * direction >= 1.0 || (s.m.acc_sign == 0.0 && s.m.xd == 0.0)) continue;
     s.m.acc_sign = direction;
     s.settled = true;
     first = b;

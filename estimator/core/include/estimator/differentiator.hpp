@@ -206,6 +206,13 @@ struct DifferentiatorConfig {
   /// the last count are taken as decelerating until then and at rest after
   /// it, in place of the still_time rule. false: off.
   bool settle_stops = true;
+  /// Hindsight correction: a turn after a manoeuvre (settle_turns). When the
+  /// encoder turns (a run of counts one way, then the other) and the new
+  /// way's counts speed up over settle_span, the joint decelerated into the
+  /// turn and accelerated out of it: the acceleration had the new way's sign
+  /// from the old way's last count on. Samples there that the fine channel
+  /// cannot correct (within hindsight_guard after a manoeuvre) get that sign.
+  bool settle_turns = true;
   /// settle_starts / settle_stops: the counts a start or stop is estimated
   /// from span this long, s (at least three counts, at most 16): the line
   /// through the square roots of their intervals' mean velocities, fitted

@@ -92,6 +92,7 @@ class DistalTorqueEstimator {
   // counts to tell when it started (settle_start() is then due).
   bool record_crossing(double t, double x_in) noexcept;
   void settle_start() noexcept;
+  void settle_turn() noexcept;
   // When the last changes went the same way and slowed down (a move
   // running out), the time it stops (settle_stops), else NaN.
   double estimated_stop() const noexcept;
@@ -105,6 +106,8 @@ class DistalTorqueEstimator {
     std::size_t run = 0;      // changes in the run (0: none since the (re)start)
     double direction = 0.0;   // the run's: +1 or -1
     bool start_open = false;  // a run from rest whose start is still to settle
+    bool turn_open = false;   // a run from a turn, still to settle
+    double turn_from = 0.0;   // ... the old way's last change
     double at(std::size_t back) const { return t[(newest + kCrossings - back) % kCrossings]; }
   };
   Crossings crossings_;
