@@ -217,11 +217,7 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
     s.settled = true;
     if (first == 0) first = b;
   }
-  if (first == 0) return;
-  const std::size_t j = (newest_ + kHistory - first) % kHistory;
-  Motion m = history_[j].m;
-  step_again(j, m, true);
-  catch_up(j);
+  if (first > 0) step_again_from(first);
 }
 
 // From rest at constant jerk (a hand starting a reach, or running out
@@ -257,9 +253,7 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
   std::size_t n = 3;
   while (n < std::min(c.run, kCrossings) && last - c.at(n) <= span)
     ++n;
-  std::array<double, kCrossings> times;
-  for (std::size_t k = 0; k < n; ++k)
-    times[k] = c.at(n - 1 - k);
+  const std::array<double, kCrossings> times = c.oldest_first(n);
   const double stop = zero_of_root_velocity(times.data(), n, false);
   if (std::isnan(stop)) return stop;
   // The same bound as for a start, the other way.
@@ -275,9 +269,7 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
 [[gnu::noinline]] void DistalTorqueEstimator::settle_start() noexcept {
   Crossings& c = crossings_;
   c.start_open = false;
-  std::array<double, kCrossings> times;
-  for (std::size_t k = 0; k < c.run; ++k)
-    times[k] = c.at(c.run - 1 - k);
+  const std::array<double, kCrossings> times = c.oldest_first(c.run);
   const double t_first = times[0], direction = c.direction;
   // At constant jerk the first count comes at most 2.3 (t3 - t1) after
   // the start (the reading at rest a whole count from the first change).
@@ -299,11 +291,7 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
     s.settled = true;
     first = b;
   }
-  if (first == 0) return;
-  const std::size_t j = (newest_ + kHistory - first) % kHistory;
-  Motion m = history_[j].m;
-  step_again(j, m, true);
-  catch_up(j);
+  if (first > 0) step_again_from(first);
 }
 
 // A run of counts from a turn has spanned settle_span (record_crossing()):
@@ -315,9 +303,7 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
 [[gnu::noinline]] void DistalTorqueEstimator::settle_turn() noexcept {
   Crossings& c = crossings_;
   c.turn_open = false;
-  std::array<double, kCrossings> times;
-  for (std::size_t k = 0; k < c.run; ++k)
-    times[k] = c.at(c.run - 1 - k);
+  const std::array<double, kCrossings> times = c.oldest_first(c.run);
   if (std::isnan(zero_of_root_velocity(times.data(), c.run, true))) return;
   const double direction = c.direction, t_now = history_[newest_].m.t;
   const double since = diff_.time_since_manoeuvre(), guard = diff_.config().hindsight_guard;
@@ -333,8 +319,13 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
     s.settled = true;
     first = b;
   }
-  if (first == 0) return;
-  const std::size_t j = (newest_ + kHistory - first) % kHistory;
+  if (first > 0) step_again_from(first);
+}
+
+// The samples `back` and younger were given new signs: steps the model
+// again from `back` to now.
+void DistalTorqueEstimator::step_again_from(std::size_t back) noexcept {
+  const std::size_t j = (newest_ + kHistory - back) % kHistory;
   Motion m = history_[j].m;
   step_again(j, m, true);
   catch_up(j);

@@ -86,6 +86,8 @@ class DistalTorqueEstimator {
   // Steps every sample after `from` to the newest again, from the state the
   // model holds (from's): the model then holds the corrected newest state.
   void catch_up(std::size_t from) noexcept;
+  // Steps the sample `back` samples old and every younger one again.
+  void step_again_from(std::size_t back) noexcept;
   void settle_reversal() noexcept;
   // Records a change of the encoder reading at t, to x_in (before the
   // sample joins the history): true when a move from rest has shown enough
@@ -109,6 +111,13 @@ class DistalTorqueEstimator {
     bool turn_open = false;   // a run from a turn, still to settle
     double turn_from = 0.0;   // ... the old way's last change
     double at(std::size_t back) const { return t[(newest + kCrossings - back) % kCrossings]; }
+    // The newest n (<= kCrossings) times, oldest first.
+    std::array<double, kCrossings> oldest_first(std::size_t n) const {
+      std::array<double, kCrossings> out{};
+      for (std::size_t k = 0; k < n; ++k)
+        out[k] = at(n - 1 - k);
+      return out;
+    }
   };
   Crossings crossings_;
   // estimated_stop() for the current still stretch, once looked up.
