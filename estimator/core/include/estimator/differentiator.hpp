@@ -190,21 +190,21 @@ struct DifferentiatorConfig {
   /// acceleration has the move's sign from its first instant, while the
   /// first encoder count comes tens of ms later (about 100 ms for a slow
   /// start), and eq. (4) drives the true state with lambda sgn(xdd) all
-  /// that time. At the move's third count (the three the same way) its
-  /// start is estimated from the counts' timing: from rest at constant jerk
-  /// (as a hand starts a reach) the velocity grows as the square of the
-  /// time since the start, so the square root of each interval's mean
-  /// velocity, extrapolated back to zero, gives it. The samples at rest
-  /// since then get the move's sign. Measured in docs/friction-model.md
-  /// ("Moves the encoder shows late"). false: off.
+  /// that time. Once the move's counts (the same way) span settle_span, its
+  /// start is estimated from their timing: from rest at constant jerk (as
+  /// a hand starts a reach) the velocity grows as the square of the time
+  /// since the start, so the square root of each interval's mean velocity,
+  /// extrapolated back to zero, gives it. The samples at rest since then
+  /// get the move's sign. Measured in docs/friction-model.md ("Moves the
+  /// encoder shows late"). false: off.
   bool settle_starts = true;
   /// Hindsight correction: a move that runs out into a hold. Its last
   /// count comes 10-90 ms before it stops; meanwhile it decelerates, and
   /// after still_time without a count the estimator declares rest. From the
-  /// last three counts' timing (the same way, the intervals growing) the
-  /// stop is estimated as a start is (settle_starts), and the samples after
-  /// the last count are taken as decelerating until then and at rest after
-  /// it, in place of the still_time rule. false: off.
+  /// last counts' timing (the same way, over settle_span, slowing down) the
+  /// stop is estimated as a start is (settle_starts); the samples the
+  /// still_time rule would put at rest before that stop are taken as
+  /// decelerating instead. false: off.
   bool settle_stops = true;
   /// Hindsight correction: a turn after a manoeuvre (settle_turns). When the
   /// encoder turns (a run of counts one way, then the other) and the new
@@ -213,8 +213,9 @@ struct DifferentiatorConfig {
   /// from the old way's last count on. Samples there that the fine channel
   /// cannot correct (within hindsight_guard after a manoeuvre) get that sign.
   bool settle_turns = true;
-  /// settle_starts / settle_stops: the counts a start or stop is estimated
-  /// from span this long, s (at least three counts, at most 16): the line
+  /// settle_starts / settle_stops / settle_turns: the counts a start, stop
+  /// or turn is judged from span this long, s (at least three counts, at
+  /// most 16): the line
   /// through the square roots of their intervals' mean velocities, fitted
   /// by weighted least squares. Longer averages out the sample clock's
   /// quantisation of the count times (+-0.5 ms each); a start is settled
