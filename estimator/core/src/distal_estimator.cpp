@@ -41,8 +41,9 @@ void DistalTorqueEstimator::reset() noexcept {
   const double direction = x_in > last.x ? 1.0 : -1.0;
   Crossings& c = crossings_;
   if (repeats_ > 0 && last.acc_sign == 0.0) {
-    // Leaving a reading the estimator had at rest: a move from rest.
-    c.run = 1, c.start_open = diff_.config().settle_starts;
+    // Leaving a reading the estimator had at rest: a move from rest (a turn
+    // still open before the rest is not this run's).
+    c.run = 1, c.start_open = diff_.config().settle_starts, c.turn_open = false;
   } else if (direction == c.direction && c.run > 0) {
     ++c.run;
   } else {
