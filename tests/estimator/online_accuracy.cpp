@@ -287,21 +287,21 @@ int main(int argc, char** argv) {
                  "... none within this long (s) of a manoeuvre");
   app.add_option("--hindsight-ahead", diff.hindsight_ahead,
                  "... after a correction, samples up to this much younger (s) in the same pass");
+  app.add_option("--settle-reversals", diff.settle_reversals,
+                 "... a still stretch the encoder leaves back the way it came: the samples at rest "
+                 "there get the new direction's sign (true/false)");
+  app.add_option("--settle-starts", diff.settle_starts,
+                 "... a move leaving a hold: once its counts span --settle-span, the samples at "
+                 "rest since its estimated start get its sign (true/false)");
+  app.add_option("--settle-stops", diff.settle_stops,
+                 "... a move running out into a hold: the samples still_time would put at rest "
+                 "before its estimated stop decelerate instead (true/false)");
   app.add_option("--settle-turns", diff.settle_turns,
                  "... a turn after a manoeuvre whose new way's counts speed up: the samples from "
                  "the old way's last count get the new way's sign where the fine channel cannot "
                  "correct them (true/false)");
   app.add_option("--settle-span", diff.settle_span,
-                 "... the counts a start or stop is estimated from span this long, s");
-  app.add_option("--settle-stops", diff.settle_stops,
-                 "... a move running out into a hold: after its last count, decelerating until its "
-                 "estimated stop, at rest after (true/false)");
-  app.add_option("--settle-starts", diff.settle_starts,
-                 "... a move leaving a hold: once its counts span --settle-span, the samples at "
-                 "rest since its estimated start get its sign (true/false)");
-  app.add_option("--settle-reversals", diff.settle_reversals,
-                 "... a still stretch the encoder leaves back the way it came: the samples at rest "
-                 "there get the new direction's sign (true/false)");
+                 "... the counts a start, stop or turn is judged from span this long, s");
   app.add_option("--hindsight-sure-armed", diff.hindsight_sure_armed,
                  "... |xdd| where it starts to count shortly after a manoeuvre");
   app.add_option("--hindsight-certain-armed", diff.hindsight_certain_armed,

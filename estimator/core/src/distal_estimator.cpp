@@ -29,6 +29,10 @@ void DistalTorqueEstimator::reset() noexcept {
   model_->reset();
   diff_.reset();
   started_ = false;
+  forget_history();
+}
+
+void DistalTorqueEstimator::forget_history() noexcept {
   size_ = pending_ = counts_seen_ = repeats_ = crossings_.run = 0;
   stop_known_ = false;
 }
@@ -70,7 +74,7 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   const bool restart = diff_.restarted();
   Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
   if (!hindsight_) return e;
-  if (restart) size_ = pending_ = counts_seen_ = repeats_ = crossings_.run = 0, stop_known_ = false;
+  if (restart) forget_history();
   // The encoder moves again after standing still for two samples or more:
   // settle_reversal() looks at that stretch (in motion it moves every
   // sample or two, and this costs a comparison).
@@ -126,7 +130,7 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
   bool dirty = false;    // the samples after `frontier` are to be stepped again
   std::size_t frontier = 0;
   while (pending_ > 0) {
-    const std::size_t j = (newest_ + kHistory - (pending_ - 1)) % kHistory;
+    const std::size_t j = index_back(pending_ - 1);
     Sample& s = history_[j];
     const double back = t - s.m.t;
     if (back < c.hindsight_lag && pending_ < kHistory - 1 &&
@@ -196,9 +200,6 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
 [[gnu::noinline]] void DistalTorqueEstimator::settle_reversal() noexcept {
   // Four readings seen since the (re)start: as many samples in the history.
   if (counts_seen_ < 4) return;
-  const auto at = [&](std::size_t back) -> Sample& {
-    return history_[(newest_ + kHistory - back) % kHistory];
-  };
   const double after = counts_[0] > counts_[1] ? 1.0 : -1.0;
   // Came the other way over the two counts before (a move, not a flicker).
   if ((counts_[1] > counts_[2] ? 1.0 : -1.0) == after ||
@@ -207,12 +208,12 @@ void DistalTorqueEstimator::look_back(double t) noexcept {
   // The stretch: samples 1 .. n back at counts_[1].
   std::size_t n = 1;
   const std::size_t span = std::min(size_, kReversalSpan);
-  while (n + 1 < span && at(n + 1).m.x == counts_[1])
+  while (n + 1 < span && sample_back(n + 1).m.x == counts_[1])
     ++n;
   if (n + 1 >= span) return;  // its start is no longer held, or a hold
   std::size_t first = 0;      // back of the oldest sample whose sign changes
   for (std::size_t b = n; b >= 1; --b) {
-    Sample& s = at(b);
+    Sample& s = sample_back(b);
     if (s.m.acc_sign != 0.0) continue;
     s.m.acc_sign = after;
     s.settled = true;
@@ -277,15 +278,12 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
   double t0 = zero_of_root_velocity(times.data(), c.run, true);
   if (std::isnan(t0)) return;
   t0 = std::max(t0, t_first - 2.5 * (times[2] - t_first));
-  const auto at = [&](std::size_t back) -> Sample& {
-    return history_[(newest_ + kHistory - back) % kHistory];
-  };
   std::size_t b = 1;  // back to the last sample before the first count
-  while (b + 1 < size_ && at(b).m.t > t_first)
+  while (b + 1 < size_ && sample_back(b).m.t > t_first)
     ++b;
   std::size_t first = 0;  // back of the oldest sample whose sign changes
   for (; b + 1 < size_; ++b) {
-    Sample& s = at(b);
+    Sample& s = sample_back(b);
     if (s.m.t < t0 || s.m.acc_sign * direction < 0.0) break;
     if (s.m.acc_sign != 0.0) continue;
     s.m.acc_sign = direction;
@@ -308,12 +306,9 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
   if (std::isnan(zero_of_root_velocity(times.data(), c.run, true))) return;
   const double direction = c.direction, t_now = history_[newest_].m.t;
   const double since = diff_.time_since_manoeuvre(), guard = diff_.config().hindsight_guard;
-  const auto at = [&](std::size_t back) -> Sample& {
-    return history_[(newest_ + kHistory - back) % kHistory];
-  };
   std::size_t first = 0;
-  for (std::size_t b = 1; b + 1 < size_ && at(b).m.t >= c.turn_from; ++b) {
-    Sample& s = at(b);
+  for (std::size_t b = 1; b + 1 < size_ && sample_back(b).m.t >= c.turn_from; ++b) {
+    Sample& s = sample_back(b);
     if (since > t_now - s.m.t + guard) break;  // the fine channel's to correct
     if (s.m.acc_sign * direction >= 1.0 || (s.m.acc_sign == 0.0 && s.m.xd == 0.0)) continue;
     s.m.acc_sign = direction;
@@ -326,7 +321,7 @@ double DistalTorqueEstimator::estimated_stop() const noexcept {
 // The samples `back` and younger were given new signs: steps the model
 // again from `back` to now.
 void DistalTorqueEstimator::step_again_from(std::size_t back) noexcept {
-  const std::size_t j = (newest_ + kHistory - back) % kHistory;
+  const std::size_t j = index_back(back);
   Motion m = history_[j].m;
   step_again(j, m, true);
   catch_up(j);

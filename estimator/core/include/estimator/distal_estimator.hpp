@@ -88,6 +88,8 @@ class DistalTorqueEstimator {
   void catch_up(std::size_t from) noexcept;
   // Steps the sample `back` samples old and every younger one again.
   void step_again_from(std::size_t back) noexcept;
+  // Empties the history and what is read from it (reset, a restart).
+  void forget_history() noexcept;
   void settle_reversal() noexcept;
   // Records a change of the encoder reading at t, to x_in (before the
   // sample joins the history): true when a move from rest has shown enough
@@ -146,6 +148,11 @@ class DistalTorqueEstimator {
   static constexpr std::size_t kReversalSpan = 128;
   std::array<Sample, kHistory> history_{};
   std::size_t newest_ = 0, size_ = 0, pending_ = 0;
+  // The history's index of the sample `back` samples older than the newest.
+  std::size_t index_back(std::size_t back) const noexcept {
+    return (newest_ + kHistory - back) % kHistory;
+  }
+  Sample& sample_back(std::size_t back) noexcept { return history_[index_back(back)]; }
   bool hindsight_ = false;
   double inv_span_ = 0.0, inv_span_armed_ = 0.0;  // 1 / (certain - sure)
   std::size_t resteps_ = 0;
