@@ -13,6 +13,7 @@ ChannelStats InboxBase::stats() const noexcept {
   s.accepted = accepted_.load(std::memory_order_relaxed);
   for (std::size_t i = 0; i < s.rejected_by.size(); ++i)
     s.rejected_by[i] = rejected_by_[i].load(std::memory_order_relaxed);
+  s.handshake = handshake_.load(std::memory_order_relaxed);
   s.duplicates = duplicates_.load(std::memory_order_relaxed);
   s.reordered = reordered_.load(std::memory_order_relaxed);
   s.seq_gaps = seq_gaps_.load(std::memory_order_relaxed);
@@ -42,6 +43,7 @@ void InboxBase::reject_unauthentic(const AuthResult& auth, std::int64_t receive_
   switch (auth.verdict) {
     case AuthVerdict::kOk:
     case AuthVerdict::kMissing:
+    case AuthVerdict::kVersion1:
       break;
     case AuthVerdict::kBadMac:
       reason = RejectReason::kBadMac;
@@ -56,11 +58,32 @@ void InboxBase::reject_unauthentic(const AuthResult& auth, std::int64_t receive_
   char what[64];
   if (auth.verdict == AuthVerdict::kMissing)
     std::snprintf(what, sizeof what, "no trailer");
+  else if (auth.verdict == AuthVerdict::kVersion1)
+    std::snprintf(what, sizeof what, "trailer version 1 (a sender from before sessions)");
   else
     std::snprintf(what, sizeof what, "sender %016llx seq %llu",
                   static_cast<unsigned long long>(auth.trailer.sender_id),
                   static_cast<unsigned long long>(auth.trailer.seq));
   Rejection r = make_rejection(reason, what, static_cast<double>(auth.age_us));
+  r.receive_ns = receive_ns;
+  count_rejected(r);
+}
+
+void InboxBase::refuse_by_session(SessionVerdict verdict, const AuthTrailer& trailer,
+                                  std::int64_t receive_ns) noexcept {
+  count_received();
+  if (verdict == SessionVerdict::kHandshake) {
+    handshake_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  char what[64];
+  std::snprintf(what, sizeof what, "sender %016llx naming %016llx",
+                static_cast<unsigned long long>(trailer.sender_id),
+                static_cast<unsigned long long>(trailer.peer_id));
+  Rejection r =
+      make_rejection(verdict == SessionVerdict::kOtherSession ? RejectReason::kOtherSession
+                                                              : RejectReason::kSessionEnded,
+                     what);
   r.receive_ns = receive_ns;
   count_rejected(r);
 }
@@ -131,9 +154,9 @@ std::optional<Rejection> step_check(const Sample& prev, const Sample& next,
 
 template <class Sample>
 Inbox<Sample>::Inbox(std::string channel, InboxOptions<Sample> options)
-    : InboxBase(std::move(channel)),
-      options_(std::move(options)),
-      tracker_(options_.resync_after) {}
+    : InboxBase(std::move(channel)), options_(std::move(options)), tracker_(options_.resync_after) {
+  session_ = options_.session;
+}
 
 template <class Sample>
 void Inbox<Sample>::ingest(const void* data, std::size_t size, std::int64_t receive_ns) noexcept {

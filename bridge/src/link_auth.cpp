@@ -15,8 +15,14 @@ namespace tsmh::bridge {
 namespace {
 
 constexpr std::array<std::uint8_t, 4> kMagic = {'T', 'S', 'M', 'A'};
-constexpr std::uint8_t kVersion = 1;
+constexpr std::uint8_t kVersion = 2;
+// The trailer bytes under the MAC (everything before it), per version.
 constexpr std::size_t kSignedTrailerBytes = kAuthTrailerBytes - kAuthMacBytes;
+constexpr std::size_t kSignedTrailerV1Bytes = kAuthTrailerV1Bytes - kAuthMacBytes;
+
+std::size_t signed_bytes(std::size_t trailer_size) noexcept {
+  return trailer_size == kAuthTrailerBytes ? kSignedTrailerBytes : kSignedTrailerV1Bytes;
+}
 
 void init_sodium() {
   // Idempotent and thread-safe; -1 only when no random source can be opened.
@@ -42,17 +48,21 @@ void write_header(const AuthTrailer& t, std::uint8_t* out) noexcept {
   put_u64(out + 8, t.sender_id);
   put_u64(out + 16, t.seq);
   put_u64(out + 24, static_cast<std::uint64_t>(t.send_time_us));
+  put_u64(out + 32, t.peer_id);
 }
 
 AuthTrailer read_header(const std::uint8_t* in) noexcept {
-  return {get_u64(in + 8), get_u64(in + 16), static_cast<std::int64_t>(get_u64(in + 24))};
+  AuthTrailer t{get_u64(in + 8), get_u64(in + 16), static_cast<std::int64_t>(get_u64(in + 24))};
+  t.version = in[4];
+  t.peer_id = t.version >= 2 ? get_u64(in + 32) : 0;
+  return t;
 }
 
 // The MAC binds the channel (a MASTER_COMMAND cannot be replayed as another
-// arm's), the payload and the trailer's identity, sequence and time. The 0x00
-// separates channel from payload (channel names never contain it).
+// arm's), the payload and the trailer's identity, sequence, time and peer.
+// The 0x00 separates channel from payload (channel names never contain it).
 void compute_mac(const LinkKey& key, std::string_view channel, const std::uint8_t* payload,
-                 std::size_t size, const std::uint8_t* header,
+                 std::size_t size, const std::uint8_t* header, std::size_t header_size,
                  std::uint8_t mac[kAuthMacBytes]) noexcept {
   crypto_auth_hmacsha512256_state st;
   crypto_auth_hmacsha512256_init(&st, key.bytes().data(), key.bytes().size());
@@ -61,19 +71,20 @@ void compute_mac(const LinkKey& key, std::string_view channel, const std::uint8_
   const unsigned char zero = 0;
   crypto_auth_hmacsha512256_update(&st, &zero, 1);
   crypto_auth_hmacsha512256_update(&st, payload, size);
-  crypto_auth_hmacsha512256_update(&st, header, kSignedTrailerBytes);
+  crypto_auth_hmacsha512256_update(&st, header, header_size);
   crypto_auth_hmacsha512256_final(&st, mac);
   sodium_memzero(&st, sizeof st);
 }
 
 bool mac_matches(const LinkKey& key, std::string_view channel, const std::uint8_t* data,
-                 std::size_t payload_size) noexcept {
+                 std::size_t payload_size, std::size_t trailer_size) noexcept {
   const std::uint8_t* header = data + payload_size;
+  const std::size_t signed_size = signed_bytes(trailer_size);
   std::uint8_t mac[kAuthMacBytes];
-  compute_mac(key, channel, data, payload_size, header, mac);
+  compute_mac(key, channel, data, payload_size, header, signed_size, mac);
   // Constant time: a timing difference must not tell an attacker how many
   // leading bytes of a forged MAC were right.
-  return sodium_memcmp(mac, header + kSignedTrailerBytes, kAuthMacBytes) == 0;
+  return sodium_memcmp(mac, header + signed_size, kAuthMacBytes) == 0;
 }
 
 int hex_value(char c) noexcept {
@@ -194,10 +205,19 @@ std::string LinkKey::fingerprint() const {
   return out;
 }
 
+std::size_t auth_trailer_size(const std::uint8_t* data, std::size_t size) noexcept {
+  auto is = [&](std::size_t bytes, std::uint8_t version) {
+    if (size < bytes) return false;
+    const std::uint8_t* t = data + size - bytes;
+    return std::memcmp(t, kMagic.data(), kMagic.size()) == 0 && t[4] == version;
+  };
+  if (is(kAuthTrailerBytes, kVersion)) return kAuthTrailerBytes;
+  if (is(kAuthTrailerV1Bytes, 1)) return kAuthTrailerV1Bytes;
+  return 0;
+}
+
 bool has_auth_trailer(const std::uint8_t* data, std::size_t size) noexcept {
-  if (size < kAuthTrailerBytes) return false;
-  const std::uint8_t* t = data + size - kAuthTrailerBytes;
-  return std::memcmp(t, kMagic.data(), kMagic.size()) == 0 && t[4] == kVersion;
+  return auth_trailer_size(data, size) != 0;
 }
 
 MessageSigner::MessageSigner(std::shared_ptr<const LinkKey> key) : key_(std::move(key)) {
@@ -210,15 +230,23 @@ MessageSigner::MessageSigner(std::shared_ptr<const LinkKey> key) : key_(std::mov
 
 void MessageSigner::sign(std::string_view channel, const std::uint8_t* payload, std::size_t size,
                          std::uint8_t* trailer) noexcept {
-  const AuthTrailer t{sender_id_, next_seq_.fetch_add(1, std::memory_order_relaxed),
-                      realtime_now_us()};
+  sign_at(channel, payload, size, next_seq_.fetch_add(1, std::memory_order_relaxed),
+          realtime_now_us(), trailer);
+}
+
+void MessageSigner::sign_at(std::string_view channel, const std::uint8_t* payload, std::size_t size,
+                            std::uint64_t seq, std::int64_t send_time_us,
+                            std::uint8_t* trailer) const noexcept {
+  AuthTrailer t{sender_id_, seq, send_time_us};
+  t.peer_id = peer_id();
   sign_as(channel, payload, size, t, trailer);
 }
 
 void MessageSigner::sign_as(std::string_view channel, const std::uint8_t* payload, std::size_t size,
                             const AuthTrailer& t, std::uint8_t* trailer) const noexcept {
   write_header(t, trailer);
-  compute_mac(*key_, channel, payload, size, trailer, trailer + kSignedTrailerBytes);
+  compute_mac(*key_, channel, payload, size, trailer, kSignedTrailerBytes,
+              trailer + kSignedTrailerBytes);
 }
 
 MessageVerifier::MessageVerifier(std::shared_ptr<const LinkKey> key, VerifierOptions options)
@@ -251,11 +279,16 @@ MessageVerifier::Window& MessageVerifier::claim(std::uint64_t sender_id) noexcep
 AuthResult MessageVerifier::verify(std::string_view channel, const std::uint8_t* data,
                                    std::size_t size, std::int64_t now_realtime_us) noexcept {
   AuthResult r;
-  if (!has_auth_trailer(data, size)) return r;  // Missing
-  r.payload_size = size - kAuthTrailerBytes;
+  const std::size_t trailer_size = auth_trailer_size(data, size);
+  if (trailer_size == 0) return r;  // Missing
+  r.payload_size = size - trailer_size;
   r.trailer = read_header(data + r.payload_size);
-  if (!mac_matches(*key_, channel, data, r.payload_size)) {
+  if (!mac_matches(*key_, channel, data, r.payload_size, trailer_size)) {
     r.verdict = AuthVerdict::kBadMac;
+    return r;
+  }
+  if (r.trailer.version == 1 && !options_.accept_version_1) {
+    r.verdict = AuthVerdict::kVersion1;
     return r;
   }
   // Differences in doubles: a hostile (but correctly signed) time must not overflow.
@@ -303,9 +336,10 @@ std::int64_t realtime_now_us() noexcept {
 
 AuthVerdict verify_stored(const LinkKey& key, std::string_view channel, const std::uint8_t* data,
                           std::size_t size) noexcept {
-  if (!has_auth_trailer(data, size)) return AuthVerdict::kMissing;
-  return mac_matches(key, channel, data, size - kAuthTrailerBytes) ? AuthVerdict::kOk
-                                                                   : AuthVerdict::kBadMac;
+  const std::size_t trailer_size = auth_trailer_size(data, size);
+  if (trailer_size == 0) return AuthVerdict::kMissing;
+  return mac_matches(key, channel, data, size - trailer_size, trailer_size) ? AuthVerdict::kOk
+                                                                            : AuthVerdict::kBadMac;
 }
 
 }  // namespace tsmh::bridge

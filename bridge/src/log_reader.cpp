@@ -100,12 +100,13 @@ std::optional<std::size_t> authentic_size(const LogEvent& ev, const LinkKey* key
                                           const LogReadOptions& options, JointSeries& out,
                                           Collected& c) {
   const std::size_t size = ev.data.size();
-  const bool has_mac = has_auth_trailer(ev.data.data(), size);
-  if (options.skip_mac) return has_mac ? size - kAuthTrailerBytes : size;
+  const std::size_t trailer_size = auth_trailer_size(ev.data.data(), size);
+  const bool has_mac = trailer_size != 0;
+  if (options.skip_mac) return size - trailer_size;
   if (key != nullptr) {
     switch (verify_stored(*key, ev.channel, ev.data.data(), size)) {
       case AuthVerdict::kOk:
-        return size - kAuthTrailerBytes;
+        return size - trailer_size;
       case AuthVerdict::kMissing:
         ++out.skipped_no_mac;
         return std::nullopt;

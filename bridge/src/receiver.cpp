@@ -33,9 +33,17 @@ void Receiver::on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string&
   if (route->verifier != nullptr) {
     const AuthResult auth = route->verifier->verify(channel, data, size, realtime_now_us());
     if (auth.verdict != AuthVerdict::kOk) return inbox->reject_unauthentic(auth, receive_ns);
+    // One master, one slave: on a session channel only the bound peer's
+    // messages go on (bridge/link_session.hpp); another keyed sender ends it.
+    if (LinkSession* session = inbox->session()) {
+      const SessionVerdict v = session->observe(auth.trailer, receive_ns);
+      if (v != SessionVerdict::kAccept)
+        return inbox->refuse_by_session(v, auth.trailer, receive_ns);
+    }
     size = auth.payload_size;
-  } else if (has_auth_trailer(data, size)) {
-    size -= kAuthTrailerBytes;  // an unkeyed reader (a test, a tool) still decodes signed traffic
+  } else {
+    size -= auth_trailer_size(
+        data, size);  // an unkeyed reader (a test, a tool) still decodes signed traffic
   }
   inbox->ingest(data, size, receive_ns);
 }
@@ -43,7 +51,8 @@ void Receiver::on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string&
 Receiver::Receiver(BridgeConfig config) : config_(std::move(config)), lcm_(open_lcm(config_.url)) {
   if (config_.key)
     verifier_ = std::make_unique<MessageVerifier>(
-        config_.key, VerifierOptions{.check_freshness = !is_log_url(config_.url)});
+        config_.key, VerifierOptions{.check_freshness = !is_log_url(config_.url),
+                                     .accept_version_1 = is_log_url(config_.url)});
   wake_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
   if (wake_fd_ < 0)
     throw BridgeError(std::string("Receiver: eventfd failed: ") + std::strerror(errno));

@@ -28,6 +28,10 @@ std::string_view reason_name(RejectReason reason) noexcept {
       return "stale";
     case RejectReason::kReplayed:
       return "replayed";
+    case RejectReason::kOtherSession:
+      return "other_session";
+    case RejectReason::kSessionEnded:
+      return "session_ended";
   }
   return "unknown";
 }
@@ -99,7 +103,7 @@ std::string describe(const Rejection& r, std::string_view channel) {
       out += " since the last accepted sample: faster than its configured limit";
       break;
     case RejectReason::kUnauthenticated:
-      out += "no authentication trailer (sender has no link key): ";
+      out += "not authenticated (a sender without the link key, or too old a program): ";
       out += field;
       break;
     case RejectReason::kBadMac:
@@ -118,6 +122,17 @@ std::string describe(const Rejection& r, std::string_view channel) {
       out += "replayed: ";
       out += field;
       out += " already seen or older than the replay window";
+      break;
+    case RejectReason::kOtherSession:
+      out +=
+          "another session (a second keyed sender on this session's channel, a restarted "
+          "peer or a replay of an older session): ";
+      out += field;
+      out += "; the session ends in FAULT";
+      break;
+    case RejectReason::kSessionEnded:
+      out += "the session has ended: ";
+      out += field;
       break;
   }
   return out;

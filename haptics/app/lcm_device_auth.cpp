@@ -19,6 +19,9 @@ class BridgeLcmAuth final : public master_devices::LcmMessageAuth {
       case bridge::AuthVerdict::kMissing:
         why = "no MAC trailer (the sender has no link key)";
         break;
+      case bridge::AuthVerdict::kVersion1:
+        why = "trailer version 1 (a sender from before sessions: update it)";
+        break;
       case bridge::AuthVerdict::kBadMac:
         why = "MAC does not match (wrong link key, or altered on the way)";
         break;

@@ -4,6 +4,8 @@
 //           trailer header), in the Sender's publish thread
 //   verify: MessageVerifier::verify (MAC, freshness, replay window), in the
 //           Receiver's receive thread
+//   session: LinkSession::observe (bridge/link_session.hpp) on a bound
+//           session, after verify in the receive thread
 // for the encoded 2- and 8-joint SLAVE_STATE. Each call timed alone with a
 // CLOCK_MONOTONIC pair (whose own cost is printed), and the mean of
 // back-to-back calls. Neither runs in the 1 kHz loop thread.
@@ -17,6 +19,7 @@
 
 #include "bridge/codec.hpp"
 #include "bridge/link_auth.hpp"
+#include "bridge/link_session.hpp"
 #include "realtime/clock.hpp"
 #include "test_samples.hpp"
 
@@ -84,11 +87,32 @@ void bench(int joints, int count) {
     ok += fresh.verify(channel, m.data(), m.size(), now_us).verdict == AuthVerdict::kOk;
   const double verify_mean = static_cast<double>(tsmh::realtime::monotonic_now_ns() - v0) / count;
 
+  // The session check of a bound session: the peer's messages name us.
+  MessageSigner mine(key);
+  LinkSession session(mine);
+  std::vector<AuthTrailer> trailers(messages.size());
+  for (std::size_t i = 0; i < trailers.size(); ++i)
+    trailers[i] = {signer.sender_id(), i + 1, now_us, mine.sender_id()};
+  std::vector<double> session_ns;
+  session_ns.reserve(trailers.size());
+  std::size_t accepted = 0;
+  for (const auto& t : trailers) {
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
+    accepted += session.observe(t, t0) == SessionVerdict::kAccept;
+    session_ns.push_back(static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0));
+  }
+  const std::int64_t o0 = tsmh::realtime::monotonic_now_ns();
+  for (const auto& t : trailers)
+    accepted += session.observe(t, o0) == SessionVerdict::kAccept;
+  const double session_mean = static_cast<double>(tsmh::realtime::monotonic_now_ns() - o0) / count;
+
   std::printf(
       "\nSLAVE_STATE %d joints: payload %zu bytes + %zu trailer; %d messages, %zu verified\n",
       joints, n, kAuthTrailerBytes, count, ok);
   print("sign (publish thread)", sign_ns, sign_mean);
   print("verify (receive thread)", verify_ns, verify_mean);
+  std::printf("  (session: %zu of %zu accepted)\n", accepted, 2 * trailers.size());
+  print("session check (receive thread)", session_ns, session_mean);
   print("timer alone (clock_gettime pair)", timer_ns, 0);
 }
 

@@ -3,9 +3,11 @@
 // real udpm, rogue publishers (no key, wrong key, replayed, reordered, stale)
 // against a keyed Receiver.
 #include <gtest/gtest.h>
+#include <sodium.h>
 #include <sys/stat.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
@@ -72,6 +74,86 @@ TEST(LinkAuth, SignedMessageVerifiesAndGivesThePayloadSize) {
   EXPECT_EQ(verify_stored(*key, "ARM1_MASTER_COMMAND", m.data(), m.size()), AuthVerdict::kOk);
 }
 
+std::uint64_t u64_at(const std::vector<std::uint8_t>& m, std::size_t offset) {
+  std::uint64_t v = 0;
+  for (int i = 7; i >= 0; --i)
+    v = (v << 8) | m[offset + static_cast<std::size_t>(i)];
+  return v;
+}
+
+TEST(LinkAuth, TrailerVersion2LayoutCarriesThePeerIdUnderTheMac) {
+  const auto key = new_key();
+  MessageSigner signer(key);
+  signer.set_peer_id(0x1122334455667788ULL);
+  const auto payload = some_payload();
+  auto m = payload;
+  m.resize(payload.size() + kAuthTrailerBytes);
+  signer.sign_at("C", m.data(), payload.size(), 9, kNow, m.data() + payload.size());
+  ASSERT_EQ(kAuthTrailerBytes, 72U);
+  const std::size_t t = payload.size();
+  EXPECT_EQ(std::string(m.begin() + static_cast<long>(t), m.begin() + static_cast<long>(t) + 4),
+            "TSMA");
+  EXPECT_EQ(m[t + 4], 2);
+  EXPECT_EQ(m[t + 5] | m[t + 6] | m[t + 7], 0);
+  EXPECT_EQ(u64_at(m, t + 8), signer.sender_id());
+  EXPECT_EQ(u64_at(m, t + 16), 9U);
+  EXPECT_EQ(u64_at(m, t + 24), static_cast<std::uint64_t>(kNow));
+  EXPECT_EQ(u64_at(m, t + 32), 0x1122334455667788ULL);
+  EXPECT_EQ(auth_trailer_size(m.data(), m.size()), kAuthTrailerBytes);
+  MessageVerifier v(key);
+  const AuthResult r = v.verify("C", m.data(), m.size(), kNow);
+  ASSERT_EQ(r.verdict, AuthVerdict::kOk);
+  EXPECT_EQ(r.trailer.peer_id, 0x1122334455667788ULL);
+  EXPECT_EQ(r.payload_size, payload.size());
+  // The peer id is signed: naming another peer breaks the MAC.
+  m[t + 32] ^= 1;
+  MessageVerifier fresh(key);
+  EXPECT_EQ(verdict(fresh, "C", m, kNow), AuthVerdict::kBadMac);
+}
+
+// A version 1 trailer (64 bytes, MAC over bytes 0..31), as written before sessions.
+std::vector<std::uint8_t> version1_message(const LinkKey& key, std::string_view channel,
+                                           std::vector<std::uint8_t> payload, std::uint64_t id,
+                                           std::uint64_t seq) {
+  const std::size_t n = payload.size();
+  payload.resize(n + kAuthTrailerV1Bytes);
+  std::uint8_t* t = payload.data() + n;
+  std::memcpy(t, "TSMA\x01\0\0\0", 8);
+  for (int i = 0; i < 8; ++i) {
+    t[8 + i] = static_cast<std::uint8_t>(id >> (8 * i));
+    t[16 + i] = static_cast<std::uint8_t>(seq >> (8 * i));
+    t[24 + i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(kNow) >> (8 * i));
+  }
+  crypto_auth_hmacsha512256_state st;
+  crypto_auth_hmacsha512256_init(&st, key.bytes().data(), key.bytes().size());
+  crypto_auth_hmacsha512256_update(&st, reinterpret_cast<const unsigned char*>(channel.data()),
+                                   channel.size());
+  const unsigned char zero = 0;
+  crypto_auth_hmacsha512256_update(&st, &zero, 1);
+  crypto_auth_hmacsha512256_update(&st, payload.data(), n);
+  crypto_auth_hmacsha512256_update(&st, t, 32);
+  crypto_auth_hmacsha512256_final(&st, t + 32);
+  return payload;
+}
+
+TEST(LinkAuth, Version1IsReadInStoredLogsAndRefusedLive) {
+  const auto key = new_key();
+  const auto payload = some_payload();
+  const auto m = version1_message(*key, "C", payload, 42, 1);
+  EXPECT_EQ(auth_trailer_size(m.data(), m.size()), kAuthTrailerV1Bytes);
+  EXPECT_EQ(verify_stored(*key, "C", m.data(), m.size()), AuthVerdict::kOk);
+  EXPECT_EQ(verify_stored(*new_key(), "C", m.data(), m.size()), AuthVerdict::kBadMac);
+  MessageVerifier live(key);
+  EXPECT_EQ(verdict(live, "C", m, kNow), AuthVerdict::kVersion1)
+      << "a live receiver needs a peer id to hold a session";
+  MessageVerifier log(key, {.check_freshness = false, .accept_version_1 = true});
+  const AuthResult r = log.verify("C", m.data(), m.size(), kNow);
+  EXPECT_EQ(r.verdict, AuthVerdict::kOk);
+  EXPECT_EQ(r.payload_size, payload.size());
+  EXPECT_EQ(r.trailer.sender_id, 42U);
+  EXPECT_EQ(r.trailer.peer_id, 0U);
+}
+
 TEST(LinkAuth, EveryAlteredByteIsRejected) {
   const auto key = new_key();
   const MessageSigner signer(key);
@@ -83,7 +165,8 @@ TEST(LinkAuth, EveryAlteredByteIsRejected) {
     const AuthVerdict v = verdict(verifier, "C", bad, kNow);
     // The magic and version bytes make it "no trailer"; every other byte the MAC covers.
     EXPECT_TRUE(v == AuthVerdict::kBadMac ||
-                (v == AuthVerdict::kMissing && i >= m.size() - 64 && i < m.size() - 56))
+                (v == AuthVerdict::kMissing && i >= m.size() - kAuthTrailerBytes &&
+                 i < m.size() - kAuthTrailerBytes + 8))
         << "byte " << i << " flipped, verdict " << static_cast<int>(v);
   }
 }
@@ -134,7 +217,7 @@ TEST(LinkAuth, ForgedMessagesDoNotMoveTheWindow) {
   auto forged = signed_message(rogue, "C", {1}, 1'000'000, kNow);
   const auto id = signer.sender_id();
   for (int i = 0; i < 8; ++i)  // overwrite the sender id (bytes 8..15 of the trailer)
-    forged[forged.size() - 56 + static_cast<std::size_t>(i)] =
+    forged[forged.size() - kAuthTrailerBytes + 8 + static_cast<std::size_t>(i)] =
         static_cast<std::uint8_t>(id >> (8 * i));
   EXPECT_EQ(verdict(v, "C", forged, kNow), AuthVerdict::kBadMac);
   EXPECT_EQ(verdict(v, "C", signed_message(signer, "C", {1}, 6, kNow), kNow), AuthVerdict::kOk);

@@ -15,6 +15,9 @@ struct ChannelStats {
   std::uint64_t accepted = 0;  ///< handed to the loop
   /// Rejected messages by RejectReason (index = static_cast<int>(reason)).
   std::array<std::uint64_t, kRejectReasons> rejected_by{};
+  /// Authentic messages of a session's handshake (a hello, or the peer's
+  /// before it heard our answer): not rejected, but their content is not used.
+  std::uint64_t handshake = 0;
   std::uint64_t duplicates = 0;  ///< seq equal to the last accepted: dropped
   std::uint64_t reordered = 0;   ///< arrived after a newer one: dropped
   /// Gaps between accepted messages (lost or rejected in between): one per
@@ -40,7 +43,7 @@ struct ChannelStats {
     return std::accumulate(rejected_by.begin(), rejected_by.end(), std::uint64_t{0});
   }
   /// Everything that never reached the loop.
-  std::uint64_t dropped() const noexcept { return rejected() + duplicates + reordered; }
+  std::uint64_t dropped() const noexcept { return rejected() + handshake + duplicates + reordered; }
 };
 
 }  // namespace tsmh::bridge

@@ -17,6 +17,7 @@
 #include "bridge/channel_stats.hpp"
 #include "bridge/codec.hpp"
 #include "bridge/link_auth.hpp"
+#include "bridge/link_session.hpp"
 #include "bridge/rejection.hpp"
 #include "bridge/sequence_tracker.hpp"
 #include "realtime/histogram.hpp"
@@ -37,6 +38,10 @@ struct InboxOptions {
   std::string channel{};
   /// See SequenceTracker.
   int resync_after = 50;
+  /// A session channel (keyed Receiver only): every authentic message is put
+  /// to this session (bridge/link_session.hpp) before it is decoded; only its
+  /// bound peer's are used. Null: any sender with the key (CALIBRATION_REQUEST).
+  LinkSession* session = nullptr;
 };
 
 /// The type-independent part: counters and the receive-thread entry point.
@@ -55,6 +60,13 @@ class InboxBase {
   /// Ok) is counted as received and rejected by its reason; it never reaches
   /// the decoder.
   void reject_unauthentic(const AuthResult& auth, std::int64_t receive_ns) noexcept;
+  /// Receive thread only: an authentic message the session did not accept
+  /// (verdict not Accept): a handshake message is counted as such, another
+  /// session's or one after the end as rejected.
+  void refuse_by_session(SessionVerdict verdict, const AuthTrailer& trailer,
+                         std::int64_t receive_ns) noexcept;
+  /// The session this channel belongs to; null for none.
+  LinkSession* session() const noexcept { return session_; }
 
   const std::string& channel() const noexcept { return channel_; }
   /// Any thread.
@@ -78,12 +90,14 @@ class InboxBase {
                    std::int64_t receive_ns) noexcept;
   void count_accepted(std::int64_t utime, std::int64_t receive_ns, bool clocks_shared) noexcept;
   void count_resync() noexcept { resyncs_.fetch_add(1, std::memory_order_relaxed); }
+  LinkSession* session_ = nullptr;
 
  private:
   std::string channel_;
   std::atomic<std::uint64_t> received_{0};
   std::atomic<std::uint64_t> accepted_{0};
   std::array<std::atomic<std::uint64_t>, kRejectReasons> rejected_by_{};
+  std::atomic<std::uint64_t> handshake_{0};
   std::atomic<std::uint64_t> duplicates_{0};
   std::atomic<std::uint64_t> reordered_{0};
   std::atomic<std::uint64_t> seq_gaps_{0};

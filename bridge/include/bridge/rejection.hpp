@@ -21,11 +21,15 @@ enum class RejectReason : std::uint8_t {
   kBadMac,           ///< MAC does not match: wrong key, or bytes altered
   kStale,            ///< send time too far from the receiver's clock (an old recording)
   kReplayed,         ///< (sender id, sequence) already seen or older than the replay window
+  // Sessions (keyed session channels only; bridge/link_session.hpp), after authentication:
+  kOtherSession,  ///< a keyed sender that is not this session's peer: ends the session in FAULT
+  kSessionEnded,  ///< the session is closed or in FAULT: nothing is used any more
 };
-inline constexpr int kRejectReasons = 10;
+inline constexpr int kRejectReasons = 12;
 
 /// "decode", "joint_count", "non_finite", "out_of_range", "time_backwards",
-/// "implausible_step", "unauthenticated", "bad_mac", "stale", "replayed".
+/// "implausible_step", "unauthenticated", "bad_mac", "stale", "replayed",
+/// "other_session", "session_ended".
 std::string_view reason_name(RejectReason reason) noexcept;
 
 struct Rejection {
