@@ -23,6 +23,7 @@
 
 #include <CLI/CLI.hpp>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -62,6 +63,15 @@ class FakeVendorMaster {
   std::array<double, kDof> joint_velocities() const { return qd_; }
   int buttons() const { return 1; }  // bit 0 dead-man held
   void set_joint_torques(const std::array<double, kDof>& tau) { torque_ = tau; }
+  /// Zero torque from a signal handler: async-signal-safe (plain stores).
+  /// A real SDK's torque call rarely is (it locks, allocates, talks to
+  /// libusb): there, write() a zero command prepared at start-up to a
+  /// descriptor of the device's own (as haptic-server does for its hidraw
+  /// console, bridge/crash_stop.hpp), or leave it to the device's watchdog.
+  void zero_torque_from_signal_handler() noexcept {
+    for (double& t : torque_)
+      t = 0.0;
+  }
 
  private:
   double t_ = 0.0;
@@ -123,6 +133,29 @@ bool stop_requested(const sigset_t& set) {
   for (int s = 1; s < NSIG; ++s)
     if (sigismember(&set, s) == 1 && sigismember(&pending, s) == 1) return true;
   return false;
+}
+
+// A crash (the core-dumping signals: SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL,
+// SIGTRAP, SIGSYS) must not leave the motors driven either: the handler zeroes
+// the device's torque with async-signal-safe calls only, then lets the signal
+// end the process as it would have (default action restored, raised again).
+// A handler has no context argument: the device is reached through this one
+// static pointer.
+std::atomic<FakeVendorMaster*> g_crash_device{nullptr};
+
+void on_crash_signal(int sig) {
+  if (FakeVendorMaster* device = g_crash_device.load()) device->zero_torque_from_signal_handler();
+  raise(sig);  // SA_RESETHAND restored the default; delivered when we return
+}
+
+void zero_torque_on_crash(FakeVendorMaster& device) {
+  g_crash_device.store(&device);
+  struct sigaction sa {};
+  sa.sa_handler = on_crash_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  for (int s : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGTRAP, SIGSYS})
+    sigaction(s, &sa, nullptr);
 }
 
 // Every signal that would end the process by default and can be caught (not
@@ -211,6 +244,7 @@ int main(int argc, char** argv) {
   std::vector<std::uint8_t> bytes;
 
   FakeVendorMaster device;
+  zero_torque_on_crash(device);
   tsmh::master_state_t state;
   state.num_joints = FakeVendorMaster::kDof;
   state.q.resize(FakeVendorMaster::kDof);
@@ -231,7 +265,14 @@ int main(int argc, char** argv) {
     }  // drain MASTER_FORCE without blocking
     const std::int64_t now = tsmh::realtime::monotonic_now_ns();
     const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= watchdog_ms * 1e6;
-    if (was_fresh && !fresh) ++watchdog_trips;
+    if (was_fresh && !fresh) {
+      // Once per trip, not per period: the operator learns why the handle went limp.
+      ++watchdog_trips;
+      std::fprintf(stderr,
+                   "external-master-adapter: no MASTER_FORCE for %.0f ms (watchdog): torque "
+                   "zeroed\n",
+                   static_cast<double>(now - inbox.received_ns) * 1e-6);
+    }
     was_fresh = fresh;
     device.set_joint_torques(fresh && inbox.enable ? inbox.torque : std::array<double, 2>{});
     device.step(static_cast<double>(period_ns) * 1e-9);

@@ -27,6 +27,7 @@
 #include "bridge/link_security.hpp"
 #include "bridge/stop_signals.hpp"
 #include "calibration_log.hpp"
+#include "crash_outputs.hpp"
 #include "estimator/model_io.hpp"
 #include "haptics/evaluation.hpp"
 #include "haptics/lcm_slave_link.hpp"
@@ -230,16 +231,18 @@ class EventLog {
   bool live_shown_ = false;
 };
 
-/// Waits for a stop signal or the runner finishing, logging loop events every
-/// 50 ms. Returns the signal or 0.
+/// Waits for a stop signal or the runner finishing, logging loop events and
+/// keeping the crash messages fresh every 50 ms. Returns the signal or 0.
 int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventLog& log,
-                  haptic_server::CalibrationLog& calibration) {
+                  haptic_server::CalibrationLog& calibration, haptic_server::CrashOutputs& crash) {
   while (!runner.finished()) {
     timespec timeout{0, 50'000'000};
     const int sig = sigtimedwait(&set, nullptr, &timeout);
     if (sig > 0) return sig;
     log.poll();
-    calibration.poll(tsmh::realtime::monotonic_now_ns());
+    const std::int64_t now = tsmh::realtime::monotonic_now_ns();
+    calibration.poll(now);
+    crash.refresh(now);
   }
   return 0;
 }
@@ -531,7 +534,8 @@ int run(const Options& o, const sigset_t& stop_signals) {
   link_cfg.subscribe_truth = cfg.evaluation.truth;
   haptics::LcmSlaveLink link(link_cfg);
 
-  const auto registry = make_registry(haptics::make_lcm_device_auth(security.key));
+  const auto device_auth = haptics::make_lcm_device_auth(security.key);
+  const auto registry = make_registry(device_auth);
   std::unique_ptr<master_devices::Device> device = create_device(cfg, registry);
   haptics::check_against_device(cfg, device->spec());
   cap_torque_to_device(cfg, device->spec());
@@ -556,6 +560,17 @@ int run(const Options& o, const sigset_t& stop_signals) {
       if (!dma->active()) std::fprintf(stderr, "haptic-server: warning: %s\n", dma->note().c_str());
     }
     link.start();
+    // The core-dumping signals: zero torque and a hold, best effort, before
+    // the process ends as the kernel ends it (docs/haptic-server.md "Crash").
+    std::optional<haptic_server::CrashOutputs> crash;
+    crash.emplace(haptic_server::CrashOutputs::Setup{.link = link,
+                                                     .link_url = link_cfg.bridge.url,
+                                                     .joints = cfg.loop.joints,
+                                                     .device = *device,
+                                                     .driver = cfg.device_driver,
+                                                     .device_auth = device_auth});
+    if (!o.quiet && !crash->summary().empty())
+      std::fprintf(stderr, "haptic-server: on a crash signal: %s\n", crash->summary().c_str());
     haptics::LoopRunner runner(loop, {cfg.loop.rate_hz, cfg.realtime.sched_fifo,
                                       cfg.realtime.priority, cfg.realtime.cpu, cfg.duration_s});
     const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
@@ -579,12 +594,13 @@ int run(const Options& o, const sigset_t& stop_signals) {
                      .live = live},
                     t0);
     haptic_server::CalibrationLog calibration(loop.calibration(), t0, live);
-    const int sig = wait_for_stop(stop_signals, runner, events, calibration);
+    const int sig = wait_for_stop(stop_signals, runner, events, calibration, *crash);
     events.poll();  // anything the loop reported in its last ticks
     calibration.poll(tsmh::realtime::monotonic_now_ns());
     events.clear();
     runner.stop();
     runner.join();  // the loop thread wrote zero torque on its way out
+    crash.reset();  // before the sockets and descriptors it knows are closed
     const double seconds = static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0) * 1e-9;
     link.stop();
     device->close();

@@ -49,6 +49,7 @@ std::uint64_t LcmSlaveLink::latest_calibration_request(
 
 void LcmSlaveLink::publish_command(const bridge::MasterCommandSample& cmd) noexcept {
   command_->publish(cmd);
+  last_command_.store(cmd);
 }
 
 void LcmSlaveLink::publish_status(const bridge::HapticStatusSample& status) noexcept {

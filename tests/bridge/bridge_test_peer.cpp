@@ -8,7 +8,17 @@
 //   bridge_test_peer publish-direct URL PREFIX COUNT RATE_HZ [truth]
 //       the same with synchronous publishes and, after a stall, a re-based
 //       schedule: no bursts (lcm-logger's 30-message queue drops bursts).
+//   bridge_test_peer crash URL CHANNEL SIGNAL
+//       a thread publishes "alive" on CHANNEL through LCM every 200 us; a
+//       CrashStop holds the datagram "crashed" for CHANNEL; after 50 ms the
+//       process sends itself SIGNAL (core dumps off) and must die of it with
+//       "crashed" the last message on CHANNEL.
+#include <signal.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +27,7 @@
 #include <thread>
 
 #include "bridge/codec.hpp"
+#include "bridge/crash_stop.hpp"
 #include "bridge/lcm_url.hpp"
 #include "bridge/sender.hpp"
 #include "realtime/clock.hpp"
@@ -77,6 +88,37 @@ int publish_mode(const std::string& url, const std::string& prefix, long count, 
   return published == count && errors == 0 ? 0 : 1;
 }
 
+int crash_mode(const std::string& url, const std::string& channel, int sig) {
+  const rlimit no_core{0, 0};
+  setrlimit(RLIMIT_CORE, &no_core);
+  const auto endpoint = tsmh::bridge::udpm_endpoint(url);
+  if (!endpoint) return 2;
+  auto lcm = tsmh::bridge::open_lcm(url);
+  std::atomic<bool> stop{false};
+  std::thread alive([&] {
+    static constexpr char kAlive[] = "alive";
+    while (!stop.load()) {
+      lcm->publish(channel, kAlive, sizeof kAlive - 1);
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  });
+  tsmh::bridge::CrashStop crash;
+  const std::size_t out = crash.add_datagram(*endpoint);
+  static constexpr std::uint8_t kCrashed[] = {'c', 'r', 'a', 's', 'h', 'e', 'd'};
+  std::uint8_t datagram[128];
+  const std::size_t n = tsmh::bridge::frame_udpm_short(channel, 7, kCrashed, sizeof kCrashed,
+                                                       datagram, sizeof datagram);
+  if (n == 0 || !crash.set(out, datagram, n)) return 2;
+  crash.find_senders({ntohs(endpoint->group.sin_port)});
+  crash.install();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  kill(getpid(), sig);
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  stop = true;
+  alive.join();
+  return 0;  // the signal did not end the process: the test fails on this
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -85,7 +127,10 @@ int main(int argc, char** argv) {
   if ((mode == "publish" || mode == "publish-direct") && (argc == 6 || argc == 7))
     return publish_mode(argv[2], argv[3], std::atol(argv[4]), std::atof(argv[5]),
                         argc == 7 && std::string(argv[6]) == "truth", mode == "publish-direct");
-  std::fprintf(stderr, "usage: %s open URL | publish[-direct] URL PREFIX COUNT RATE_HZ [truth]\n",
+  if (mode == "crash" && argc == 5) return crash_mode(argv[2], argv[3], std::atoi(argv[4]));
+  std::fprintf(stderr,
+               "usage: %s open URL | publish[-direct] URL PREFIX COUNT RATE_HZ [truth] | crash URL "
+               "CHANNEL SIGNAL\n",
                argv[0]);
   return 2;
 }

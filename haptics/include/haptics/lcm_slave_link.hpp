@@ -11,6 +11,7 @@
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
 #include "haptics/slave_link.hpp"
+#include "realtime/latest_value.hpp"
 
 namespace tsmh::haptics {
 
@@ -40,6 +41,16 @@ class LcmSlaveLink final : public SlaveLink {
 
   bridge::ChannelStats state_stats() const noexcept { return state_->stats(); }
 
+  /// The last command given to publish_command(), for any thread (0: none
+  /// yet), and where and how it goes: what a message prepared outside the
+  /// publish thread needs (haptic-server's crash outputs).
+  std::uint64_t last_command(bridge::MasterCommandSample& out) const noexcept {
+    return last_command_.load(out);
+  }
+  const std::string& command_channel() const noexcept { return command_->channel(); }
+  /// Signs this link's messages; null when the link is not keyed.
+  bridge::MessageSigner* signer() noexcept { return tx_.signer(); }
+
  private:
   bridge::Receiver rx_;
   bridge::Sender tx_;
@@ -48,6 +59,7 @@ class LcmSlaveLink final : public SlaveLink {
   bridge::Inbox<bridge::CalibrationRequestSample>* calibration_ = nullptr;
   bridge::Outbox<bridge::MasterCommandSample>* command_ = nullptr;
   bridge::Outbox<bridge::HapticStatusSample>* status_ = nullptr;
+  realtime::LatestValue<bridge::MasterCommandSample> last_command_;  // loop thread -> main
 };
 
 }  // namespace tsmh::haptics

@@ -76,6 +76,8 @@ class LcmDevice final : public Device {
   DeviceStatus status() const noexcept override;
 
   std::uint64_t rejected_messages() const { return rejected_.load(); }
+  /// As given (the URL unresolved: "" means $LCM_DEFAULT_URL, else LCM's default).
+  const LcmSettings& settings() const noexcept { return settings_; }
 
   struct Impl;  // the LCM side (internal)
 

@@ -2,8 +2,10 @@
 // Authentication of the `lcm` driver's messages (MASTER_STATE in,
 // MASTER_FORCE out), supplied by the program that builds the registry:
 // master_devices depends on no crypto and no bridge; haptic-server plugs in
-// the bridge's link key (docs/bridge.md, "Authentication"). Every call comes
-// from the device's LCM thread.
+// the bridge's link key (docs/bridge.md, "Authentication"). verify() is
+// called from the device's LCM thread only; sign() also from the program's
+// main thread (haptic-server prepares its crash MASTER_FORCE with it), so an
+// implementation's sign() must be thread-safe.
 
 #include <cstddef>
 #include <cstdint>
