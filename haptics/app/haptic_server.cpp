@@ -7,7 +7,9 @@
 //
 // Exit paths: any catchable terminating signal (bridge/stop_signals.hpp),
 // --duration, or any error after the device is open: each writes zero
-// torque and disables the device before exiting.
+// torque and disables the device before exiting. The core-dumping signals
+// (SIGSEGV, SIGABRT, ...) go to a handler that sends prepared zero-torque
+// and hold messages first (crash_outputs.hpp, bridge/crash_stop.hpp).
 
 #include <pthread.h>
 #include <signal.h>
