@@ -13,6 +13,11 @@
 //       CrashStop holds the datagram "crashed" for CHANNEL; after 50 ms the
 //       process sends itself SIGNAL (core dumps off) and must die of it with
 //       "crashed" the last message on CHANNEL.
+//   bridge_test_peer crash-node NODE SIGNAL
+//       the same for a device node (a FIFO standing in for hidraw): a thread
+//       writes "torque!!" to it every 200 us through its own descriptor; the
+//       CrashStop writes "zeroed!!" through a second one.
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -119,6 +124,33 @@ int crash_mode(const std::string& url, const std::string& channel, int sig) {
   return 0;  // the signal did not end the process: the test fails on this
 }
 
+int crash_node_mode(const std::string& node, int sig) {
+  const rlimit no_core{0, 0};
+  setrlimit(RLIMIT_CORE, &no_core);
+  const int busy = open(node.c_str(), O_WRONLY | O_CLOEXEC);  // the driver's own descriptor
+  if (busy < 0) return 2;
+  std::atomic<bool> stop{false};
+  std::thread torque([&] {
+    static constexpr char kTorque[] = "torque!!";
+    while (!stop.load()) {
+      if (write(busy, kTorque, 8) != 8) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  });
+  tsmh::bridge::CrashStop crash;
+  const std::size_t out = crash.add_node(node);
+  static constexpr std::uint8_t kZeroed[] = {'z', 'e', 'r', 'o', 'e', 'd', '!', '!'};
+  if (!crash.set(out, kZeroed, sizeof kZeroed)) return 2;
+  crash.find_senders({}, {node});
+  crash.install();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  kill(getpid(), sig);
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  stop = true;
+  torque.join();
+  return 0;  // the signal did not end the process: the test fails on this
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -128,9 +160,10 @@ int main(int argc, char** argv) {
     return publish_mode(argv[2], argv[3], std::atol(argv[4]), std::atof(argv[5]),
                         argc == 7 && std::string(argv[6]) == "truth", mode == "publish-direct");
   if (mode == "crash" && argc == 5) return crash_mode(argv[2], argv[3], std::atoi(argv[4]));
+  if (mode == "crash-node" && argc == 4) return crash_node_mode(argv[2], std::atoi(argv[3]));
   std::fprintf(stderr,
                "usage: %s open URL | publish[-direct] URL PREFIX COUNT RATE_HZ [truth] | crash URL "
-               "CHANNEL SIGNAL\n",
+               "CHANNEL SIGNAL | crash-node NODE SIGNAL\n",
                argv[0]);
   return 2;
 }

@@ -4,9 +4,12 @@
 // signal must die of that signal with the prepared message the last one on
 // its channel, although another thread of it kept publishing until then.
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -139,6 +142,59 @@ TEST(CrashStop, EveryCoreDumpingSignalSendsThePreparedDatagramLastThenEndsThePro
     ASSERT_GE(messages.size(), 2u) << "the peer's alive thread was never heard";
     EXPECT_EQ(messages.front(), "alive");
     EXPECT_EQ(messages.back(), "crashed") << messages.size() << " messages";
+  }
+}
+
+// The same for a device node (the hid console's hidraw node in haptic-server;
+// a FIFO here, where no console is plugged in): the prepared report, written
+// through the CrashStop's own descriptor, is the last record on the node,
+// after the "driver's" records, and the process dies of the signal. (The
+// driver's descriptor is silenced too, but its 200 us writes rarely fall in
+// the microseconds between the report and the end: this test cannot tell.)
+TEST(CrashStop, ThePreparedReportIsTheLastOneWrittenToTheDeviceNode) {
+  for (int sig : {SIGSEGV, SIGABRT}) {
+    SCOPED_TRACE(signal_name(sig));
+    const std::string fifo =
+        test::cat("/tmp/tsmh-crash-node-", std::to_string(getpid()), "-", std::to_string(sig));
+    unlink(fifo.c_str());
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    const int reader = open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+    ASSERT_GE(reader, 0);
+    const std::vector<std::string> argv = {TSMH_BRIDGE_PEER, "crash-node", fifo,
+                                           std::to_string(sig)};
+    const pid_t pid = fork();
+    if (pid == 0) {
+      std::vector<char*> args;
+      for (const auto& a : argv)
+        args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      execv(args[0], args.data());
+      _exit(127);
+    }
+    ASSERT_GT(pid, 0);
+    // Drain the FIFO until the peer has ended and nothing more comes.
+    std::string bytes;
+    int status = 0;
+    bool ended = false;
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (std::chrono::steady_clock::now() < deadline) {
+      pollfd p{reader, POLLIN, 0};
+      poll(&p, 1, 5);
+      char buf[4096];
+      const ssize_t n = read(reader, buf, sizeof buf);
+      if (n > 0) bytes.append(buf, static_cast<std::size_t>(n));
+      if (!ended && waitpid(pid, &status, WNOHANG) == pid) ended = true;
+      if (ended && n <= 0) break;
+    }
+    close(reader);
+    unlink(fifo.c_str());
+    ASSERT_TRUE(ended);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "exit code " << WEXITSTATUS(status);
+    EXPECT_EQ(WTERMSIG(status), sig);
+    ASSERT_GE(bytes.size(), 16u) << "the peer's torque thread was never heard";
+    ASSERT_EQ(bytes.size() % 8, 0u);  // writes of 8 bytes into a FIFO are atomic
+    EXPECT_EQ(bytes.substr(0, 8), "torque!!");
+    EXPECT_EQ(bytes.substr(bytes.size() - 8), "zeroed!!") << bytes.size() / 8 << " records";
   }
 }
 
