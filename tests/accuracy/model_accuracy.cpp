@@ -13,9 +13,10 @@
 //
 //   build/bin/model_accuracy [--sources world,paper,slave] [--seeds N]
 //       [--first-seed S | --seed-list a,b,c | --sealed FILE] [--models a,b]
-//       [--params FILE]... [--kinds k,...] [--markdown FILE] [--check]
+//       [--params FILE]... [--kinds k,...] [--jobs N] [--markdown FILE] [--check]
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +26,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "estimator/fit_workflow.hpp"
@@ -297,6 +299,7 @@ int main(int argc, char** argv) {
   std::uint64_t first_seed = 1;
   double duration = 40.0;
   bool do_check = false;
+  int jobs = 1;
   app.add_option("--sources", sources_arg, "world, paper, slave (comma-separated)");
   app.add_option("--seeds", seeds, "Sets (seeds) per source")->check(CLI::Range(1, 1000));
   app.add_option("--first-seed", first_seed, "First seed (development seeds: 1-100)");
@@ -311,6 +314,8 @@ int main(int argc, char** argv) {
                  "Only these motion kinds / scenarios (default: each source's all)");
   app.add_option("--duration", duration, "Seconds per recording")->check(CLI::Range(5.0, 600.0));
   app.add_option("--markdown", md_path, "Write the tables as markdown to this file");
+  app.add_option("--jobs", jobs, "Sets run at once (threads; the fits use every core anyway)")
+      ->check(CLI::Range(1, 64));
   app.add_flag("--check", do_check, "Assert the structural checks (exit 1 when one fails)");
   CLI11_PARSE(app, argc, argv);
 
@@ -353,17 +358,51 @@ int main(int argc, char** argv) {
   try {
     for (const auto& m : models)
       estimator::load_model(m);  // a bad name or file fails before any work
+    // Every (source, seed) set is a job; each fills its own results, merged
+    // in order afterwards, so the tables do not depend on --jobs.
+    struct Job {
+      std::string source;
+      std::vector<std::string> kinds;
+      std::size_t index;
+      Results results;
+      std::string error;
+    };
+    std::vector<Job> jobs_list;
     for (const auto& source : sources) {
       std::vector<std::string> kinds;
       for (const auto& k : source_kinds(source))
         if (kinds_filter.empty() ||
             std::find(kinds_filter.begin(), kinds_filter.end(), k) != kinds_filter.end())
           kinds.push_back(k);
-      for (std::size_t i = 0; i < seed_values.size(); ++i) {
-        const Set set = make_set(source, seed_values[i], kinds, duration);
-        run_set(set, models,
-                is_sealed ? "#" + std::to_string(i + 1) : std::to_string(seed_values[i]), results);
+      for (std::size_t i = 0; i < seed_values.size(); ++i)
+        jobs_list.push_back({source, kinds, i, {}, {}});
+    }
+    std::atomic<std::size_t> next{0};
+    const auto worker = [&] {
+      for (std::size_t j = next++; j < jobs_list.size(); j = next++) {
+        Job& job = jobs_list[j];
+        try {
+          const Set set = make_set(job.source, seed_values[job.index], job.kinds, duration);
+          run_set(set, models,
+                  is_sealed ? "#" + std::to_string(job.index + 1)
+                            : std::to_string(seed_values[job.index]),
+                  job.results);
+        } catch (const std::exception& e) {
+          job.error = e.what();
+        }
       }
+    };
+    std::vector<std::thread> pool;
+    for (int k = 1; k < jobs; ++k)
+      pool.emplace_back(worker);
+    worker();
+    for (auto& t : pool)
+      t.join();
+    for (auto& job : jobs_list) {
+      if (!job.error.empty()) throw std::runtime_error(job.error);
+      results.fits.insert(results.fits.end(), job.results.fits.begin(), job.results.fits.end());
+      results.online.insert(results.online.end(), job.results.online.begin(),
+                            job.results.online.end());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "model_accuracy: %s\n", e.what());
