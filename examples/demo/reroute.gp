@@ -1,4 +1,4 @@
-# The re-route demo's plot (issue 17), from haptic-server's trace and the
+# The re-route demo's plot, from haptic-server's trace and the
 # phases reroute_report.py found. Called by scripts/demo --reroute:
 #   gnuplot -e "trace='DIR/trace.csv'; phases='DIR/reroute-phases.dat'; outdir='DIR'" examples/demo/reroute.gp
 set datafile separator ","
@@ -14,6 +14,8 @@ t_alarm = STATS_min
 stats phases using 3 nooutput
 t_applied = STATS_min
 set datafile separator ","
+stats trace using 1 nooutput
+set xrange [STATS_min:STATS_max]
 set output sprintf("%s/reroute.png", outdir)
 set multiplot layout 2,1 title "Re-routing the sheaths (+50 % wrap), the drift alarm and the recalibration (joint 0)"
 set arrow 1 from t_reroute, graph 0 to t_reroute, graph 1 nohead lc rgb "black" dt 2

@@ -32,7 +32,7 @@ import os
 import sys
 
 trace_path, report_path = sys.argv[1], sys.argv[2]
-reroute_at, wrap, ramp = float(sys.argv[3]), sys.argv[4], float(sys.argv[5])
+reroute_at, wrap, ramp = float(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
 control_path = sys.argv[6] if len(sys.argv) > 6 and os.path.exists(sys.argv[6]) else None
 refit_path = sys.argv[7] if len(sys.argv) > 7 and os.path.exists(sys.argv[7]) else None
 
@@ -175,7 +175,10 @@ def fmt(p):
         return "no data"
     contact = f"{p['contact_rmse_nm']:.4f} N m" if p["contact_rmse_nm"] is not None else "none"
     return f"rmse {p['rmse_nm']:.4f} N m ({p['samples']} ticks), in contact {contact}"
-print(f"   re-route at {t_reroute:.1f} s (wrap {wrap} rad); drift alarm "
+# Every time printed is on the server's clock (s since haptic-server
+# started; the slave started about half a second before it).
+print(f"   times in s since haptic-server started; re-route at {t_reroute:.1f} s (the slave's "
+      f"{reroute_at:g} s; joint 0's sheath wrap now {wrap:g} rad); drift alarm "
       + (f"at {alarms[0]['t_s']:.1f} s ({alarms[0]['t_s'] - t_reroute:.1f} s after)" if alarms else "never")
       + "; recalibration " + (f"applied at {t_applied:.1f} s, scale {scale:.3f}" if applied
                               else "not applied " + str([e['reason'] for e in refused])))

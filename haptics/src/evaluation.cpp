@@ -81,6 +81,43 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
   return fit_line(x, y).slope;
 }
 
+namespace {
+
+struct PhaseSamples {
+  std::vector<double> qm, tm, xs, ts;
+  void append(const PhaseSamples& o) {
+    qm.insert(qm.end(), o.qm.begin(), o.qm.end());
+    tm.insert(tm.end(), o.tm.begin(), o.tm.end());
+    xs.insert(xs.end(), o.xs.begin(), o.xs.end());
+    ts.insert(ts.end(), o.ts.begin(), o.ts.end());
+  }
+};
+
+Stiffness stiffness_of(const PhaseSamples& p, double gain, double position_scale) {
+  Stiffness s;
+  s.samples = p.qm.size();
+  s.perceived = std::fabs(slope(p.qm, p.tm)) / gain;
+  s.truth = std::fabs(slope(p.xs, p.ts));
+  s.ideal = std::fabs(slope(p.qm, p.ts)) / position_scale;
+  s.reached =
+      s.samples >= kMinStiffnessSamples && std::isfinite(s.perceived) && std::isfinite(s.truth);
+  return s;
+}
+
+// Marks a phase not reached: its figures are not printed as if they were.
+void not_reached(Stiffness& s, std::string why) {
+  s.reached = false;
+  s.why = std::move(why);
+  s.perceived = s.truth = s.ideal = std::nan("");
+}
+
+std::string too_few(std::size_t n) {
+  return "only " + std::to_string(n) + " contact ticks in this phase (at least " +
+         std::to_string(kMinStiffnessSamples) + " needed for a slope)";
+}
+
+}  // namespace
+
 Discrimination discriminate(const Trace& trace, const ServerConfig& config, int joint) {
   Discrimination d;
   d.joint = joint;
@@ -91,25 +128,38 @@ Discrimination discriminate(const Trace& trace, const ServerConfig& config, int 
     d.force_sign = config.loop.force[j].sign;
     d.position_scale = config.loop.position[j].scale;
     const double gain = d.force_scale * d.position_scale;
-    std::vector<double> qm[2], tm[2], xs[2], ts[2];
+    PhaseSamples phase[2];
     for (std::size_t i = 0; i < trace.size(); ++i) {
       const auto& row = trace[i];
       if (!enabled_with_truth(row, j)) continue;
       const auto& q = row.joints[j];
       if (!(q.indentation > 0.0) || !std::isfinite(q.true_x_out)) continue;
+      d.deepest_m = std::max(d.deepest_m, q.indentation);
       const int cls = std::isfinite(d.boundary_m) && q.indentation > d.boundary_m ? 1 : 0;
-      qm[cls].push_back(q.master_q);
-      tm[cls].push_back(q.torque_cmd);
-      xs[cls].push_back(q.true_x_out);
-      ts[cls].push_back(q.true_tau_out);
+      phase[cls].qm.push_back(q.master_q);
+      phase[cls].tm.push_back(q.torque_cmd);
+      phase[cls].xs.push_back(q.true_x_out);
+      phase[cls].ts.push_back(q.true_tau_out);
     }
-    Stiffness* out[2] = {&d.soft, &d.hard};
-    for (int c = 0; c < 2; ++c) {
-      out[c]->samples = qm[c].size();
-      out[c]->perceived = std::fabs(slope(qm[c], tm[c])) / gain;
-      out[c]->truth = std::fabs(slope(xs[c], ts[c]));
-      out[c]->ideal = std::fabs(slope(qm[c], ts[c])) / d.position_scale;
+    d.soft = stiffness_of(phase[0], gain, d.position_scale);
+    d.hard = stiffness_of(phase[1], gain, d.position_scale);
+    // The split always finds a "best" cut; it is the nodule's edge only when
+    // the true slope beyond it is clearly steeper. Otherwise every contact
+    // tick is the soft layer's, and the nodule was not reached.
+    if (!(d.hard.truth > kNoduleSlopeRatio * d.soft.truth) || d.hard.samples < 50) {
+      phase[0].append(phase[1]);
+      d.soft = stiffness_of(phase[0], gain, d.position_scale);
+      d.hard = Stiffness{};
+      char b[160];
+      std::snprintf(b, sizeof b,
+                    "no stiffer layer under the soft one in this run (deepest indentation %.1f mm)",
+                    d.deepest_m * 1e3);
+      not_reached(d.hard, b);
+      d.boundary_m = std::nan("");
+    } else if (!d.hard.reached) {
+      not_reached(d.hard, too_few(d.hard.samples));
     }
+    if (!d.soft.reached) not_reached(d.soft, too_few(d.soft.samples));
   }
   return d;
 }
@@ -220,6 +270,9 @@ std::string report_to_json(const EvaluationReport& r) {
                 {"hard_true", num(d.hard.truth)},
                 {"soft_samples", d.soft.samples},
                 {"hard_samples", d.hard.samples},
+                {"soft_reached", d.soft.reached},
+                {"hard_reached", d.hard.reached},
+                {"deepest_m", num(d.deepest_m)},
                 {"soft_ideal", num(d.soft.ideal)},
                 {"hard_ideal", num(d.hard.ideal)},
                 {"force_scale", num(d.force_scale)},
@@ -246,6 +299,50 @@ void write_report(const EvaluationReport& report, const std::string& path) {
   estimator::write_text_atomically(path, report_to_json(report));
 }
 
+std::string format_stiffness(const Discrimination& d, double rate_hz) {
+  // How far each felt stiffness is from the truth, in %: what a surgeon
+  // would misjudge (the same for the perfect estimate, for scale).
+  const auto off = [](double felt, double truth) {
+    char b[48];
+    if (std::isfinite(felt) && std::isfinite(truth) && truth > 0)
+      std::snprintf(b, sizeof b, "%+.0f %%", 100.0 * (felt - truth) / truth);
+    else
+      std::snprintf(b, sizeof b, "n/a");
+    return std::string(b);
+  };
+  const double hz = rate_hz > 0.0 ? rate_hz : 1000.0;
+  std::string s;
+  char line[640];
+  std::snprintf(line, sizeof line,
+                "stiffness felt pressing joint %d, in N m/rad of the slave joint (the master's "
+                "torque / force scale %g, per master rad x position scale %g), against the "
+                "tissue's true stiffness:\n",
+                d.joint, d.force_scale, d.position_scale);
+  s += line;
+  const auto row = [&](const char* name, const Stiffness& st) {
+    if (!st.reached) {
+      std::snprintf(line, sizeof line, "  %-11s not reached: %s\n", name, st.why.c_str());
+    } else {
+      std::snprintf(line, sizeof line,
+                    "  %-11s felt %.3f, true %.3f: %s; a perfect estimate %.3f (%s); from %zu "
+                    "contact ticks (%.1f s)\n",
+                    name, st.perceived, st.truth, off(st.perceived, st.truth).c_str(), st.ideal,
+                    off(st.ideal, st.truth).c_str(), st.samples,
+                    static_cast<double>(st.samples) / hz);
+    }
+    s += line;
+  };
+  row("soft layer", d.soft);
+  row("nodule", d.hard);
+  if (d.soft.reached || d.hard.reached)
+    s += "  (a perfect estimate: the true distal torque rendered against the master angle, what "
+         "an exact estimate would feel like. It falls below the truth where the slave's joint "
+         "lags the master under load (tendon stretch, tracking error: the hand travels further "
+         "than the tool). A felt value nearer the truth than it is not a better estimate: an "
+         "error of the estimate, e.g. torque overshoot while pressing, offsets that lag.)\n";
+  return s;
+}
+
 std::string format_report(const EvaluationReport& r) {
   std::string s;
   char line[512];
@@ -267,26 +364,7 @@ std::string format_report(const EvaluationReport& r) {
   }
   const auto& d = r.discrimination;
   if (d.joint >= 0) {
-    // How far each felt stiffness is from the truth, in %: what a surgeon
-    // would misjudge (the same for the perfect estimate, for scale).
-    const auto off = [](double felt, double truth) {
-      char b[48];
-      if (std::isfinite(felt) && std::isfinite(truth) && truth > 0)
-        std::snprintf(b, sizeof b, "%+.0f %%", 100.0 * (felt - truth) / truth);
-      else
-        std::snprintf(b, sizeof b, "n/a");
-      return std::string(b);
-    };
-    std::snprintf(line, sizeof line,
-                  "stiffness felt (joint %d, N m/rad, slave joint space; vs the truth):\n"
-                  "  soft   %.3f  true %.3f: %s   (a perfect estimate: %.3f, %s)\n"
-                  "  nodule %.3f  true %.3f: %s   (a perfect estimate: %.3f, %s)\n",
-                  d.joint, d.soft.perceived, d.soft.truth,
-                  off(d.soft.perceived, d.soft.truth).c_str(), d.soft.ideal,
-                  off(d.soft.ideal, d.soft.truth).c_str(), d.hard.perceived, d.hard.truth,
-                  off(d.hard.perceived, d.hard.truth).c_str(), d.hard.ideal,
-                  off(d.hard.ideal, d.hard.truth).c_str());
-    s += line;
+    s += format_stiffness(d, r.nominal_rate_hz);
   } else {
     s += "stiffness felt: no tissue contact in this run\n";
   }

@@ -58,6 +58,8 @@ with tempfile.TemporaryDirectory() as d:
     r = json.load(open(report))["reroute"]
     near = lambda a, b: a is not None and abs(a - b) <= 1e-9 * max(1.0, abs(b))
     check("re-route found at 8 s", near(r["at_s"], 8.0))
+    # Documented as a number (rad), as every other figure of the report.
+    check("wrap_rad is a number", isinstance(r["wrap_rad"], float) and near(r["wrap_rad"], 5.1))
     check("alarm 2 s after", near(r["drift_alarm_delay_s"], 2.0))
     check("settled after the longer ramp", near(r["scale_settled_s"], 21.0))
     check("before rmse", near(r["phases"]["before"]["rmse_nm"], 0.001))

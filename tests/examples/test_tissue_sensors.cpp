@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "virtual_tissue_slave/sensors.hpp"
 #include "virtual_tissue_slave/tissue.hpp"
@@ -115,4 +116,14 @@ TEST(Sensors, NoJointEncoderReadsNaNAndSeedsReproduce) {
   EXPECT_EQ(ma.T1, mb.T1);
   p.load_cell_noise_n = -1.0;
   EXPECT_THROW(vts::Sensors(p, 1), std::invalid_argument);
+}
+
+// The log line names what each angle is: a bare "nodule at 0.200 rad" was
+// read as the nodule's place, though 0.200 rad is the tissue surface.
+TEST(Tissue, DescriptionNamesTheSurfaceAndTheInclusion) {
+  const std::string d = vts::tissue_description(vts::tissue_preset("nodule"));
+  EXPECT_NE(d.find("surface at joint angle 0.300 rad"), std::string::npos) << d;
+  EXPECT_NE(d.find("from joint angle 0.450 rad"), std::string::npos) << d;
+  EXPECT_NE(d.find("1.500 N m/rad"), std::string::npos) << d;
+  EXPECT_EQ(vts::tissue_description(vts::tissue_preset("none")).find("rad"), std::string::npos);
 }

@@ -234,6 +234,70 @@ TEST(Evaluation, FindsTheNoduleEdgeAndBothStiffnesses) {
   EXPECT_NEAR(d.hard.ideal, d.hard.truth, 1e-9);
 }
 
+// Presses that stay in the soft layer (one slope throughout): the split
+// still finds a "best" cut, and the deeper half used to be printed as the
+// nodule ("nodule 0.160 true 0.200: -20 %"). It is not reached.
+Trace soft_presses(int ticks) {
+  Trace trace(1, static_cast<std::size_t>(ticks));
+  for (int i = 0; i < ticks; ++i) {
+    const double theta = 0.2 + 0.12 * (i % 1000) / 1000.0;  // 3.6 mm deep at most
+    const double ind = (theta - 0.2) * 0.03;
+    TraceRow row;
+    row.state = static_cast<std::int32_t>(LoopState::kEnabled);
+    auto& q = row.joints[0];
+    q.true_tau_out = 222.0 * ind * 0.03;
+    q.true_x_out = theta;
+    q.master_q = theta;
+    q.torque_cmd = 0.6 * q.true_tau_out;
+    q.indentation = ind;
+    q.contact_force = 222.0 * ind;
+    trace.append(row);
+  }
+  return trace;
+}
+
+TEST(Evaluation, ANoduleNeverReachedIsSaidSoNotMeasured) {
+  ServerConfig config = parse_server_config(
+      "device: {driver: sim}\njoints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  EvaluationReport r;
+  r.nominal_rate_hz = 1000;
+  r.discrimination = discriminate(soft_presses(4000), config, 0);
+  const std::string text = format_report(r);
+  EXPECT_TRUE(std::isnan(r.discrimination.hard.perceived)) << text;
+  EXPECT_NE(text.find("nodule      not reached"), std::string::npos) << text;
+  // Every contact tick is the soft layer's then, at its true slope.
+  EXPECT_EQ(r.discrimination.soft.samples, 4000u - 4u);
+  EXPECT_NEAR(r.discrimination.soft.perceived, 0.2, 0.01);
+  EXPECT_NE(report_to_json(r).find("\"hard_stiffness\": null"), std::string::npos);
+}
+
+// A slope from part of one press (133 ticks gave +75 %) is not printed.
+TEST(Evaluation, AStiffnessFromTooFewTicksIsNotPrinted) {
+  ServerConfig config = parse_server_config(
+      "device: {driver: sim}\njoints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  EvaluationReport r;
+  r.nominal_rate_hz = 1000;
+  r.discrimination = discriminate(soft_presses(140), config, 0);
+  const std::string text = format_report(r);
+  EXPECT_TRUE(std::isnan(r.discrimination.soft.perceived)) << text;
+  EXPECT_NE(text.find("soft layer  not reached: only 139 contact ticks"), std::string::npos)
+      << text;
+}
+
+// The "perfect estimate" figure says what it is and why a felt value can
+// come out nearer the truth than it.
+TEST(Evaluation, ThePerfectEstimateIsExplained) {
+  ServerConfig config = parse_server_config(
+      "device: {driver: sim}\njoints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  EvaluationReport r;
+  r.discrimination = discriminate(soft_presses(4000), config, 0);
+  const std::string text = format_report(r);
+  EXPECT_NE(text.find("a perfect estimate: the true distal torque rendered against the master"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("not a better estimate"), std::string::npos) << text;
+}
+
 TEST(Evaluation, PhantomTorqueInFreeMotion) {
   // Half the ticks in free motion (true torque 0) rendering 0.01 N m where
   // naive feedback would render 0.6 x 0.05; half in contact.

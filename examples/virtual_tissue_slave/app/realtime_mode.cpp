@@ -186,9 +186,9 @@ int run_realtime_mode(const CliOptions& o) {
   tx.start();
   std::fprintf(stderr,
                "virtual-slave: 1 kHz on %s, channels %sMASTER_COMMAND -> %sSLAVE_STATE, "
-               "%sSLAVE_TRUTH; tissue %s at %.3f rad\n",
+               "%sSLAVE_TRUTH; %s\n",
                config.url.c_str(), o.prefix.c_str(), o.prefix.c_str(), o.prefix.c_str(),
-               setup.tissue.name.c_str(), setup.tissue.surface_rad);
+               tissue_description(setup.tissue).c_str());
   pin_to_cpu(o.cpu);
 
   // Everything the loop touches exists before it starts: no allocation,

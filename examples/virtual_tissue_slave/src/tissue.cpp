@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace tsmh::virtual_tissue_slave {
@@ -136,6 +137,22 @@ TissueTruth tissue_truth(const TissueParams& t) {
     truth.inclusion_depth_rad = t.inclusion_depth_m / t.lever_m;
   }
   return truth;
+}
+
+std::string tissue_description(const TissueParams& t) {
+  if (!t.present) return "tissue " + t.name + ": none at the tool (free motion)";
+  const TissueTruth truth = tissue_truth(t);
+  char b[320];
+  int n = std::snprintf(b, sizeof b,
+                        "tissue %s: surface at joint angle %.3f rad, outer layer %.3f N m/rad",
+                        t.name.c_str(), t.surface_rad, truth.outer_nm_per_rad);
+  if (truth.inclusion_depth_rad > 0.0 && n > 0 && static_cast<std::size_t>(n) < sizeof b)
+    std::snprintf(b + n, sizeof b - static_cast<std::size_t>(n),
+                  ", inclusion (nodule) from joint angle %.3f rad (%.3f rad past the surface), "
+                  "%.3f N m/rad",
+                  t.surface_rad + truth.inclusion_depth_rad, truth.inclusion_depth_rad,
+                  truth.inclusion_nm_per_rad);
+  return b;
 }
 
 }  // namespace tsmh::virtual_tissue_slave

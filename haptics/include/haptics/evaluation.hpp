@@ -46,14 +46,27 @@ struct Stiffness {
   /// tracking under load).
   double ideal = 0.0;
   std::size_t samples = 0;
+  /// False: too few samples of this phase for a slope, or (the nodule) the
+  /// press never reached a stiffer layer; the figures are then NaN and
+  /// `why` says which.
+  bool reached = false;
+  std::string why;
 };
+
+/// Fewest contact ticks a stiffness is computed from (0.5 s at 1 kHz): below
+/// it a slope rests on part of one press (133 ticks gave +75 %).
+inline constexpr std::size_t kMinStiffnessSamples = 500;
+/// The deeper phase counts as the nodule only when its true slope is this
+/// many times the soft layer's: otherwise the split fell inside one layer.
+inline constexpr double kNoduleSlopeRatio = 2.0;
 
 struct Discrimination {
   int joint = -1;               ///< the joint that pressed the tissue (-1: no contact seen)
   double force_scale = 1.0;     ///< of that joint: master N m per slave N m
   double force_sign = 1.0;      ///< of that joint (the master renders -sign x scale x tau)
   double position_scale = 1.0;  ///< of that joint: slave rad per master rad
-  double boundary_m = 0.0;      ///< indentation separating soft layer from nodule
+  double boundary_m = 0.0;  ///< indentation separating soft layer from nodule (NaN: not reached)
+  double deepest_m = 0.0;   ///< deepest indentation of the pressing joint, m
   Stiffness soft, hard;
 };
 
@@ -99,6 +112,8 @@ double slope(const std::vector<double>& x, const std::vector<double>& y);
 
 void write_report(const EvaluationReport& report, const std::string& path);  ///< JSON, atomic
 std::string format_report(const EvaluationReport& report);                   ///< human summary
+/// The stiffness lines of the summary; a phase not reached says why, never a number.
+std::string format_stiffness(const Discrimination& d, double rate_hz);
 std::string report_to_json(const EvaluationReport& report);
 
 }  // namespace tsmh::haptics

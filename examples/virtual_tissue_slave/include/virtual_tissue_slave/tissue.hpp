@@ -66,6 +66,10 @@ std::string_view contact_law_name(ContactLaw law);
 /// Throws std::invalid_argument naming the bad field.
 void validate(const TissueParams& tissue);
 TissueTruth tissue_truth(const TissueParams& tissue);
+/// One line for logs: what the angles and slopes are ("tissue nodule: surface
+/// at joint angle 0.200 rad, ..."), so a bare "0.200 rad" is never read as
+/// the nodule's place.
+std::string tissue_description(const TissueParams& tissue);
 
 /// Elastic force at indentation delta (>= 0), N.
 double elastic_force(const TissueParams& tissue, double delta_m);
