@@ -16,6 +16,7 @@
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
 #include "free_motion_options.hpp"
+#include "master_scale_options.hpp"
 #include "output_checks.hpp"
 #include "progress_line.hpp"
 
@@ -35,6 +36,7 @@ struct FitCliOptions {
   std::string derivatives = "auto";
   std::string method = "lm";
   FreeMotionCliOptions free_motion;
+  MasterScaleCliOptions master;
 };
 
 std::string progress_text(const estimator::FitProgress& p) {
@@ -54,6 +56,7 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
   const auto& rec = loaded.recording;
   const auto initial = estimator::load_model(o.model);
+  const auto master = master_scale(o.master);
 
   estimator::FitWorkflowOptions wo;
   wo.fit.seed = o.seed;
@@ -62,6 +65,7 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   wo.split.block_s = o.block_s;
   wo.fit.method = o.method;
   wo.derivatives = estimator::derivatives_from_name(o.derivatives);
+  wo.master = master;
   ProgressLine line("tsm fit");
   wo.fit.progress = [&](const estimator::FitProgress& p) { line.update(progress_text(p)); };
   estimator::FitRun run = estimator::run_fit(rec, *initial, o.model, wo);
@@ -95,6 +99,7 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   for (const auto& n : run.notes)
     std::cerr << "tsm fit: note: " << n << "\n";
   std::cerr << "tsm fit: verdict " << run.verdict.grade << ": " << run.verdict.reason << "\n";
+  std::cerr << "tsm fit: for haptics: " << run.verdict.meaning << "\n";
   std::fprintf(stderr,
                "tsm fit: validation RMSE %.4g N, p2p %.4g N, fit %.1f %% (%s); %ld model runs in "
                "%.1f s -> %s%s%s\n",
@@ -142,6 +147,7 @@ void add_fit_command(CLI::App& app, Context& ctx) {
                   "(MLSL + BOBYQA)")
       ->check(CLI::IsMember({"lm", "nlopt"}));
   add_free_motion_options(*cmd, opts->free_motion);
+  add_master_scale_options(*cmd, opts->master);
   add_lcm_log_options(*cmd, ctx.lcm_log);
   cmd->callback([opts, &ctx] { run_fit_command(*opts, ctx); });
 }

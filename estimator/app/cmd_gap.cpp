@@ -6,15 +6,18 @@
 // params.yaml (the final model) and plots; on any error nothing is written.
 
 #include <chrono>
+#include <cmath>
 #include <iostream>
 
 #include "commands.hpp"
 #include "estimator/atomic_file.hpp"
+#include "estimator/fit_workflow.hpp"
 #include "estimator/model_gap.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
 #include "free_motion_options.hpp"
+#include "master_scale_options.hpp"
 #include "output_checks.hpp"
 #include "progress_line.hpp"
 
@@ -33,6 +36,7 @@ struct GapCliOptions {
   int threads = 0;
   std::string derivatives = "auto";
   FreeMotionCliOptions free_motion;
+  MasterScaleCliOptions master;
 };
 
 void run_gap_command(const GapCliOptions& o, const Context& ctx) {
@@ -41,6 +45,7 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
   const auto& rec = loaded.recording;
   const auto base = estimator::load_model(o.base);
+  const auto master = master_scale(o.master);
   estimator::StagedDirectory dir(o.output);  // fails early on an unusable path
 
   estimator::GapOptions go;
@@ -79,8 +84,22 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
     plots.insert(plots.end(), r.files.begin(), r.files.end());
   }
   // The shape of each effect found: the friction it adds against its variable.
+  // A shape flat at zero (an effect that acts through the friction's memory,
+  // not as a function of one variable) is not drawn: a flat line at zero
+  // reads as "this effect does nothing"; the summary says why it is absent.
+  std::vector<std::string> not_plotted;
   for (std::size_t k = 0; k < g.effects.size() && plot_error.empty(); ++k) {
     const auto& e = g.effects[k];
+    if (estimator::shape_is_flat(e.shape)) {
+      not_plotted.push_back(e.name +
+                            ": no shape plot, the friction it adds is zero at every one "
+                            "of the " +
+                            std::to_string(e.shape.size()) + " points against " + e.variable +
+                            " (it acts through the friction's state, e.g. its memory of past "
+                            "motion, not as a function of " +
+                            e.variable + ")");
+      continue;
+    }
     const std::string unit = e.variable == "x"      ? "x (rad)"
                              : e.variable == "load" ? "load |tau_in|/R (N)"
                              : e.variable == "t"    ? "t (s)"
@@ -101,12 +120,27 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   header.push_back("effects added: " + (found.empty() ? std::string("none") : found));
   estimator::write_text_atomically(dir.file("params.yaml"),
                                    estimator::model_to_yaml(*g.final_model, header));
-  const std::string summary = estimator::gap_summary_text(g, go);
+  // What the gap left means in the hand (the verdict layer of tsm fit).
+  estimator::FitVerdict meaning;
+  estimator::explain_for_haptics(meaning, g.gap_final.rmse, g.data.radius_m,
+                                 master ? &*master : nullptr);
+  std::string summary =
+      estimator::gap_summary_text(g, go) + "For haptics, the gap after: " + meaning.meaning + ".\n";
+  for (const auto& n : not_plotted)
+    summary += "Plots: " + n + ".\n";
   estimator::write_text_atomically(dir.file("summary.txt"), summary);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   auto report = estimator::gap_report_json(g, go, plots, plot_error, seconds);
   if (loaded.free_motion) report["free_motion"] = free_motion_json(*loaded.free_motion);
+  const auto num_or_null = [](double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+  };
+  report["plots_not_written"] = not_plotted;
+  report["haptics"] = {{"meaning", meaning.meaning},
+                       {"tip_rmse_nm", num_or_null(meaning.tip_rmse_nm)},
+                       {"master_rmse_nm", num_or_null(meaning.master_rmse_nm)},
+                       {"master_fraction", num_or_null(meaning.master_fraction)}};
   estimator::write_text_atomically(dir.file("report.json"), report.dump(2) + "\n");
   dir.commit();
 
@@ -152,6 +186,7 @@ void add_gap_command(CLI::App& app, Context& ctx) {
                   "(zero-phase smoother of x_in), deployed (the online differentiator)")
       ->check(CLI::IsMember({"auto", "offline", "deployed"}));
   add_free_motion_options(*cmd, opts->free_motion);
+  add_master_scale_options(*cmd, opts->master);
   add_lcm_log_options(*cmd, ctx.lcm_log);
   cmd->callback([opts, &ctx] { run_gap_command(*opts, ctx); });
 }

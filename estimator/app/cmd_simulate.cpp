@@ -2,12 +2,15 @@
 // Runs a friction model over recorded (or synthetic) motion: OUT has t,F, and
 // tau_out_est when the input has tau_in (or T1, T3) and a radius is known.
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <map>
 
 #include "commands.hpp"
 #include "estimator/distal_estimator.hpp"
+#include "estimator/fit_metrics.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/simulate.hpp"
 #include "output_checks.hpp"
@@ -47,6 +50,25 @@ std::vector<double> causal_friction(const estimator::FrictionModel& model,
   return f;
 }
 
+// The estimate against the recording's measured tau_out, beside the naive
+// feedback (tau_in itself) as the reference: one number alone says nothing.
+std::string simulate_comparison(const estimator::Recording& rec, const std::vector<double>& est) {
+  const auto all = [&](std::size_t i) {
+    return std::isfinite(rec.tau_out[i]) && std::isfinite(est[i]) && std::isfinite(rec.tau_in[i]);
+  };
+  const auto e = estimator::error_metrics(rec.tau_out, est, all);
+  const auto naive = estimator::error_metrics(rec.tau_out, rec.tau_in, all);
+  char b[512];
+  std::snprintf(
+      b, sizeof b,
+      "tsm simulate: tau_out_est vs the recording's tau_out (%zu samples): RMSE %.4g N m, "
+      "p2p %.4g N m, fit %.1f %%; the naive feedback (tau_in) vs tau_out: RMSE %.4g N m, "
+      "p2p %.4g N m (estimate / naive RMSE %.2f)\n",
+      e.samples, e.rmse, e.p2p, e.fit_percent, naive.rmse, naive.p2p,
+      naive.rmse > 0.0 ? e.rmse / naive.rmse : std::nan(""));
+  return b;
+}
+
 void run_simulate(const SimulateOptions& o, const Context& ctx) {
   check_outputs({{"--output", o.output, OutputKind::kFile}});
   auto model = estimator::load_model(o.params);
@@ -75,6 +97,15 @@ void run_simulate(const SimulateOptions& o, const Context& ctx) {
   out.meta["model"] = model->kind() + " (" + o.params + ")";
   estimator::write_csv_table(out, o.output);
   std::cerr << "tsm simulate: " << rec.size() << " samples -> " << o.output << "\n";
+  if (rec.has_tau_out()) {
+    const auto* est = out.has("tau_out_est") ? &out.column("tau_out_est") : nullptr;
+    if (est == nullptr) {
+      std::cerr << "tsm simulate: the recording has tau_out but no tau_in (or no radius): no "
+                   "distal estimate to compare with it\n";
+    } else {
+      std::cerr << simulate_comparison(rec, *est);
+    }
+  }
 }
 
 }  // namespace
@@ -85,9 +116,14 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
   cmd->add_option("--params", opts->params,
                   "Model: a preset (paper, dahl, ...) or a params YAML file")
       ->required();
-  cmd->add_option("input,--input", opts->input,
-                  "Input CSV (t, x_in; optional tau_in or T1,T3; xd_in,xdd_in)")
-      ->required();
+  // The input by position or by --input: one required input, so neither is
+  // marked REQUIRED on its own (the help listed both as required).
+  auto* positional = cmd->add_option(
+      "input", opts->input,
+      "Input CSV (t, x_in; optional tau_in or T1,T3; xd_in,xdd_in; tau_out to compare with); "
+      "required, here or as --input");
+  cmd->add_option("--input", opts->input, "The input CSV, as a flag (instead of the positional)")
+      ->excludes(positional);
   cmd->add_option("--output", opts->output, "Output CSV (t, F[, tau_out_est])")->required();
   cmd->add_option("--radius", opts->radius,
                   "Pulley radius in m (overrides '# radius_m:' in the input)")
@@ -136,7 +172,10 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "friction state at the first sample: free_tip (tared from tau_in, the "
                   "default) or zero")
       ->transform(CLI::CheckedTransformer(starts, CLI::ignore_case));
-  cmd->callback([opts, &ctx] { run_simulate(*opts, ctx); });
+  cmd->callback([opts, &ctx] {
+    if (opts->input.empty()) throw CLI::RequiredError("the input CSV (positional, or --input)");
+    run_simulate(*opts, ctx);
+  });
 }
 
 }  // namespace tsmh::tsm_cli

@@ -1,5 +1,7 @@
 #include "data_sources.hpp"
 
+#include <iostream>
+
 namespace tsmh::tsm_cli {
 
 estimator::Recording DataSources::load(const std::filesystem::path& path,
@@ -7,10 +9,20 @@ estimator::Recording DataSources::load(const std::filesystem::path& path,
                                        const estimator::RecordingRequirements& need) const {
   if (!std::filesystem::exists(path))
     throw estimator::DataError(path.string(), 0, "", "no such file");
+  estimator::Recording rec;
+  bool read = false;
   for (const auto& s : sources_) {
-    if (s.accepts(path)) return s.load(path, radius, need);
+    if (s.accepts(path)) {
+      rec = s.load(path, radius, need);
+      read = true;
+      break;
+    }
   }
-  return estimator::read_recording_csv(path, radius, need);
+  if (!read) rec = estimator::read_recording_csv(path, radius, need);
+  // Said once, here, for every command that reads DATA.
+  for (const auto& w : rec.warnings)
+    std::cerr << "tsm: warning: " << path.string() << ": " << w << "\n";
+  return rec;
 }
 
 }  // namespace tsmh::tsm_cli

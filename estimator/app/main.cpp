@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/table.hpp"
+#include "tsmh/cli_words.hpp"
 #include "tsmh/version.hpp"
 
 int main(int argc, char** argv) {
@@ -21,6 +22,9 @@ int main(int argc, char** argv) {
   add_fit_command(app, ctx);
   add_gap_command(app, ctx);
   add_keygen_command(app, ctx);
+  // A typo is named with the nearest valid word before CLI11 reports the
+  // first rule it breaks (e.g. "A subcommand is required" for 'tsm fitt').
+  if (const int rc = tsmh::cli_words::check_words(app, argc, argv)) return rc;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

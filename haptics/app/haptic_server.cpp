@@ -41,6 +41,7 @@
 #include "master_devices/registry.hpp"
 #include "realtime/clock.hpp"
 #include "request_recalibration.hpp"
+#include "tsmh/cli_words.hpp"
 #include "tsmh/version.hpp"
 
 namespace {
@@ -659,6 +660,8 @@ int main(int argc, char** argv) {
   app.add_flag("--request-recalibration", o.request_recalibration,
                "Send one CALIBRATION_REQUEST for every joint of --config to the server running "
                "with it, and exit");
+  // A typo is named with the nearest option (tsmh/cli_words.hpp).
+  if (tsmh::cli_words::check_words(app, argc, argv) != 0) return kExitConfig;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,7 +1,8 @@
-// tsm-devices: what master devices this machine can drive.
-//   tsm-devices --list                 connected devices matching known profiles, with paths
-//   tsm-devices --drivers              registered drivers
-//   tsm-devices --monitor DRIVER [--config FILE] [--seconds S]
+// tsm-devices: what master devices this machine can drive. Subcommands, as
+// `tsm` has; the flags they replace stay as aliases.
+//   tsm-devices list      (--list)     connected devices matching known profiles, with paths
+//   tsm-devices drivers   (--drivers)  registered drivers
+//   tsm-devices monitor DRIVER (--monitor DRIVER) [--config FILE] [--seconds S]
 //               [--lcm-url URL] [--prefix P]   (driver lcm)
 //                                      open a device, print its readings (no torque)
 // haptic-server --list-devices prints the same listing (same library call).
@@ -23,6 +24,7 @@
 #include "master_devices/profile_dirs.hpp"
 #include "master_devices/registry.hpp"
 #include "realtime/clock.hpp"
+#include "tsmh/cli_words.hpp"
 #include "tsmh/version.hpp"
 
 namespace md = tsmh::master_devices;
@@ -36,24 +38,47 @@ int main(int argc, char** argv) {
   std::string config;
   std::string profile_dir = md::default_profiles_dir().string();
   double seconds = 3.0;
-  app.add_flag("--list", list, "list connected devices that match known profiles");
-  app.add_flag("--drivers", drivers, "list registered drivers");
-  app.add_option("--monitor", monitor, "open a device with this driver and print readings");
-  app.add_option("--config", config, "YAML file with the driver's settings map (for --monitor)");
+  // Subcommands; the options below are the parent's and reach them
+  // (fallthrough), so `tsm-devices monitor sim --seconds 1` and
+  // `tsm-devices --monitor sim --seconds 1` are the same.
+  auto* list_cmd =
+      app.add_subcommand("list", "list connected devices that match known profiles")->fallthrough();
+  auto* drivers_cmd = app.add_subcommand("drivers", "list registered drivers")->fallthrough();
+  auto* monitor_cmd = app.add_subcommand("monitor",
+                                         "open a device with the driver DRIVER and print its "
+                                         "readings (no torque)")
+                          ->fallthrough();
+  std::string monitor_driver;
+  monitor_cmd->add_option("driver", monitor_driver, "the driver (see `tsm-devices drivers`)")
+      ->required();
+  app.add_flag("--list", list, "the same as the subcommand list");
+  app.add_flag("--drivers", drivers, "the same as the subcommand drivers");
+  app.add_option("--monitor", monitor, "the same as the subcommand monitor DRIVER");
+  app.add_option("--config", config, "YAML file with the driver's settings map (for monitor)");
   app.add_option("--seconds", seconds, "how long to monitor")->check(CLI::PositiveNumber);
   std::string lcm_url;
   std::string prefix;
   app.add_option("--lcm-url", lcm_url,
-                 "--monitor lcm: LCM URL (default: the config's url, else $LCM_DEFAULT_URL)");
-  app.add_option(
-      "--prefix", prefix,
-      "--monitor lcm: channel prefix, e.g. LEFT_ (default: the config's channel_prefix)");
+                 "monitor lcm: LCM URL (default: the config's url, else $LCM_DEFAULT_URL)");
+  app.add_option("--prefix", prefix,
+                 "monitor lcm: channel prefix, e.g. LEFT_ (default: the config's channel_prefix)");
   CLI::Option* profiles_opt =
       app.add_option("--profiles", profile_dir,
                      "directory of device profiles (*.yaml); default: $TSMH_PROFILES_DIR, else "
                      "share/tsm-haptics/profiles next to this program's bin/")
           ->capture_default_str();
+  if (const int rc = tsmh::cli_words::check_words(app, argc, argv)) return rc;
   CLI11_PARSE(app, argc, argv);
+  list = list || list_cmd->parsed();
+  drivers = drivers || drivers_cmd->parsed();
+  if (monitor_cmd->parsed()) {
+    if (!monitor.empty() && monitor != monitor_driver) {
+      std::fprintf(stderr, "tsm-devices: monitor %s and --monitor %s: give one driver\n",
+                   monitor_driver.c_str(), monitor.c_str());
+      return 2;
+    }
+    monitor = monitor_driver;
+  }
 
   try {
     md::BuiltinDriverOptions options;
@@ -87,7 +112,7 @@ int main(int argc, char** argv) {
         if (!lcm_url.empty()) settings["url"] = lcm_url;
         if (!prefix.empty()) settings["channel_prefix"] = prefix;
       } else if (!lcm_url.empty() || !prefix.empty()) {
-        throw std::runtime_error("--lcm-url and --prefix apply to --monitor lcm only");
+        throw std::runtime_error("--lcm-url and --prefix apply to monitor lcm only");
       }
       auto device = registry.create(monitor, settings, ctx);
       device->open();

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -387,7 +388,9 @@ TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
   for (const auto& p : r["plots"])
     EXPECT_TRUE(fs::exists(dir / "g" / p.get<std::string>())) << p;
   // Four plots, and the shape of each effect found against its variable.
-  EXPECT_EQ(r["plots"].size(), 4U + r["effects"].size()) << r["warnings"];
+  // (A shape flat at zero is not drawn; plots_not_written says which and why.)
+  EXPECT_EQ(r["plots"].size(), 4U + r["effects"].size() - r["plots_not_written"].size())
+      << r["warnings"];
   EXPECT_TRUE(r["effects"][0]["shape"].is_array());
   EXPECT_EQ(r["effects"][0]["variable"], "x");
   // The final params file carries the effect and is what simulate/fit load.
@@ -400,6 +403,23 @@ TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
   text << sum.rdbuf();
   EXPECT_NE(text.str().find("Effect 1: position_dependent"), std::string::npos) << text.str();
   EXPECT_NE(text.str().find("Where:"), std::string::npos);
+  // Every parenthesis the summary opens it closes (the stop message did not).
+  const std::string t = text.str();
+  EXPECT_EQ(std::count(t.begin(), t.end(), '('), std::count(t.begin(), t.end(), ')')) << t;
+  // The fitted values it prints are params.yaml's (the final model), to the
+  // 4 digits it prints: "name = value;".
+  const auto final_params = model->parameters();
+  std::size_t compared = 0;
+  for (const auto& p : final_params) {
+    const auto at = t.find(" " + p.name + " = ");
+    if (at == std::string::npos) continue;
+    const double printed = std::stod(t.substr(at + p.name.size() + 4));
+    EXPECT_NEAR(printed, p.value, 5e-4 * std::max(1.0, std::fabs(p.value))) << p.name << "\n" << t;
+    ++compared;
+  }
+  EXPECT_GT(compared, 0U) << t;
+  // What the gap left means at the tip, in N m.
+  EXPECT_NE(t.find("For haptics, the gap after: at the tool's tip"), std::string::npos) << t;
   fs::remove_all(dir);
 }
 

@@ -41,8 +41,12 @@ TEST(GroupedWarnings, OneLinePerProblem) {
   EXPECT_EQ(lines[0], "no uncertainty: too few train samples or no free parameters");
   EXPECT_NE(lines[1].find("acceleration_dependence.mu2, kappa2:"), std::string::npos) << lines[1];
   EXPECT_NE(lines[1].find("correlated mu2~kappa2 r = -0.99"), std::string::npos) << lines[1];
-  EXPECT_NE(lines[2].find("stribeck.kappa1: at its upper bound 100"), std::string::npos)
+  // The one wording of a bound (value and bound), with what it means.
+  EXPECT_NE(lines[2].find("stribeck.kappa1: at its upper bound (value 100, bound 100) (the "
+                          "Stribeck bump pushed to its ceiling"),
+            std::string::npos)
       << lines[2];
+  EXPECT_NE(lines[2].find("likely absent"), std::string::npos) << lines[2];
   for (const auto& l : lines)
     EXPECT_EQ(l.find("core.theta"), std::string::npos) << "a well identified parameter: " << l;
 }

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "estimator/recording_checks.hpp"
+
 namespace tsmh::estimator {
 namespace {
 
@@ -81,6 +83,18 @@ Recording recording_from_table(const Table& table, std::optional<double> radius_
   } else if (auto r = parse_radius(table)) {
     rec.radius_m = *r;
   }
+  // A required column missing while a near-miss is there ("tauin", "time")
+  // is named with it; the other header words are warned about.
+  for (const char* required : {"t", "x_in"}) {
+    if (table.has(required)) continue;
+    for (const auto& name : table.names) {
+      if (contract_column_for(name) == required)
+        throw DataError(table.source, 0, required,
+                        "required column is missing; the header has '" + name + "': did you mean " +
+                            required + "?");
+    }
+  }
+  rec.warnings = header_warnings(table);
   rec.t = table.column("t");
   rec.x_in = table.column("x_in");
   rec.tau_out = optional_column(table, "tau_out");
@@ -112,6 +126,7 @@ Recording recording_from_table(const Table& table, std::optional<double> radius_
   if (rec.size() == 0)
     throw DataError(table.source, 0, "", "no data rows (the file has only a header)");
   check_time_column(table, rec.t);
+  if (auto w = time_unit_warning(rec.t); !w.empty()) rec.warnings.push_back(std::move(w));
   if (need.radius && !std::isfinite(rec.radius_m))
     throw DataError(table.source, 0, "",
                     "no pulley radius: add '# radius_m: R' to the file or pass --radius");

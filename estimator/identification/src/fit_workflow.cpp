@@ -26,18 +26,55 @@ std::string data_that_helps(const std::string& name) {
   return "motion that varies this term's variable more";
 }
 
+// Above this many times the noise floor a fit is "coarse", not "fair".
+constexpr double kFairRatio = 3.0;
+// The share of a force a hand tells apart (the just-noticeable difference
+// of force is about 7-10 %): an error below it at a force is hard to feel.
+constexpr double kForceJnd = 0.10;
+
 }  // namespace
+
+void explain_for_haptics(FitVerdict& v, double rmse_n, double radius_m, const MasterScale* master) {
+  if (!(std::isfinite(rmse_n) && std::isfinite(radius_m) && radius_m > 0.0)) {
+    v.meaning = "no pulley radius: the error cannot be given at the tip";
+    return;
+  }
+  v.tip_rmse_nm = rmse_n * radius_m;
+  v.meaning = "at the tool's tip the friction error is a distal-torque error of " +
+              num(v.tip_rmse_nm) + " N m RMS (" + num(rmse_n) + " N x pulley radius " +
+              num(radius_m) + " m)";
+  if (master == nullptr || !std::isfinite(master->force_scale)) {
+    v.meaning +=
+        "; give tsm the server's config (--config) or --force-scale and --master-peak to "
+        "have it on the master";
+    return;
+  }
+  v.master_rmse_nm = std::fabs(master->force_scale) * v.tip_rmse_nm;
+  v.meaning += "; on the master (force scale " + num(master->force_scale) + ", " + master->source +
+               ") " + num(v.master_rmse_nm) + " N m RMS";
+  if (std::isfinite(master->peak_nm) && master->peak_nm > 0.0) {
+    v.master_fraction = v.master_rmse_nm / master->peak_nm;
+    v.meaning += ", " + num(100.0 * v.master_fraction, 2) + " % of its peak torque " +
+                 num(master->peak_nm) +
+                 " N m: below the ~10 % of a force a hand can tell apart "
+                 "for rendered torques above " +
+                 num(v.master_rmse_nm / kForceJnd) + " N m (" +
+                 num(100.0 * v.master_fraction / kForceJnd, 2) + " % of the peak)" +
+                 (v.master_fraction / kForceJnd >= 1.0 ? ", so felt as a wrong force everywhere"
+                                                       : ", felt as a wrong force on lighter ones");
+  }
+}
 
 FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double noise,
                      const UncertaintyReport* u, const std::vector<RegimeError>* regimes,
                      double good_ratio) {
   FitVerdict v;
   const double ratio = noise > 0.0 ? val.rmse / noise : std::nan("");
-  std::string text = "validation RMSE " + num(val.rmse) + " N against a noise floor of " +
-                     num(noise) +
-                     " N estimated from the measured friction's high-frequency part (ratio " +
-                     num(ratio) + ", good needs <= " + num(good_ratio) + "); train RMSE " +
-                     num(train.rmse) + " N, validation fit " + num(val.fit_percent) + " %";
+  std::string text =
+      "validation RMSE " + num(val.rmse) + " N against a noise floor of " + num(noise) +
+      " N estimated from the measured friction's high-frequency part (ratio " + num(ratio) +
+      ", good needs <= " + num(good_ratio) + ", fair <= " + num(kFairRatio) + "); train RMSE " +
+      num(train.rmse) + " N, validation fit " + num(val.fit_percent) + " %";
   std::vector<std::string> problems;
   const bool overfit = val.rmse > 1.5 * train.rmse;
   const bool above_floor = !(ratio <= good_ratio);
@@ -64,24 +101,26 @@ FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double 
     for (const auto& p : u->parameters) {
       if (p.fixed || !p.at_bound) continue;
       ++at_bound;
-      const bool low = std::fabs(p.value - p.lower) <= std::fabs(p.value - p.upper);
-      problems.push_back(p.name + " = " + num(p.value) + " at its " + (low ? "lower" : "upper") +
-                         " bound (" + num(low ? p.lower : p.upper) +
-                         "): the data do not pin it down or want it beyond its range; data "
-                         "that would help: " +
-                         data_that_helps(p.name));
+      problems.push_back(p.name + " " + at_bound_text(p) + ": " + bound_consequence(p) +
+                         "; data that would help: " + data_that_helps(p.name));
     }
   }
   if (overfit)
     problems.push_back("validation RMSE " + num(val.rmse) + " N is over 1.5x the train RMSE " +
                        num(train.rmse) +
                        " N: over-fitted, or the friction changes over the recording");
+  // Graded by how far the residual is above the measurement noise: good at
+  // it, fair within 3x (small effects missing), coarse beyond (the model
+  // misses structure the data show); poor when it explains under half of
+  // the friction's variation.
   if (!(val.fit_percent >= 50.0)) {
     v.grade = "poor";
   } else if (!above_floor && at_bound == 0 && !overfit) {
     v.grade = "good";
-  } else {
+  } else if (ratio <= kFairRatio) {
     v.grade = "fair";
+  } else {
+    v.grade = "coarse";
   }
   if (problems.empty()) {
     text += ": the residual is at the measurement noise";
@@ -124,6 +163,8 @@ FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::st
   }
   run.verdict = judge_fit(run.train, run.validation, run.noise,
                           o.uncertainty ? &run.uncertainty : nullptr, &run.regimes);
+  explain_for_haptics(run.verdict, run.validation.rmse, run.data.radius_m,
+                      o.master ? &*o.master : nullptr);
   return run;
 }
 
@@ -215,7 +256,15 @@ nlohmann::json fit_report_json(const FitRun& run, const FitWorkflowOptions& o, d
   r["train"] = to_json(run.train);
   r["validation"] = to_json(run.validation);
   r["regimes"] = to_json(run.regimes);
-  r["quality"] = {{"verdict", run.verdict.grade}, {"reason", run.verdict.reason}};
+  const auto num_or_null = [](double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+  };
+  r["quality"] = {{"verdict", run.verdict.grade},
+                  {"reason", run.verdict.reason},
+                  {"meaning", run.verdict.meaning},
+                  {"tip_rmse_nm", num_or_null(run.verdict.tip_rmse_nm)},
+                  {"master_rmse_nm", num_or_null(run.verdict.master_rmse_nm)},
+                  {"master_fraction", num_or_null(run.verdict.master_fraction)}};
   const auto u = to_json(run.uncertainty);
   r["parameters"] = u["parameters"];
   r["correlation"] = u["correlation"];

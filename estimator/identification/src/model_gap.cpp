@@ -848,8 +848,9 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     run_trials(g, cur, todo, o, say, t_start, round);
     if (!round.trials.front().qualifies) {
       const auto& best = round.trials.front();
-      g.stop_reason = "no candidate qualifies (shrinks the validation gap by >= " + pct(o.margin) +
-                      " or significantly" + " (best: " + best.name + ", " + pct(best.gain) + ")";
+      g.stop_reason =
+          "no candidate qualifies: none shrinks the validation gap by >= " + pct(o.margin) +
+          " or significantly (best: " + best.name + ", " + pct(best.gain) + ")";
       round.stop_reason = g.stop_reason;
       g.rounds.push_back(std::move(round));
       break;
@@ -1028,8 +1029,19 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
           {"seconds", seconds}};
 }
 
+bool shape_is_flat(const std::vector<std::pair<double, double>>& shape) {
+  return std::all_of(shape.begin(), shape.end(),
+                     [](const auto& p) { return !(std::fabs(p.second) > 1e-12); });
+}
+
 std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
   std::ostringstream s;
+  const auto final_params = g.final_model ? g.final_model->parameters() : std::vector<Parameter>{};
+  const auto final_value = [&](const std::string& name, double found) {
+    for (const auto& p : final_params)
+      if (p.name == name) return p.value;
+    return found;
+  };
   const auto metrics = [](const ErrorMetrics& m) {
     return "RMSE " + num(m.rmse) + " N, p2p " + num(m.p2p) + " N, fit " + num(m.fit_percent) + " %";
   };
@@ -1091,9 +1103,11 @@ std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
     s << "Effect " << k + 1 << ": " << e.name << " (form " << e.form << ") -- " << e.meaning
       << ".\n  Where: " << e.where << ".\n  Why: adding it shrinks the validation gap by "
       << pct(e.gain) << " (the acceptance margin is " << pct(o.margin) << "); now "
-      << metrics(e.gap_after) << ".\n  Fitted:";
+      << metrics(e.gap_after) << ".\n  Fitted (the final model, as in params.yaml):";
+    // The values of the final model, refitted after every later effect: the
+    // ones params.yaml holds, not those of the round that found the effect.
     for (const auto& [name, value] : e.parameters)
-      s << " " << name << " = " << num(value, 4) << ";";
+      s << " " << name << " = " << num(final_value(name, value), 4) << ";";
     s << "\n";
   }
   for (const auto& c : g.confounds)

@@ -131,13 +131,8 @@ void warn_per_parameter(const ParameterMap& map, const std::vector<double>& stds
                              num(100.0 * stds[j] / std::fabs(e.value), 2) + " % of its value)");
       poor = true;
     }
-    if (e.at_bound) {
-      rep.warnings.push_back(e.name +
-                             (e.value - fp.lower <= fp.upper - e.value ? ": at its lower bound"
-                                                                       : ": at its upper bound") +
-                             " (" + num(e.value, 4) +
-                             "); the data may want a value outside the search range");
-    }
+    if (e.at_bound)
+      rep.warnings.push_back(e.name + ": " + at_bound_text(e) + "; " + bound_consequence(e));
     e.well_identified = !poor && !e.at_bound;
   }
 }
@@ -156,7 +151,46 @@ void warn_correlated(const UncertaintyOptions& o, UncertaintyReport& rep) {
   }
 }
 
+bool near_lower(const ParameterEstimate& p) {
+  return std::fabs(p.value - p.lower) <= std::fabs(p.value - p.upper);
+}
+
 }  // namespace
+
+std::string at_bound_text(const ParameterEstimate& p) {
+  const bool low = near_lower(p);
+  return std::string("at its ") + (low ? "lower" : "upper") + " bound (value " + num(p.value, 4) +
+         ", bound " + num(low ? p.lower : p.upper, 4) + ")";
+}
+
+std::string bound_consequence(const ParameterEstimate& p) {
+  const auto dot = p.name.find('.');
+  const std::string term = dot == std::string::npos ? "" : p.name.substr(0, dot);
+  const std::string param = dot == std::string::npos ? p.name : p.name.substr(dot + 1);
+  const bool low = near_lower(p);
+  const std::string drop = "drop '" + term + "' from the model's terms (or list " + p.name +
+                           " under fixed:) and fit again";
+  // A term's size at zero: the term adds nothing on this data.
+  const bool size =
+      param == "mu1" || param == "mu2" || param == "mu3" || param == "c_v" || param == "w2";
+  if (low && size && p.lower == 0.0)
+    return "the '" + term +
+           "' term adds no friction at this value: the effect is likely absent "
+           "on this slave; " +
+           drop;
+  if (term == "stribeck" && !low)
+    return "the Stribeck bump pushed to its ceiling (" + param +
+           (param == "mu1" ? ": its height" : ": how fast it decays with speed") +
+           ") is the fit using it for something else, not a Stribeck effect: the term is likely "
+           "absent on this slave and standing in for an effect the model lacks (tsm gap names "
+           "it); " +
+           drop;
+  if (low)
+    return "the fit wanted it at or below its lowest allowed value: the data do not pin it down, "
+           "or its term stands in for an effect the model lacks (tsm gap names it)";
+  return "the fit wanted it at or beyond its highest allowed value: the data do not pin it down, "
+         "or its term stands in for an effect the model lacks (tsm gap names it)";
+}
 
 UncertaintyReport estimate_uncertainty(const FrictionModel& fitted, const FitData& data,
                                        const UncertaintyOptions& o) {
@@ -283,9 +317,7 @@ std::vector<std::string> grouped_warnings(const UncertaintyReport& rep,
       if (!e || e->well_identified) continue;
       std::string s;
       if (e->at_bound) {
-        s = (e->value - e->lower <= e->upper - e->value ? "at its lower bound "
-                                                        : "at its upper bound ") +
-            num(e->value, 4);
+        s = at_bound_text(*e) + " (" + bound_consequence(*e) + ")";
       } else if (!std::isfinite(e->std_error)) {
         s = "not identifiable";
       } else {

@@ -8,6 +8,7 @@
 #include "cli_options.hpp"
 #include "offline_mode.hpp"
 #include "realtime_mode.hpp"
+#include "tsmh/cli_words.hpp"
 #include "tsmh/version.hpp"
 #include "virtual_tissue_slave/scenario.hpp"
 
@@ -21,6 +22,8 @@ int main(int argc, char** argv) {
   cli.set_version_flag("--version", tsmh::version_line("virtual-slave"));
   app::CliOptions options;
   app::add_options(cli, options);
+  // A typo is named with the nearest option (tsmh/cli_words.hpp).
+  if (const int rc = tsmh::cli_words::check_words(cli, argc, argv)) return rc;
   CLI11_PARSE(cli, argc, argv);
   try {
     if (options.list_scenarios) {

@@ -22,6 +22,9 @@ struct Recording {
   std::vector<double> x_out;          ///< rad, joint angle (optional)
   std::vector<double> T1, T3;         ///< N, proximal tensions (optional)
   std::vector<double> xd_in, xdd_in;  ///< exact derivatives (optional)
+  /// What the reader noticed but did not refuse (recording_checks.hpp): a
+  /// header word that is not a contract column, times that look like ms.
+  std::vector<std::string> warnings;
 
   std::size_t size() const { return t.size(); }
   bool has_tau_in() const { return !tau_in.empty(); }

@@ -4,8 +4,10 @@
 // judge the fit, and build report.json (docs/data-formats.md). The CLI adds only
 // file handling, so tests exercise exactly what users run.
 
+#include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,14 +19,34 @@
 namespace tsmh::estimator {
 
 struct FitVerdict {
-  std::string grade;   ///< "good", "fair" or "poor"
-  std::string reason;  ///< one sentence with the numbers
+  std::string grade;    ///< "good", "fair", "coarse" or "poor"
+  std::string reason;   ///< one sentence with the numbers
+  std::string meaning;  ///< the error at the tool's tip and, when known, on the master
+  double tip_rmse_nm = std::nan("");      ///< validation RMSE x pulley radius, N m
+  double master_rmse_nm = std::nan("");   ///< x force scale: on the master, N m
+  double master_fraction = std::nan("");  ///< master_rmse_nm / the master's peak torque
 };
+
+/// The master that renders the estimate, to say what an error means in the
+/// hand: from the server's config (tsm fit --config) or --force-scale and
+/// --master-peak.
+struct MasterScale {
+  double force_scale = std::nan("");  ///< master N m per slave N m
+  double peak_nm = std::nan("");      ///< the master joint's peak torque, N m
+  std::string source;                 ///< where they came from, for the text
+};
+
+/// What a friction RMSE (N) means for haptics: x pulley radius at the tip
+/// in N m and, given the master, on the master in N m and as a share of its
+/// peak, with the force below which that error exceeds the ~10 % of a force
+/// a hand can tell apart. Fills the verdict's meaning and figures.
+void explain_for_haptics(FitVerdict& v, double rmse_n, double radius_m, const MasterScale* master);
 
 /// good: validation RMSE within `good_ratio` (1.2) x the noise floor
 /// estimated from the data (`noise`), no free parameter at a bound, and no
 /// sign of over-fitting (validation RMSE within 1.5x train). poor: validation
-/// fit < 50 %. fair otherwise. The reason gives the raw
+/// fit < 50 %. fair: within 3x the floor; coarse: beyond (the model misses
+/// structure the data show). The reason gives the raw
 /// figures beside the ratio, says what is wrong and what data would help.
 /// `uncertainty` (optional) supplies the parameters at a bound, `regimes`
 /// (optional) where the residual concentrates.
@@ -54,6 +76,8 @@ struct FitWorkflowOptions {
   FitDerivatives derivatives = FitDerivatives::kAutomatic;
   OfflineDerivativeConfig offline;
   bool uncertainty = true;
+  /// Set: the verdict also says what the error is on this master.
+  std::optional<MasterScale> master;
 };
 
 /// Runs the whole identification. Throws DataError for unusable data.

@@ -212,4 +212,8 @@ nlohmann::json gap_report_json(const GapResult& result, const GapOptions& option
 /// and why, the gap before and after.
 std::string gap_summary_text(const GapResult& result, const GapOptions& options);
 
+/// True when an effect's shape adds no friction anywhere (every point within
+/// 1e-12 N of zero): its plot would be a flat line at zero, so none is drawn.
+bool shape_is_flat(const std::vector<std::pair<double, double>>& shape);
+
 }  // namespace tsmh::estimator

@@ -29,6 +29,15 @@ struct ParameterEstimate {
   bool well_identified = false;  ///< free, not at a bound, std small, not degenerate
 };
 
+/// "at its lower bound (value 0.009286, bound 0)": the one wording of every
+/// report of a parameter at a bound (the value and the bound both named).
+std::string at_bound_text(const ParameterEstimate& p);
+
+/// What a parameter at a bound does to the model and what to do about it
+/// (a term's size at 0 or the bump of a term the slave lacks pushed to its
+/// ceiling: the term is likely absent, drop it).
+std::string bound_consequence(const ParameterEstimate& p);
+
 struct UncertaintyReport {
   std::vector<ParameterEstimate> parameters;  ///< all, in parameters() order
   std::vector<std::string> free_names;        ///< rows/columns of `correlation`
