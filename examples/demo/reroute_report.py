@@ -180,7 +180,8 @@ def fmt(p):
 print(f"   times in s since haptic-server started; re-route at {t_reroute:.1f} s (the slave's "
       f"{reroute_at:g} s; joint 0's sheath wrap now {wrap:g} rad); drift alarm "
       + (f"at {alarms[0]['t_s']:.1f} s ({alarms[0]['t_s'] - t_reroute:.1f} s after)" if alarms else "never")
-      + "; recalibration " + (f"applied at {t_applied:.1f} s, scale {scale:.3f}" if applied
+      + "; recalibration " + (f"applied at {t_applied:.1f} s, friction scale x{scale:.3f} "
+                              f"(the identified friction times it)" if applied
                               else "not applied " + str([e['reason'] for e in refused])))
 print(f"   joint 0 distal-torque error: before {fmt(b)}")
 print(f"                                after  {fmt(a)}")

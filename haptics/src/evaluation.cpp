@@ -349,14 +349,14 @@ std::string format_report(const EvaluationReport& r) {
   // The loop's timing is in haptic-server's own exit summary (printed once).
   for (const auto& j : r.joints) {
     std::snprintf(line, sizeof line,
-                  "joint %-8s distal torque rmse: estimated %.4f N m, naive %.4f N m, ratio %.2f "
-                  "(%zu samples, true peak %.3f N m)\n",
+                  "joint %-8s distal torque rmse against the truth: estimated %.4f N m, naive "
+                  "(tau_in) %.4f N m, estimated / naive %.2f (%zu ticks, true peak %.3f N m)\n",
                   j.name.c_str(), j.rmse_estimated, j.rmse_naive, j.ratio, j.samples, j.true_peak);
     s += line;
     if (j.free_samples) {
       std::snprintf(line, sizeof line,
-                    "      %-8s free motion (|true| < %.3f N m, %zu samples): phantom torque on "
-                    "the master %.4f N m rms, naive %.4f N m rms, ratio %.2f\n",
+                    "      %-8s free motion (|true| < %.3f N m, %zu ticks): phantom torque on "
+                    "the master %.4f N m rms, naive %.4f N m rms, rendered / naive %.2f\n",
                     "", kPhantomThreshold, j.free_samples, j.phantom_rendered, j.phantom_naive,
                     j.phantom_ratio);
       s += line;
