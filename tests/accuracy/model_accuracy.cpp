@@ -13,7 +13,7 @@
 //
 //   build/bin/model_accuracy [--sources world,paper,slave] [--seeds N]
 //       [--first-seed S | --seed-list a,b,c | --sealed FILE] [--models a,b]
-//       [--params FILE]... [--kinds k,...] [--jobs N] [--markdown FILE] [--check]
+//       [--params FILE]... [--kinds k,...] [--gap] [--jobs N] [--markdown FILE] [--check]
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "estimator/fit_workflow.hpp"
+#include "estimator/model_gap.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/tsm_model.hpp"
 #include "scoring.hpp"
@@ -75,14 +76,28 @@ struct OnlineRecord {
 constexpr const char* kNaive = "naive (tau_in)";
 constexpr const char* kTruth = "truth (paper, not fitted)";
 
+// `tsm gap` (find_model_gaps from the paper preset, its default options)
+// on the calibration recording: what it named and where it ended.
+struct GapRecord {
+  std::string source;
+  std::uint64_t seed;
+  std::string effects;  // "name (form, variable)[ confounded with x]; ..." or "none"
+  double base_rmse, final_rmse, floor, seconds;
+  double ratio() const { return final_rmse / floor; }
+};
+
+// The model the gap workflow ends with, run online like the others.
+constexpr const char* kGap = "gap (paper + effects found)";
+
 struct Results {
   std::vector<FitRecord> fits;
   std::vector<OnlineRecord> online;
+  std::vector<GapRecord> gaps;
 };
 
 // `shown`: the set's name in the progress lines (a sealed seed is not shown).
-void run_set(const Set& set, const std::vector<std::string>& models, const std::string& shown,
-             Results& out) {
+void run_set(const Set& set, const std::vector<std::string>& models, bool gap,
+             const std::string& shown, Results& out) {
   const double floor = friction_sensor_floor(set.calibration);
   const auto add_online = [&](const std::string& model, const Scored& s, const OnlineScore& sc) {
     out.online.push_back({set.source, model, s.kind, set.seed, sc});
@@ -96,6 +111,27 @@ void run_set(const Set& set, const std::vector<std::string>& models, const std::
     const estimator::TsmFrictionModel truth(estimator::paper_spec());
     for (const auto& t : set.tests)
       add_online(kTruth, t, score_online(truth, t));
+  }
+  if (gap) {
+    const auto base = estimator::load_model("paper");
+    const auto t0 = std::chrono::steady_clock::now();
+    const estimator::GapResult g =
+        estimator::find_model_gaps(set.calibration.rec, *base, "paper", estimator::GapOptions{});
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::string named;
+    for (const auto& e : g.effects) {
+      named += (named.empty() ? "" : "; ") + e.name + " (" + e.form + ", " + e.variable + ")";
+      for (const auto& c : e.confounded_with)
+        named += " confounded with " + c;
+    }
+    out.gaps.push_back({set.source, set.seed, named.empty() ? "none" : named, g.gap_base.rmse,
+                        g.gap_final.rmse, floor, secs});
+    std::fprintf(stderr, "  %-6s %6s gap: %s; %.4f -> %.4f N / floor %.4f N = %.3f (%.1f s)\n",
+                 set.source.c_str(), shown.c_str(), out.gaps.back().effects.c_str(),
+                 g.gap_base.rmse, g.gap_final.rmse, floor, g.gap_final.rmse / floor, secs);
+    for (const auto& t : set.tests)
+      add_online(kGap, t, score_online(*g.final_model, t));
   }
   for (const auto& name : models) {
     const auto initial = estimator::load_model(name);
@@ -178,6 +214,28 @@ std::string markdown(const std::string& source, const Results& r,
        << fmt(1, median(secs)) << " / " << fmt(1, *std::max_element(secs.begin(), secs.end()))
        << " |\n";
   }
+  std::vector<const GapRecord*> gaps;
+  for (const auto& g : r.gaps)
+    if (g.source == source) gaps.push_back(&g);
+  if (!gaps.empty()) {
+    md << "\n### tsm gap on the calibration recording\n\n"
+          "The model-gap workflow from the paper preset with its default options: the effects "
+          "it named and the validation RMSE it ended at, beside the sensor floor. Its final "
+          "model runs online below as \""
+       << kGap
+       << "\".\n\n"
+          "| set | effects named | RMSE base -> final / floor, N | final ratio | s |\n"
+          "| --- | --- | --- | --- | --- |\n";
+    std::vector<double> ratios;
+    for (auto* g : gaps) {
+      ratios.push_back(g->ratio());
+      md << "| " << which(g->seed) << " | " << g->effects << " | " << fmt(3, g->base_rmse) << " -> "
+         << fmt(3, g->final_rmse) << " / " << fmt(3, g->floor) << " | " << fmt(2, g->ratio())
+         << " | " << fmt(1, g->seconds) << " |\n";
+    }
+    md << "| worst / median | | | " << fmt(2, *std::max_element(ratios.begin(), ratios.end()))
+       << " / " << fmt(2, median(ratios)) << " | |\n";
+  }
   md << "\n### Online tip torque (the deployed estimator)\n\n"
         "RMSE of the estimated tip torque against the true one, % of the recording's peak "
         "|true tip torque| (raw mN m in brackets), beside the floor: the same estimate fed the "
@@ -197,6 +255,7 @@ std::string markdown(const std::string& source, const Results& r,
   md << "\n";
   std::vector<std::string> all_models = {kNaive};
   if (source == "paper") all_models.push_back(kTruth);
+  if (!gaps.empty()) all_models.push_back(kGap);
   all_models.insert(all_models.end(), models.begin(), models.end());
   for (const auto& kind : source_kinds(source)) {
     for (const auto& m : all_models) {
@@ -300,6 +359,7 @@ int main(int argc, char** argv) {
   double duration = 40.0;
   bool do_check = false;
   int jobs = 1;
+  bool gap = false;
   app.add_option("--sources", sources_arg, "world, paper, slave (comma-separated)");
   app.add_option("--seeds", seeds, "Sets (seeds) per source")->check(CLI::Range(1, 1000));
   app.add_option("--first-seed", first_seed, "First seed (development seeds: 1-100)");
@@ -316,6 +376,9 @@ int main(int argc, char** argv) {
   app.add_option("--markdown", md_path, "Write the tables as markdown to this file");
   app.add_option("--jobs", jobs, "Sets run at once (threads; the fits use every core anyway)")
       ->check(CLI::Range(1, 64));
+  app.add_flag("--gap", gap,
+               "Also run tsm gap's workflow (from the paper preset) on each calibration "
+               "recording and its final model online (minutes per set)");
   app.add_flag("--check", do_check, "Assert the structural checks (exit 1 when one fails)");
   CLI11_PARSE(app, argc, argv);
 
@@ -383,7 +446,7 @@ int main(int argc, char** argv) {
         Job& job = jobs_list[j];
         try {
           const Set set = make_set(job.source, seed_values[job.index], job.kinds, duration);
-          run_set(set, models,
+          run_set(set, models, gap,
                   is_sealed ? "#" + std::to_string(job.index + 1)
                             : std::to_string(seed_values[job.index]),
                   job.results);
@@ -403,6 +466,7 @@ int main(int argc, char** argv) {
       results.fits.insert(results.fits.end(), job.results.fits.begin(), job.results.fits.end());
       results.online.insert(results.online.end(), job.results.online.begin(),
                             job.results.online.end());
+      results.gaps.insert(results.gaps.end(), job.results.gaps.begin(), job.results.gaps.end());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "model_accuracy: %s\n", e.what());

@@ -112,9 +112,14 @@ Set make_set(const std::string& source, std::uint64_t seed, const std::vector<st
     set.calibration =
         from_world(seed, physics_world::MotionKind::kMultisine, seed * 1000, duration_s);
     set.calibration.kind = "calibration (multisine)";
-    for (std::size_t i = 0; i < kinds.size(); ++i)
-      set.tests.push_back(from_world(seed, *physics_world::motion_kind_from_name(kinds[i]),
-                                     seed * 1000 + 1 + i, duration_s));
+    // A kind's motion seed is its place in the full list, so a recording
+    // is the same whichever kinds are asked for.
+    for (const auto& k : kinds) {
+      const auto place =
+          static_cast<std::uint64_t>(std::find(known.begin(), known.end(), k) - known.begin());
+      set.tests.push_back(from_world(seed, *physics_world::motion_kind_from_name(k),
+                                     seed * 1000 + 1 + place, duration_s));
+    }
   } else if (source == "paper") {
     set.calibration = from_paper(estimator::MotionKind::kMultisine, seed, false, duration_s);
     set.calibration.kind = "calibration (multisine)";
