@@ -1,7 +1,7 @@
 // libFuzzer target: the LCM log reader (our event-header validation, then
 // SLAVE_STATE / SLAVE_TRUTH decoding and row building) must return rows or a
 // LogError for any bytes, never crash, read out of bounds or trip UB. Seeds:
-// the malformed logs of issue 15 (bridge/fuzz/corpus, written by
+// the malformed logs of LogEvents (bridge/fuzz/corpus, written by
 // TSMH_WRITE_FUZZ_SEEDS=bridge/fuzz/corpus build/bin/bridge_tests
 // --gtest_filter=LogEvents.RandomMutationsNeverCrash).
 //   CC=clang CXX=clang++ cmake -S . -B build-fuzz && cmake --build build-fuzz -t

@@ -270,7 +270,7 @@ JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::st
                              std::to_string(kMaxJoints - 1));
   if (bytes.size() < 4 || !std::equal(bytes.begin(), bytes.begin() + 4, std::begin(kSyncWord)))
     throw LogError(file, "not an LCM log (it does not start with LCM's event sync word)");
-  // Our own reader: liblcm's trusts the length fields (issue 15).
+  // Our own reader: liblcm's trusts the length fields.
   LogEventReader log(bytes);
   const std::string state_channel = channel_name(prefix, Channel::kSlaveState);
   const std::string truth_channel = channel_name(prefix, Channel::kSlaveTruth);

@@ -1,7 +1,7 @@
 // tsm fit DATA [--radius R] --output PARAMS.yaml [--report DIR] [--model paper|dahl|FILE]
 //              [--seed N] [--starts N] [--threads N] [--block S]
-// Identifies the friction model's parameters from recorded data (issue 3,
-// docs/identification.md). Writes the params file and, with --report, a
+// Identifies the friction model's parameters from recorded data
+// (docs/identification.md). Writes the params file and, with --report, a
 // directory with report.json and plots; on any error it writes nothing.
 
 #include <chrono>

@@ -1,6 +1,6 @@
 // tsm gap DATA [--radius R] --output DIR [--base paper|dahl|FILE] [--seed N] [--margin F]
 //              [--max-effects N] [--candidates a,b,...] [--threads N]
-// The model-gap workflow (issue 8, docs/model-gap.md): fit the base model,
+// The model-gap workflow (docs/model-gap.md): fit the base model,
 // find where it disagrees with the measurement, name the missing effects and
 // show the gap shrink. DIR gets report.json (docs/data-formats.md), summary.txt,
 // params.yaml (the final model) and plots; on any error nothing is written.

@@ -146,7 +146,7 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
       ->transform(CLI::CheckedTransformer(signs, CLI::ignore_case));
   cmd->add_option("--cruise-window", opts->cruise_window,
                   "smooth sign: window of the cruise hypothesis, s (haptic-server's default; 0: "
-                  "off, the estimator before issue 13)")
+                  "off)")
       ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kCruiseWindow));
   cmd->add_option("--fine-psd", opts->fine_psd,
                   "smooth sign: crackle spectral density of the fine acceleration channel, "

@@ -1,6 +1,6 @@
 #pragma once
-// --free-motion and its options, shared by `tsm fit` and `tsm gap` (issue 17,
-// docs/identification.md "Free-motion identification").
+// --free-motion and its options, shared by `tsm fit` and `tsm gap`
+// (docs/identification.md "Free-motion identification").
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

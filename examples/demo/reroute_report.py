@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The re-route demo's figures (issue 17), from haptic-server's trace and report.
+"""The re-route demo's figures, from haptic-server's trace and report.
 
   reroute_report.py TRACE.csv REPORT.json REROUTE_AT_S WRAP RAMP_PER_S [CONTROL.csv [REFIT.csv]]
 

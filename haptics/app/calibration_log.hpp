@@ -1,5 +1,5 @@
 #pragma once
-// haptic-server's side of the drift alarm and the recalibration (issue 17),
+// haptic-server's side of the drift alarm and the recalibration,
 // on the main thread: it runs the identification the loop handed over
 // (Recalibration::identify_pending, which allocates: never on the loop
 // thread) and logs requests, results and drift alarms. Also keeps the

@@ -3,7 +3,7 @@
 //   haptic-server --config server.yaml [--lcm-url URL] [--key FILE | --insecure] [--duration S]
 //                 [--feedback estimated|naive|none] [--trace F] [--report F]
 //   haptic-server --list-devices
-//   haptic-server --config server.yaml --request-recalibration   (issue 17)
+//   haptic-server --config server.yaml --request-recalibration
 //
 // Exit paths: any catchable terminating signal (bridge/stop_signals.hpp),
 // --duration, or any error after the device is open: each writes zero
@@ -289,7 +289,7 @@ void confine_lcm_device(const haptics::ServerConfig& cfg, const bridge::LinkSecu
 
 /// The exit summary, printed once. Every figure says what it counts and what
 /// is normal, so an operator can read it without the source.
-/// Issue 21: what the oscillation detector and the passivity controller did.
+/// What the oscillation detector and the passivity controller did.
 void print_delay_summary(const haptics::HapticLoop& loop) {
   const auto& c = loop.counters();
   double w_min = 0.0, dissipated = 0.0;

@@ -1,6 +1,6 @@
 #pragma once
-// haptic-server --request-recalibration: the "external console" side of
-// issue 17 as a one-shot command: sends one CALIBRATION_REQUEST for every
+// haptic-server --request-recalibration: the "external console" side of the
+// recalibration as a one-shot command: sends one CALIBRATION_REQUEST for every
 // joint of the configuration to the server running with it, and exits.
 // The outcome is in that server's log and HAPTIC_STATUS.
 

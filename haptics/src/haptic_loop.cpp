@@ -105,7 +105,7 @@ void HapticLoop::begin_tick(std::int64_t now_ns, std::int64_t lateness_ns, TickF
     events_.worst_lateness_ns.store(lateness_ns, std::memory_order_relaxed);
 }
 
-// Issue 17 (recalibration.hpp): a request from the master's button or an
+// Recalibration (recalibration.hpp): a request from the master's button or an
 // external console's CALIBRATION_REQUEST, the end of a collection, the
 // worker's result, and the applied friction scale's ramp. Never waits.
 void HapticLoop::recalibrate(const TickFacts& f) noexcept {

@@ -45,7 +45,7 @@ std::string resolve(const std::filesystem::path& base, const std::string& p) {
   return (base / p).lexically_normal().string();
 }
 
-// safety.oscillation (issue 21); every field optional.
+// safety.oscillation; every field optional.
 OscillationConfig parse_oscillation(FieldReader& o, double rate_hz) {
   OscillationConfig c;
   c.enabled = o.get_bool("enabled", c.enabled);
@@ -62,7 +62,7 @@ OscillationConfig parse_oscillation(FieldReader& o, double rate_hz) {
   return c;
 }
 
-// passivity (issue 21); off unless enabled.
+// passivity; off unless enabled.
 PassivityConfig parse_passivity(FieldReader& p) {
   PassivityConfig c;
   c.enabled = p.get_bool("enabled", c.enabled);

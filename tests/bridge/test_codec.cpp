@@ -63,11 +63,11 @@ TEST(Codec, EveryTypeRoundTrips) {
   h.slave_latency_p99_us = 55.5;
   h.torque_cmd = {0.3, 0.4};
   h.flags = 0b10101 | (1 << 12) | (1 << 13);
-  h.oscillation_trips = 2;  // issue 21's fields
+  h.oscillation_trips = 2;  // delayed teleoperation's fields
   h.oscillation_rms = {0.01, 0.02};
   h.passivity_energy = {-0.003, 0.5};
   h.passivity_dissipated = {0.04, 0.0};
-  h.flags |= (1 << 8) | (1 << 9);  // issue 17's fields
+  h.flags |= (1 << 8) | (1 << 9);  // recalibration's fields
   h.calibration_state = 4;
   h.calibration_reason = 2;
   h.calibration_joint = 1;

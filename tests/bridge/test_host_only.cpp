@@ -82,7 +82,7 @@ class OtherHost {
   bool ok_ = false;
 };
 
-// Issue 18's probe: unicast datagrams to this host's external address on the
+// The probe: unicast datagrams to this host's external address on the
 // LCM port. A plain LCM instance hears them (what the filter is for); the
 // bridge's Receiver on the same ttl=0 URL does not, and still hears this host.
 TEST(HostOnly, DatagramsFromAnotherHostAreDroppedLocalOnesArrive) {

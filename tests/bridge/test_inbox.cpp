@@ -92,8 +92,8 @@ TEST(Inbox, ConfiguredRangesReject) {
   EXPECT_EQ(describe(*r, "C"), "C seq 0: x_in[1] = 1 is outside its configured range");
 }
 
-// seq_gaps counts gap events: one jump of two trillion is one gap (it read
-// 2,000,000,000,001 before issue 15), and hostile jumps never overflow.
+// seq_gaps counts gap events: one jump of two trillion is one gap (not
+// 2,000,000,000,001), and hostile jumps never overflow.
 TEST(Inbox, SeqGapsCountEventsNotDistances) {
   Inbox<SlaveStateSample> in("X_SLAVE_STATE", {.expected_joints = 2});
   auto s = make_state(0, 1000);
@@ -114,7 +114,7 @@ TEST(Inbox, SeqGapsCountEventsNotDistances) {
   EXPECT_EQ(st.restarts, 3U);
 }
 
-// Plausible garbage (issue 15): messages with a valid header and joint count
+// Plausible garbage: messages with a valid header and joint count
 // but a random body -- every field inside its configured range, random seq and
 // utime -- interleaved with a smooth 1 kHz stream. Before the step check 8 of
 // 2000 such messages were accepted (x_in -7.6 rad from ~0), now none is, and

@@ -1,4 +1,4 @@
-// The slave-link statistics are the truth (issue 16): known latency, gaps,
+// The slave-link statistics are the truth: known latency, gaps,
 // reordering and duplicates injected over real udpm on this host (ttl=0, its
 // own port 7731) come out as exactly those figures; messages that queued up
 // before the receive thread started are discarded and counted, never read as
@@ -89,10 +89,9 @@ TEST(LinkStats, InjectedLatencyGapsReorderingAndDuplicatesAreCountedExactly) {
   EXPECT_LE(st.latency.p50_us, kLatencyUs * 1.125 + 1000.0);
 }
 
-// Before issue 16 the backlog was handed to the loop when the receive thread
-// started: as old as the server's start-up (1.3 s in the demo, with its
-// 480 MB trace allocation), it made latency p99 read 1179648 us and, past
-// LCM's 256-message queue, ~1050 sequence numbers "missing".
+// A backlog handed to the loop when the receive thread starts is as old as
+// the server's start-up: it would make latency p99 read that start-up and,
+// past LCM's 256-message queue, sequence numbers "missing".
 TEST(LinkStats, BacklogQueuedBeforeStartIsDiscardedAndCounted) {
   const BridgeConfig cfg{.url = stats_url(), .prefix = test::unique_prefix()};
   Receiver rx(cfg);

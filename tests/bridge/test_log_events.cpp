@@ -1,5 +1,5 @@
-// Malformed LCM logs (issue 15): an event length of 0x7fffffff (liblcm's
-// reader died with SIGSEGV), a log cut off mid-event (converted silently to
+// Malformed LCM logs: an event length of 0x7fffffff (liblcm's reader dies
+// with SIGSEGV), a log cut off mid-event (which must not convert silently to
 // half its rows), corrupt regions; the reader must say what is wrong, where,
 // and how many events were lost, and never crash. The same logs seed the
 // libFuzzer target (bridge/fuzz/fuzz_log_reader.cpp); here they are replayed
@@ -85,7 +85,7 @@ void put_be32(Bytes& b, std::size_t at, std::uint32_t v) {
     b[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(v >> (24 - 8 * i));
 }
 
-// The malformed logs of issue 15, also the fuzzer's seeds.
+// The malformed logs above, also the fuzzer's seeds.
 struct Seed {
   std::string name;
   Bytes bytes;

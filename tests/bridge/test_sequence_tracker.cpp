@@ -50,7 +50,7 @@ TEST(SequenceTracker, DuplicatesNeverForceAResync) {
     EXPECT_EQ(t.observe(4, 100).order, Order::kDuplicate);
 }
 
-// Garbage seq values (issue 15): the distance from INT64_MIN to INT64_MAX
+// Garbage seq values: the distance from INT64_MIN to INT64_MAX
 // does not fit an int64; `missing` saturates instead of overflowing.
 TEST(SequenceTracker, ExtremeSeqJumpsSaturateInsteadOfOverflowing) {
   SequenceTracker t;

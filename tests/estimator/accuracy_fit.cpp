@@ -1,4 +1,4 @@
-// Accuracy sweep of `tsm fit` (issue 14) on the paper's model through
+// Accuracy sweep of `tsm fit` on the paper's model through
 // realistic sensors (encoder quantum 2 pi/40960 rad, 3 mN m noise per torque
 // channel, 40 s at 1 kHz), with the limits beside every figure. Not a ctest:
 // a whole sweep takes minutes on 2 cores.

@@ -1,6 +1,6 @@
 // One estimator step for one joint, differentiation included: the work the
-// haptic loop does per joint per tick. Target (issue 13): median <= 60 ns.
-// Measured figures and what bounds them: docs/friction-model.md, Benchmark;
+// haptic loop does per joint per tick. Target: median <= 60 ns.
+// Measured figures and what bounds them: docs/friction-model.md, "Cost";
 // BM_EstimatorStepWithoutHindsight prints the cost of the hindsight correction.
 // Run: build/bin/bench_estimator (or scripts/bench estimator).
 #include <benchmark/benchmark.h>

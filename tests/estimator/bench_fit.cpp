@@ -1,7 +1,7 @@
 // The whole identification of `tsm fit` on 40 s of 1 kHz data (the paper's
 // model through realistic sensors): data preparation, the multi-start
 // NLopt fit, validation scoring, uncertainty, plots and report.json, as the
-// CLI does it. Target: <= 3 s wall (issue 14) on the project's 2-core machine.
+// CLI does it. Target: <= 3 s wall on the project's 2-core machine.
 // Run: build/bin/bench_fit [repetitions]   (prints wall and CPU seconds)
 #include <algorithm>
 #include <chrono>
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
         run.validation.fit_percent);
   }
   std::sort(walls.begin(), walls.end());
-  std::printf("bench_fit: wall median %.2f s, max %.2f s (target <= 3 s, issue 14)\n",
+  std::printf("bench_fit: wall median %.2f s, max %.2f s (target <= 3 s)\n",
               walls[walls.size() / 2], walls.back());
   std::filesystem::remove_all(dir);
   return 0;

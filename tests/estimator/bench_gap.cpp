@@ -2,7 +2,7 @@
 // candidate rounds, re-identification, diagnostics, plots and report.json.
 // Data: the paper's model with two hidden effects (load and position
 // dependence; two rounds that accept, one that does not) and with none.
-// Target: <= 10 s wall on the project's 2-core machine (issue 14).
+// Target: <= 10 s wall on the project's 2-core machine.
 // Run: build/bin/bench_gap   (prints wall and CPU seconds)
 #include <chrono>
 #include <cstdio>
@@ -55,7 +55,7 @@ int main() {
         c.name, wall, cpu, g.rounds.size(), g.evaluations, g.gap_base.rmse, g.gap_final.rmse,
         found.empty() ? " none" : found.c_str());
   }
-  std::printf("bench_gap: target <= 10 s wall per run (issue 14)\n");
+  std::printf("bench_gap: target <= 10 s wall per run\n");
   std::filesystem::remove_all(dir);
   return 0;
 }

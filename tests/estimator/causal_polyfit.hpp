@@ -1,5 +1,5 @@
 #pragma once
-// online_accuracy's baseline differentiator (issue 13's reference): never
+// online_accuracy's baseline differentiator (a plain reference): never
 // deployed, only compared with.
 
 #include <array>

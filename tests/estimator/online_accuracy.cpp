@@ -8,8 +8,8 @@
 // and the ambiguity no estimator from the encoder can get below: the same
 // motion with a tremor, or a drift of either sign, too small to change any
 // encoder sample.
-// And one baseline below it: the plain causal polynomial differentiator that
-// issue 13 proposed as a reference.
+// And one baseline below it: the plain causal polynomial (Savitzky-Golay)
+// differentiator, as a reference.
 //
 // Run: build/bin/online_accuracy [--seeds N] [--first-seed S] [--kinds a,b]
 //      [--jitter S] [--drops F] [--resolution A] [--sign-mode M] [--markdown]

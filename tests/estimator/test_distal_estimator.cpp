@@ -210,7 +210,7 @@ TEST(DistalEstimator, HindsightCorrectsTheStartsAndStopsOfMoves) {
 // it stops, while eq. (4) still drives the true state with lambda sgn(xdd).
 // Declared at rest after 40 ms, the state froze short of it through the
 // hold; the default still_time (50 ms) freezes it closer (measured on the
-// surgeon's seeds 1-10: lower on 9 of 10, docs/friction-model.md "The stop").
+// surgeon's seeds 1-10: lower on 9 of 10, see the commit that set it).
 // Measured, and tested, with settle_stops off: that rule, added later,
 // extends a deceleration past still_time where the last counts show one.
 TEST(DistalEstimator, RestIsNotDeclaredBeforeACreepingHandHasStopped) {
@@ -435,7 +435,7 @@ TEST(DistalEstimator, SettlesTheStopOfAMoveTheEncoderShowsEarly) {
 
 // On point-to-point moves between holds, both rules together: the error
 // lower on every one of the surgeon's seeds 1-10 (by 0.6-30 %,
-// docs/friction-model.md "Moves the encoder shows late"); three of them here.
+// see the commit that added the rules); three of them here.
 TEST(DistalEstimator, SettlingStartsAndStopsLowersTheSurgeonsError) {
   DifferentiatorConfig neither;
   neither.settle_starts = neither.settle_stops = false;

@@ -1,4 +1,4 @@
-// Free-motion identification (issue 17): `tsm fit --free-motion` without a
+// Free-motion identification: `tsm fit --free-motion` without a
 // tip sensor, the distal torque from the joint's dynamics, and the refusal of
 // data that shows contact.
 #include <gtest/gtest.h>

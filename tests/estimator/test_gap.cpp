@@ -1,13 +1,12 @@
-// The model-gap workflow (`tsm gap`, issue 8) on data in which an effect is
+// The model-gap workflow (`tsm gap`) on data in which an effect is
 // hidden: the paper's model with a term injected (synthetic.hpp) and the
 // virtual slave run offline with its hidden-effect switches. Each effect must
 // be named, and the validation gap must close: shrink by >= 40 %, or come
 // down to the floor, estimated as the gap the base model leaves on the same
 // world with the effect switched off (same motion, same noise), x 1.15.
 // docs/model-gap.md gives the numbers. Seeds 111-117 were not used while
-// developing the workflow (issue 8); issue 14 adds the noise-floor checks
-// (final gap within 1.2x the floor estimated from the data), a flexible form
-// (seed 119) and the palpation confound.
+// developing the workflow; the noise-floor checks (final gap within 1.2x the floor estimated from
+// the data), a flexible form (seed 119) and the palpation confound.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -79,7 +78,7 @@ void record(const GapResult& g, double floor) {
   ::testing::Test::RecordProperty("seconds", std::to_string(g.seconds));
 }
 
-// Issue 14: with the base at the noise floor, the final gap within 1.2x the
+// With the base at the noise floor, the final gap within 1.2x the
 // floor estimated from the data itself.
 void expect_at_noise_floor(const GapResult& g) {
   EXPECT_LE(g.gap_final.rmse, 1.2 * g.noise)
@@ -100,7 +99,7 @@ TEST(GapPaperWorld, NothingHiddenNothingFound) {
   record(g, g.gap_base.rmse);
   EXPECT_TRUE(g.effects.empty()) << ::testing::PrintToString(names(g));
   EXPECT_EQ(g.gap_final.rmse, g.gap_base.rmse);
-  // Either the base is already at the noise floor (issue 14: nothing left
+  // Either the base is already at the noise floor (nothing left
   // to explain, no round needed) or no candidate comes near the margin.
   if (g.rounds.empty()) {
     EXPECT_LE(g.gap_base.rmse, 1.03 * g.noise) << g.stop_reason;
@@ -291,7 +290,7 @@ TEST(GapVirtualSlave, LoadDependenceOfTheCapstanEffect) {
   const double floor = floor_of(without);
   record(g, floor);
   // One contact position: with flexible position forms (a bump where the
-  // tissue is) position can imitate the load here. Issue 14: never one
+  // tissue is) position can imitate the load here. Never one
   // confident wrong name. Either load_dependent is named, or the effect
   // named is reported as confounded with load_dependent.
   ASSERT_EQ(g.effects.size(), 1U) << ::testing::PrintToString(names(g));

@@ -1,9 +1,9 @@
-// Identification (`tsm fit`, issue 3) on synthetic data with a known truth:
+// Identification (`tsm fit`) on synthetic data with a known truth:
 // accuracy from several starting guesses, determinism, a simpler (Dahl)
 // world, garbage refused, parameter uncertainty, and the CLI's outputs.
 //
 // Acceptance seeds 101, 202, 303 were not used while developing the fit
-// (development used 11-13, 21-25 and 31-50; for issue 14's fit, 1-6).
+// (development used 11-13, 21-25 and 31-50; for the Levenberg-Marquardt fit, 1-6).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -103,7 +103,7 @@ void check(const Acceptance& a) {
   ::testing::Test::RecordProperty("validation_fit_percent",
                                   std::to_string(a.run.validation.fit_percent));
   EXPECT_EQ(a.run.data.derivatives, "offline");
-  // Issue 14: the fitted friction within 1 % of the true friction's peak...
+  // The fitted friction within 1 % of the true friction's peak...
   EXPECT_LE(a.fitted_pct, 1.0);
   // ...and on exact motion too (the parameters are the physical ones)...
   EXPECT_LE(a.exact_pct, 1.0);
@@ -137,7 +137,7 @@ TEST(Identification, DahlWorldIsFittedWellByThePaperModel) {
   EXPECT_LE(vs_truth, 0.05 * peak_of(syn.true_friction));
   // The paper's model (n = 2) cannot take Dahl's shape (n = 1) exactly: the
   // residual stays above the noise floor, and the verdict must say so with
-  // the figures instead of calling it good (issue 14).
+  // the figures instead of calling it good.
   const double ratio = run.validation.rmse / run.noise;
   RecordProperty("rmse_over_noise_floor", std::to_string(ratio));
   if (ratio > 1.2) {

@@ -1,4 +1,4 @@
-// Offline zero-phase derivatives (issue 14): accuracy on a quantised sine,
+// Offline zero-phase derivatives: accuracy on a quantised sine,
 // uneven intervals, no lag, refusals, and what they mean for the friction
 // model: the true parameters on smoothed derivatives vs the true friction.
 #include <gtest/gtest.h>
@@ -61,7 +61,7 @@ TEST(OfflineDerivatives, RefusesMismatchedOrTooShortInput) {
 }
 
 // The limit any fit on these derivatives can reach: the true parameters
-// simulated on them, against the true friction (issue 14 asks the fit for
+// simulated on them, against the true friction (the fit's target is
 // 1 % of peak; the online differentiator's floor is about 4 %).
 TEST(OfflineDerivatives, TrueParametersReachTheTrueFrictionWithinOnePercent) {
   SyntheticConfig c;

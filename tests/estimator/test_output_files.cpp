@@ -1,4 +1,4 @@
-// Output files under hostile conditions (issue 15): special files (a device,
+// Output files under hostile conditions: special files (a device,
 // a FIFO, symbolic links) are written through and never renamed over; a
 // write that fails part way (a file-size limit) makes `tsm fit` and `tsm gap`
 // fail and leaves no truncated file in their output folder; absurd inputs
@@ -188,7 +188,7 @@ TEST_F(OutputFiles, TsmSimulateWritesThroughADeviceAndALink) {
 
 // --- partial writes ---------------------------------------------------------
 
-// Issue 15: with writes failing part way, fit and gap exited 0 and left a
+// With writes failing part way, fit and gap must not exit 0 and leave a
 // truncated plot-data file in the final folder.
 TEST_F(OutputFiles, FitFailsAndLeavesNothingWhenAWriteFailsPartWay) {
   const fs::path data = synthetic_csv(dir_, 8.0);
@@ -280,7 +280,7 @@ TEST_F(OutputFiles, HugeLinesAndBinaryFilesAreQuotedAsShortEscapedExcerpts) {
 }  // namespace
 }  // namespace tsmh::estimator
 
-// --- one rule for outputs, checked before any work (issue 16) ---------------
+// --- one rule for outputs, checked before any work ----------------------
 namespace tsmh::estimator {
 namespace {
 
@@ -320,7 +320,7 @@ TEST_F(OutputFiles, OutputPathsAreCheckedBeforeAnyWorkWithOneRule) {
   EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
 }
 
-// Plots readable at a glance (issue 16): gnuplot's enhanced text turned
+// Plots readable at a glance: gnuplot's enhanced text would turn
 // "low_speed" into a subscript; the warm-up's large residual (the model
 // starts at rest) stretched the residual axis so the scored residual was a
 // flat line.

@@ -1,4 +1,4 @@
-// The delay/loss model (issue 21): the pure LinkImpairment and DelayLine, and
+// The delay/loss model: the pure LinkImpairment and DelayLine, and
 // the lcm-delay-relay program forwarding real LCM traffic between two udpm
 // networks on this host.
 #include <gtest/gtest.h>

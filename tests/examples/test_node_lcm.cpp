@@ -153,7 +153,7 @@ TEST(Node, FollowsCommandsPublishesStateAndTruthAndHoldsWhenCommandsStop) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
 }
 
-// Issue 18: commands without the link key, with another key, or replayed
+// Commands without the link key, with another key, or replayed
 // (an authentic recording sent again) never move the node; the
 // authenticated commander does.
 TEST(Node, OnlyAuthenticatedCommandsMoveIt) {

@@ -1,4 +1,4 @@
-// What recalibration costs the loop (issue 17): HapticLoop::tick with the
+// What recalibration costs the loop: HapticLoop::tick with the
 // recalibration idle and while it collects free motion (the only loop-side
 // work: one sample copied per joint), and the identification that runs on
 // the server's main thread (never in the loop) for 5 s of samples.

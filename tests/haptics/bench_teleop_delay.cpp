@@ -1,4 +1,4 @@
-// bench_teleop_delay (issue 21): the benchmark scenario of delayed
+// bench_teleop_delay: the benchmark scenario of delayed
 // teleoperation, in simulated time and in one process, so it is
 // deterministic and independent of this machine's load:
 //

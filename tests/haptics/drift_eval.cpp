@@ -1,4 +1,4 @@
-// Drift-alarm sweep (issue 17; a measurement program, not a ctest): runs the
+// Drift-alarm sweep (a measurement program, not a ctest): runs the
 // deployed estimator and the haptic loop's DriftMonitor, sample by sample as
 // haptic-server does per SLAVE_STATE, over a virtual-slave CSV.
 //   drift_eval PARAMS.yaml DATA.csv [REROUTE_AT_S]

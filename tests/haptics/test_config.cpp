@@ -329,7 +329,7 @@ TEST(Evaluation, PhantomTorqueInFreeMotion) {
   EXPECT_NE(json.find("\"phantom_ratio\": 0.333"), std::string::npos) << json;
 }
 
-// Issue 15: configurations that used to run silently.
+// Configurations that must not run silently.
 TEST(ServerConfig, DuplicateKeysAreErrorsNamingKeyAndLine) {
   const std::string e = error_of(
       "device: {driver: sim}\njoints:\n  - name: a\n    max_torque_nm: 0.3\n"
@@ -395,8 +395,8 @@ TEST(ServerConfig, MoreJointsThanTheDeviceHasIsAnError) {
   EXPECT_NO_THROW(check_against_device(c, spec));
 }
 
-// Issue 16: the driver's settings keep their place in the file; the error
-// said "(line 1)" for a key on line 10 (the settings were a clone without marks).
+// The driver's settings keep their place in the file: the error must not say
+// "(line 1)" for a key on line 10 (a clone of the settings without marks).
 TEST(ServerConfig, DeviceSettingsErrorsCarryTheirOwnLine) {
   const auto c = parse_server_config(
       "rate_hz: 1000\n"
@@ -469,7 +469,7 @@ TEST(TraceSpool, StreamsRowsToDiskAndMapsThemBackExactly) {
   std::filesystem::remove_all(dir);
 }
 
-// The delay stages' keys (issue 21).
+// The delay stages' keys.
 TEST(ServerConfigDelay, OscillationOnAndPassivityOffByDefault) {
   const auto c = parse_server_config(kJoint, "server.yaml", "/cfg");
   EXPECT_TRUE(c.loop.oscillation.enabled);

@@ -259,9 +259,9 @@ TEST(HapticLoop, TraceMatchesTheStatesTruthWhenANewerTruthHasArrived) {
   }
 }
 
-// Issue 15: the slave reboots and its utime jumps back. Before, every later
-// sample was "time not increasing" for the estimators: torque 0 for the rest
-// of the run while the state said ENABLED and nothing was flagged. Now the
+// The slave reboots and its utime jumps back. Unhandled, every later sample
+// is "time not increasing" for the estimators: torque 0 for the rest of the
+// run while the state says ENABLED and nothing is flagged. Instead the
 // estimators are re-initialised, feedback is back at once and the jump is
 // flagged in HAPTIC_STATUS.
 TEST(HapticLoop, SlaveClockJumpingBackReinitialisesTheEstimators) {

@@ -1,4 +1,4 @@
-// OscillationDetector (issue 21): trips on sustained band energy of the
+// OscillationDetector: trips on sustained band energy of the
 // rendered torque, never on presses, steps or noise; fades and recovers.
 #include <gtest/gtest.h>
 

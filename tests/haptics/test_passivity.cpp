@@ -1,4 +1,4 @@
-// PassivityChannel (issue 21) on synthetic port signals: the two-port
+// PassivityChannel on synthetic port signals: the two-port
 // observer's bookkeeping, the controller keeping the observed energy >= 0,
 // and the controller changing nothing while the energy is positive.
 #include <gtest/gtest.h>

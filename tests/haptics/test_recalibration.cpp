@@ -1,4 +1,4 @@
-// Drift alarm and one-button recalibration (issue 17): the DriftMonitor and
+// Drift alarm and one-button recalibration: the DriftMonitor and
 // Recalibration on a joint swept in free space whose friction is the paper
 // model's times a routing factor k, and the loop end to end in simulated
 // time with an in-memory link.

@@ -1,6 +1,6 @@
 // The real haptic-server (and virtual-slave) under faults, over real udpm on
 // this host (ttl=0): every catchable terminating signal, a slave whose clock
-// jumps back, a 29 kHz SLAVE_STATE flood (issue 15). The test process plays
+// jumps back, a 29 kHz SLAVE_STATE flood. The test process plays
 // the master console (MASTER_STATE in, MASTER_FORCE out, through the
 // server's `lcm` device driver) and the slave (SLAVE_STATE), and listens to
 // MASTER_COMMAND and HAPTIC_STATUS.
@@ -354,8 +354,8 @@ bool rendering(const Peer& peer) {
 
 // Every catchable signal that ends a process by default must end
 // haptic-server through the zero-torque path: the last MASTER_FORCE says
-// enable 0 and zero torque, the last MASTER_COMMAND enable 0. Before issue 15
-// SIGHUP, SIGQUIT, SIGUSR1 and SIGPIPE killed it with enable 1 and 0.225 N m.
+// enable 0 and zero torque, the last MASTER_COMMAND enable 0 (the default
+// action of SIGHUP, SIGQUIT, SIGUSR1 and SIGPIPE would leave enable 1 and torque).
 TEST_F(ServerFaults, EveryTerminatingSignalZeroesTorqueAndDisablesTheSlave) {
   const std::vector<int> signals = {SIGHUP,  SIGINT,    SIGQUIT,  SIGUSR1, SIGUSR2, SIGALRM,
                                     SIGTERM, SIGVTALRM, SIGPROF,  SIGXCPU, SIGXFSZ, SIGIO,
@@ -417,8 +417,8 @@ TEST_F(ServerFaults, VirtualSlaveExitsCleanlyOnEveryTerminatingSignal) {
 
 // The slave reboots: its utime jumps back 10 s and its seq restarts. The
 // bridge re-bases after resync_after messages; then the estimators must be
-// re-initialised so feedback returns (before issue 15 the estimate stayed NaN
-// and torque 0 for the rest of the run with nothing flagged).
+// re-initialised so feedback returns (not an estimate NaN and torque 0 for the
+// rest of the run with nothing flagged).
 TEST_F(ServerFaults, SlaveClockResetRecoversFeedbackAndIsFlagged) {
   const std::string prefix = unique_prefix();
   Peer peer(prefix);
@@ -442,9 +442,9 @@ TEST_F(ServerFaults, SlaveClockResetRecoversFeedbackAndIsFlagged) {
   EXPECT_NE(server->log().find("slave clock jumped by -9.9"), std::string::npos) << server->log();
 }
 
-// ~29 kHz of SLAVE_STATE for 3 s. Before issue 15 the loop stalled 65-144 ms
-// (336 overruns, 958 Hz) while the tick after each stall reported ~50 us
-// lateness. Now: no status period runs far below rate, and lateness is
+// ~29 kHz of SLAVE_STATE for 3 s: a loop that waited for the receive thread
+// would stall for tens of ms (hundreds of overruns) while the tick after each
+// stall reported ~50 us lateness. Required: no status period runs far below rate, and lateness is
 // measured against the schedule, so any overrun shows in it. Bounds are
 // generous: this runs on a shared 2-core machine.
 TEST_F(ServerFaults, SlaveStateFloodDoesNotStallTheLoop) {
@@ -505,7 +505,7 @@ double max_torque_over(const Peer& peer, std::chrono::milliseconds how_long) {
   return max_torque;
 }
 
-// Issue 18: SLAVE_STATE from a slave without the link key, or with another
+// SLAVE_STATE from a slave without the link key, or with another
 // key, renders no torque (every message rejected and counted in HAPTIC_STATUS
 // slave_rejected): to the server there is no slave, so it exits 5 ("no
 // SLAVE_STATE was ever used") as with no slave at all.
@@ -535,7 +535,7 @@ TEST_F(ServerFaults, UnauthenticatedSlaveStateRendersNoTorque) {
   EXPECT_NE(server->log().find(", bad_mac "), std::string::npos) << server->log();
 }
 
-// Issue 18: while the real (authenticated) slave publishes 0.1 N m worth of
+// While the real (authenticated) slave publishes 0.1 N m worth of
 // tension, a rogue on the same URL publishes 0.6 N m worth with newer seq and
 // utime, unsigned and then with another key: the console keeps getting the
 // real slave's 0.1 N m, never the rogue's (0.3 N m after the clamp).

@@ -1,4 +1,4 @@
-// What the operator is told must be true (issue 16), checked on the real
+// What the operator is told must be true, checked on the real
 // haptic-server over udpm on this host (ttl=0, port 7731): exit codes for a
 // session without a slave, one that faulted, one whose device cannot be
 // opened, and a clean one; the line when no SLAVE_STATE arrives; the live
@@ -169,7 +169,7 @@ class ServerOperator : public test::ScratchDirTest {
   }
 };
 
-// Before issue 16: silent for the whole run, `state FAULT`, exit 0.
+// Not silent for the whole run with `state FAULT` and exit 0.
 TEST_F(ServerOperator, NoSlaveStateIsSaidAtOnceAndRepeatedAndExitsFive) {
   const auto r = run(server(config(unique_prefix()), 6.5), false);
   EXPECT_EQ(r.code, 5) << r.output;
@@ -235,9 +235,8 @@ TEST_F(ServerOperator, LiveStatusLineOnATerminalOnlyAndNeverWithQuiet) {
   EXPECT_EQ(count(quiet.output, "\r\033[K"), 0U) << quiet.output;
 }
 
-// Before issue 16 --trace/--report allocated (and zeroed) storage for
-// evaluation.max_trace_s (600 s) up front: ~480 MB resident for any run.
-// Now rows stream to disk through a fixed ring (3 MB).
+// --trace/--report must not allocate storage for evaluation.max_trace_s
+// (600 s) up front (~480 MB resident for any run): rows stream to disk through a fixed ring (3 MB).
 TEST_F(ServerOperator, TraceAndReportMemoryDoesNotFollowTheConfiguredMaximum) {
   const std::string prefix = unique_prefix();
   FakeSlave slave(prefix, 30.0);

@@ -83,7 +83,7 @@ std::string error_of(const std::string& yaml) {
   return "(no error)";
 }
 
-// The re-route demo's scenario (issue 17): presses alternate, and after the
+// The re-route demo's scenario: presses alternate, and after the
 // fourth every joint sweeps in free space (away from the tissue) while the
 // recalibration button is pressed once for 0.2 s.
 TEST(Scenarios, PalpateSweepWithTheRecalibrationButton) {

@@ -1,6 +1,6 @@
 // The real transports without hardware: they must enumerate nothing and
 // fail to open with messages that say what to do, never crash. Their data
-// paths run against a real kernel in the QEMU USB-gadget tests (issue 9).
+// paths run against a real kernel in the QEMU USB-gadget tests.
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -172,8 +172,8 @@ TEST(LatestValue, LoadIsBoundedAndKeepsTheOutputOnFailure) {
               LatestValue<Stripe>::kMaxAttempts);
 }
 
-// The fault behind the 65-144 ms loop stalls under a SLAVE_STATE flood
-// (issue 15): a SCHED_FIFO reader that preempts the writer mid-store on the
+// The fault behind loop stalls of tens of ms under a SLAVE_STATE flood: a
+// SCHED_FIFO reader that preempts the writer mid-store on the
 // same CPU. A reader that waits for the store to end then waits for a thread
 // that cannot run (until the kernel's RT throttling or a migration lets it).
 // Here reader and writer share CPU 0, the writer stores back to back (so the

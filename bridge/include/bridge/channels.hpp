@@ -15,7 +15,7 @@ enum class Channel {
   kMasterCommand,  ///< haptic server -> slave, per haptic tick
   kHapticStatus,   ///< haptic server -> monitors, 100 Hz
 
-  kCalibrationRequest,  ///< external console -> haptic server: recalibrate (issue 17)
+  kCalibrationRequest,  ///< external console -> haptic server: recalibrate
 };
 
 inline constexpr std::array<Channel, 5> kAllChannels = {

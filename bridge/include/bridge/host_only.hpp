@@ -3,8 +3,8 @@
 //
 // TTL 0 keeps what we send on this host, but LCM 1.3's udpm socket is bound
 // to 0.0.0.0:port and joins the group on the default interface, so any host
-// that reaches the port is heard (issue 18: 2000 unicast datagrams to the
-// external address were accepted). LCM has no option to bind it to an
+// that reaches the port is heard (unicast datagrams to the external address
+// are accepted). LCM has no option to bind it to an
 // interface; we attach a classic BPF socket filter (SO_ATTACH_FILTER, no
 // privilege needed) to LCM's receive socket that keeps only datagrams that
 // came in on the loopback interface or were looped back by this host's own

@@ -22,7 +22,7 @@ struct SlaveStateLimits {
   Range tension{-200.0, 5000.0};  ///< N, both T1 and T3; load cells read slightly negative at rest
   Range radius_m{1e-4, 0.5};      ///< m
 
-  // Plausible steps (issue 15): a value may change from the last accepted
+  // Plausible steps: a value may change from the last accepted
   // sample by at most rate * (elapsed + step_slack_s), elapsed being the
   // smaller of the utime and the receive-time intervals (a forged utime
   // cannot widen the bound). 0 disables a check. Beyond them a message is

@@ -1,8 +1,8 @@
 #pragma once
 // The events of an LCM log file (lcm-logger), read and validated by us
 // instead of liblcm's reader, which trusts each event's length fields: a
-// data length of 0x7fffffff made it read far past its buffer (SIGSEGV,
-// issue 15). The format, as LCM documents it (lcm-proj.github.io, "LCM Log
+// data length of 0x7fffffff makes it read far past its buffer (SIGSEGV).
+// The format, as LCM documents it (lcm-proj.github.io, "LCM Log
 // File format"), big-endian:
 //
 //   uint32 sync word 0xEDA1DA01 | int64 event number | int64 timestamp (us)

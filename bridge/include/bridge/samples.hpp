@@ -59,7 +59,7 @@ struct MasterCommandSample {
   JointArray position_ref{};  ///< slave joint position reference, rad
 };
 
-/// CALIBRATION_REQUEST: recalibrate the joints marked (issue 17).
+/// CALIBRATION_REQUEST: recalibrate the joints marked.
 struct CalibrationRequestSample {
   std::int64_t utime = 0;
   std::int64_t seq = 0;
@@ -100,7 +100,7 @@ struct HapticStatusSample {
   JointArray passivity_energy{};       ///< master-side observed energy W_M, J
   JointArray passivity_dissipated{};   ///< removed by the passivity controller, J
 
-  // Issue 17: drift alarm and recalibration.
+  // Drift alarm and recalibration.
   std::int32_t calibration_state = 0;   ///< haptics::CalibrationState
   std::int32_t calibration_reason = 0;  ///< haptics::CalibrationReason
   std::int32_t calibration_joint = -1;

@@ -27,7 +27,7 @@ std::vector<double> optional_column(const Table& table, const char* name) {
 
 // Finite and increasing is not enough: a last t of 1e300 gave a "fit" with no
 // validation samples and RMSE NaN. Times beyond ~30 years, or one step longer
-// than a minute and than 10^4 typical steps, are not a recording (issue 15).
+// than a minute and than 10^4 typical steps, are not a recording.
 void check_time_column(const Table& table, const std::vector<double>& t) {
   constexpr double kMaxAbsTime = 1e9;  // s
   const auto line_of = [&](std::size_t i) {

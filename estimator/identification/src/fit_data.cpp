@@ -118,7 +118,7 @@ FitData prepare_fit_data(const Recording& rec, const SplitConfig& split,
   d.radius_m = rec.radius_m;
   // By default exact derivatives when the file has them, else the zero-phase
   // smoother: the fit then finds the physical parameters, not ones bent to
-  // imitate the online differentiator's lag (issue 14).
+  // imitate the online differentiator's lag.
   if (derivatives == FitDerivatives::kAutomatic)
     derivatives = rec.has_derivatives() ? FitDerivatives::kAutomatic : FitDerivatives::kOffline;
   if (derivatives == FitDerivatives::kAutomatic) {

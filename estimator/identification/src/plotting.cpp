@@ -121,7 +121,7 @@ namespace {
 
 // Plot data and scripts are part of the output folder: a write that fails
 // part way (disk full, a file-size limit) is an error of the run, never a
-// warning that leaves a truncated file to be committed (issue 15).
+// warning that leaves a truncated file to be committed.
 void write_or_throw(const fs::path& path, const std::function<void(std::ostream&)>& write) {
   errno = 0;
   std::ofstream f(path);

@@ -1,4 +1,4 @@
-// lcm-delay-relay: runs the slave "far away" (issue 21). Two LCM networks,
+// lcm-delay-relay: runs the slave "far away". Two LCM networks,
 // the slave's and the server's; every message on a matching channel is
 // forwarded to the other network after a constant delay plus jitter, or
 // dropped, per direction (link_impairment.hpp). The payload is forwarded

@@ -1,5 +1,5 @@
 #pragma once
-// Drift alarm (issue 17): re-routing the endoscope changes the sheaths' wrap
+// Drift alarm: re-routing the endoscope changes the sheaths' wrap
 // and with it the capstan friction, so the identified model drifts. During
 // free motion the proximal torque is almost all friction, tau_in ~ R F, so
 // the residual r = tau_in - R F_model grows in proportion to the model's

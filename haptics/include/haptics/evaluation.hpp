@@ -70,7 +70,7 @@ struct Discrimination {
   Stiffness soft, hard;
 };
 
-/// A drift alarm or recalibration event (issue 17), as the server logged it.
+/// A drift alarm or recalibration event, as the server logged it.
 struct CalibrationRecord {
   double t_s = 0.0;    ///< since the server started
   std::string kind;    ///< drift_alarm, drift_cleared, requested, applied, refused

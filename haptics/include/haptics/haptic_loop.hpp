@@ -1,5 +1,5 @@
 #pragma once
-// One tick of the haptic loop (issue 7):
+// One tick of the haptic loop:
 //   read the master -> newest SLAVE_STATE -> estimator per joint -> force
 //   mapping -> safety -> write the master -> MASTER_COMMAND (position mapping,
 //   clutch, enable) -> HAPTIC_STATUS every status_every ticks -> trace.
@@ -54,10 +54,10 @@ struct LoopConfig {
   /// stale slave (SafetyTiming), so losing the estimate is never a step.
   double estimate_fault_s = 0.5;
   int status_every = 10;            ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
-  OscillationConfig oscillation{};  ///< safety.oscillation (issue 21)
-  PassivityConfig passivity{};      ///< passivity (issue 21), off by default
+  OscillationConfig oscillation{};  ///< safety.oscillation
+  PassivityConfig passivity{};      ///< passivity, off by default
 
-  // Issue 17 (haptic-server.md, "Drift alarm and recalibration").
+  // Drift alarm and recalibration (haptic-server.md).
   DriftConfig drift{};                  ///< drift alarm (recalibration.hpp)
   RecalibrationConfig recalibration{};  ///< one-button recalibration
 };
@@ -90,12 +90,12 @@ inline constexpr std::int32_t kRateLimited = 1 << 4;
 inline constexpr std::int32_t kEstimateLost = 1 << 5;  ///< some joint has no valid estimate
 inline constexpr std::int32_t kClockReset = 1 << 6;    ///< slave clock jumped in this period
 inline constexpr std::int32_t kOverrun = 1 << 7;       ///< a deadline was missed in this period
-// Bits 8-11 are left to other features; these two are issue 21's.
+// Bits 8-11 are left to other features; these two are delayed teleoperation's.
 inline constexpr std::int32_t kOscillation = 1 << 12;  ///< oscillation detected: force faded
 inline constexpr std::int32_t kPassivityActive =
     1 << 13;  ///< passivity controller damped in this period
 
-// Issue 17: drift alarm and recalibration.
+// Drift alarm and recalibration.
 inline constexpr std::int32_t kDriftSuspected = 1 << 8;  ///< some joint's friction drifted
 inline constexpr std::int32_t kRecalibrating = 1 << 9;   ///< collecting or identifying
 }  // namespace status_flags
@@ -197,7 +197,7 @@ class HapticLoop {
   void publish_status(const TickFacts& f) noexcept;
   void estimate() noexcept;                               // a new SLAVE_STATE in state_
   double slave_torque(std::size_t joint) const noexcept;  // what the source renders, slave N m
-  // Issue 21 (haptic_loop_passivity.cpp): the slave port's energy from each
+  // Delayed teleoperation (haptic_loop_passivity.cpp): the slave port's energy from each
   // new sample; the oscillation gain and the passivity correction of the
   // request; the master port's energy from what was rendered.
   void observe_slave_ports() noexcept;

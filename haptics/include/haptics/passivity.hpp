@@ -1,5 +1,5 @@
 #pragma once
-// Time-domain passivity for delayed teleoperation (issue 21), per joint:
+// Time-domain passivity for delayed teleoperation, per joint:
 // the two-port observer of Ryu, Artigas et al. ("time domain passivity
 // control for position-position teleoperation with delays"; the
 // time-delay power network) and an impedance-type passivity controller at

@@ -1,5 +1,5 @@
 #pragma once
-// One-button recalibration and the drift alarm (issue 17), the loop's side
+// One-button recalibration and the drift alarm, the loop's side
 // and the worker's side of one exchange.
 //
 // Re-routing the endoscope changes the sheaths' wrap and so the capstan

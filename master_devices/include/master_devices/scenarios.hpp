@@ -22,7 +22,7 @@
 namespace tsmh::master_devices {
 
 /// A free-motion sweep of every joint between two presses, with the
-/// recalibration button pressed during it (issue 17: the re-route demo).
+/// recalibration button pressed during it (the re-route demo).
 struct PalpateSweep {
   int after_press = -1;        ///< the sweep follows this many presses; -1: none
   double duration_s = 8.0;     ///< including a 1 s fade in and out

@@ -4,7 +4,7 @@
 // only after a successful flush. Readers never see half a file, and a failed
 // run leaves no output behind.
 //
-// Not regular files (issue 15): a path that is a device (/dev/null,
+// Not regular files: a path that is a device (/dev/null,
 // /dev/full), a FIFO or a socket is written through, never renamed over; a
 // symbolic link is followed and its target written atomically beside the
 // target, so the link stays a link (a dangling link's target is created).

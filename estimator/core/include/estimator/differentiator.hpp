@@ -140,7 +140,7 @@ struct DifferentiatorConfig {
   /// kReferenceQuantum, scaled with the cube root of `quantum`: a hand
   /// ending a move smoothly (velocity and acceleration reaching 0 together)
   /// covers its last count in a time proportional to quantum^(1/3)
-  /// (docs/friction-model.md, "The stop"). Differentiator::still_time()
+  /// (docs/friction-model.md, "Corrections"). Differentiator::still_time()
   /// gives the value in use.
   double still_time = -1.0;
   /// A gap longer than this (s) restarts the filters at the new sample.
@@ -183,8 +183,7 @@ struct DifferentiatorConfig {
   /// reversed there, too slowly for the encoder to show (velocity below one
   /// count per still_time), and eq. (4) drove the state with lambda
   /// sgn(xdd) meanwhile. Only for a stretch the history still holds.
-  /// Measured in docs/friction-model.md ("Reversals the encoder does not
-  /// see"). false: off.
+  /// docs/friction-model.md, "Corrections". false: off.
   bool settle_reversals = true;
   /// Hindsight correction: a move that leaves a hold. From rest the
   /// acceleration has the move's sign from its first instant, while the
@@ -195,8 +194,8 @@ struct DifferentiatorConfig {
   /// a hand starts a reach) the velocity grows as the square of the time
   /// since the start, so the square root of each interval's mean velocity,
   /// extrapolated back to zero, gives it. The samples at rest since then
-  /// get the move's sign. Measured in docs/friction-model.md ("Moves the
-  /// encoder shows late"). false: off.
+  /// get the move's sign. docs/friction-model.md,
+  /// "Corrections". false: off.
   bool settle_starts = true;
   /// Hindsight correction: a move that runs out into a hold. Its last
   /// count comes 10-90 ms before it stops; meanwhile it decelerates, and

@@ -30,8 +30,8 @@ enum class TermKind : std::uint8_t {
   kLoadDependent,           ///< c_load |tau_in|/R: capstan, friction grows with tension
   kPositionDependent,       ///< p1 x + p2 x^2: friction varies along the stroke
   kTimeVarying,             ///< drift (t - t0) + step [t >= t_step]: sheath re-routed, wear
-  // Further forms of the same physical effects (issue 14: real effects do not
-  // come in one form). Each belongs to a family (TermInfo::family), the name
+  // Further forms of the same physical effects (real effects do not come in
+  // one form). Each belongs to a family (TermInfo::family), the name
   // under which tsm gap reports it.
   kPositionRipple,  ///< a sin(k x) + b cos(k x): periodic friction along the stroke (family
                     ///< position)

@@ -36,7 +36,7 @@ enum class FitDerivatives : std::uint8_t {
   /// no lag, so the parameters found are the physical ones.
   kOffline,
   /// The deployed causal differentiator, as the haptic loop runs it (the
-  /// parameters then also absorb its lag; the behaviour before issue 14).
+  /// parameters then also absorb its lag).
   kDeployed,
 };
 

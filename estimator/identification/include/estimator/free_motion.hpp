@@ -1,5 +1,5 @@
 #pragma once
-// Free-motion identification (issue 17): a robot in surgery has no tip
+// Free-motion identification: a robot in surgery has no tip
 // sensor, so `tsm fit --free-motion` and `tsm gap --free-motion` identify the
 // friction from data recorded while the instrument moves in free space. There
 // the distal torque is only the joint's own inertia and damping torque,

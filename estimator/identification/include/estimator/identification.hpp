@@ -1,10 +1,10 @@
 #pragma once
 // Identification of a friction model's parameters from recorded data
-// (`tsm fit`, issue 3): least squares between the measured friction and the
+// (`tsm fit`): least squares between the measured friction and the
 // model simulated on the data's motion (fit_data.hpp: exact or offline
 // zero-phase derivatives by default), on the train samples only.
 //
-// Default method "lm" (issue 14): informed starts from the data (sliding
+// Default method "lm": informed starts from the data (sliding
 // plateaus give the levels, reversal slopes gamma theta, a small grid over
 // theta's share, lambda and the Stribeck decay), each screened by a few
 // Levenberg-Marquardt iterations on data decimated to 5 ms; the best

@@ -1,5 +1,5 @@
 #pragma once
-// The model-gap workflow (`tsm gap`, issues 8 and 14): find where the simulated and
+// The model-gap workflow (`tsm gap`): find where the simulated and
 // the measured friction disagree, name the missing effect, add it to the
 // model and show the gap shrink.
 //

@@ -12,7 +12,7 @@
 // the writer. With one slot a reader that meets a store in progress has to
 // retry until the store ends; when the writer is preempted mid-store by the
 // reader's own SCHED_FIFO thread on the same CPU it never ends, and the loop
-// stalled for 65-144 ms under a 29 kHz SLAVE_STATE flood (issue 15). Here the
+// stalls for tens of ms under a flood of SLAVE_STATE. Here the
 // writer fills the slot the readers are not directed to and only then
 // publishes its version, so a store in progress never blocks a read of the
 // previous value; a read retries only when the writer completed a whole store
