@@ -8,10 +8,18 @@
 //                  every MASTER_STATE, so forces stop exactly when it dies.
 //
 // FakeVendorMaster stands in for the vendor SDK; replace its four calls
-// (read angles, velocities, buttons; write torques) with the real ones.
+// (read angles, read buttons, write torques, zero from a signal handler)
+// with the real ones. Its joint count and kinematics come from the master
+// profile (--profile, master_devices/profiles/masters/); the mapping layer
+// (master_devices/axis_mapping.hpp, --mapping) turns the device's own
+// coordinates into the slave's joints for MASTER_STATE and the server's
+// per-slave-joint MASTER_FORCE back into device joint torques through the
+// Jacobian transpose, within the profile's limits. Without --profile: a
+// two-joint console mapped joint to joint.
 //
-//   external-master-adapter [--lcm-url URL] [--prefix LEFT_] [--rate-hz 1000]
-//                           [--watchdog-ms 50] [--duration S] [--key FILE | --insecure]
+//   external-master-adapter [--profile FILE --mapping FILE] [--lcm-url URL]
+//                           [--prefix LEFT_] [--rate-hz 1000] [--watchdog-ms 50]
+//                           [--duration S] [--key FILE | --insecure]
 // With the installation's link key (docs/bridge.md, "Authentication") every
 // MASTER_STATE carries a MAC and only MASTER_FORCE that verifies drives the
 // motors; the bridge's link_auth.hpp is the only project code it uses.
@@ -20,6 +28,7 @@
 #include <pthread.h>
 #include <signal.h>
 #include <time.h>
+#include <yaml-cpp/yaml.h>
 
 #include <CLI/CLI.hpp>
 #include <array>
@@ -39,30 +48,35 @@
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
+#include "master_devices/axis_mapping.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
 
-/// Stand-in for a vendor SDK: a 2-DOF handle (inertia, damping) moved by a
-/// hand that sweeps it slowly, plus whatever torque we command.
+/// Stand-in for a vendor SDK: a handle of `joints` joints (inertia,
+/// damping) moved by a hand that sweeps each joint slowly around `home`,
+/// plus whatever torque we command. Holds the dead-man button (bit 0).
 class FakeVendorMaster {
  public:
-  static constexpr int kDof = 2;
+  FakeVendorMaster(std::size_t joints, const tsmh::master_devices::JointArray& home,
+                   double amplitude)
+      : n_(joints), amplitude_(amplitude), home_(home), q_(home) {}
 
   void step(double dt) {
     t_ += dt;
-    for (int j = 0; j < kDof; ++j) {
-      const double target = 0.2 * std::sin(2.0 * 3.14159265358979 * (0.2 + 0.1 * j) * t_);
+    for (std::size_t j = 0; j < n_; ++j) {
+      const double f = 0.2 + 0.1 * static_cast<double>(j);
+      const double target = home_[j] + amplitude_ * std::sin(2.0 * 3.14159265358979 * f * t_);
       const double hand = 3.0 * (target - q_[j]) - 0.2 * qd_[j];
       qd_[j] += dt * (hand + torque_[j] - 0.005 * qd_[j]) / 0.007;
       q_[j] += dt * qd_[j];
     }
   }
-  // The four calls a real SDK provides.
-  std::array<double, kDof> joint_angles() const { return q_; }
-  std::array<double, kDof> joint_velocities() const { return qd_; }
-  int buttons() const { return 1; }  // bit 0 dead-man held
-  void set_joint_torques(const std::array<double, kDof>& tau) { torque_ = tau; }
+  // The calls a real SDK provides (joint angles in rad, or the handle's
+  // Cartesian position for an SDK that solves its own kinematics).
+  const tsmh::master_devices::JointArray& joint_angles() const { return q_; }
+  std::uint32_t buttons() const { return 1U; }  // bit 0 (the profile's first button) held
+  void set_joint_torques(const tsmh::master_devices::JointArray& tau) { torque_ = tau; }
   /// Zero torque from a signal handler: async-signal-safe (plain stores).
   /// A real SDK's torque call rarely is (it locks, allocates, talks to
   /// libusb): there, write() a zero command prepared at start-up to a
@@ -74,12 +88,49 @@ class FakeVendorMaster {
   }
 
  private:
+  std::size_t n_;
+  double amplitude_;  ///< of the hand's sweep, in the device's units
   double t_ = 0.0;
-  std::array<double, kDof> q_{}, qd_{}, torque_{};
+  tsmh::master_devices::JointArray home_{}, q_{}, qd_{}, torque_{};
 };
 
+// Without --profile: the two-joint console this adapter always modelled,
+// each slave joint following the master joint of the same index.
+tsmh::master_devices::MasterProfile default_profile() {
+  return tsmh::master_devices::parse_master_profile(R"(
+name: generic-2dof
+update_rate_hz: 1000
+kinematics: {type: identity, joints: 2}
+axes: [joint0, joint1]
+workspace: {min: -1.0, max: 1.0}
+force_limit: 0.3
+buttons: [dead_man]
+)",
+                                                    "built-in profile");
+}
+constexpr const char* kDefaultMapping = R"(
+joints: [{axis: joint0}, {axis: joint1}]
+buttons: {dead_man: dead_man}
+)";
+
+// Where the fake hand sweeps: the workspace's centre for a master whose
+// coordinates are its joints; for a pantograph, joint angles that put the
+// handle in the middle of its workspace (elbows out, handle up).
+tsmh::master_devices::JointArray home_pose(const tsmh::master_devices::MasterProfile& p) {
+  tsmh::master_devices::JointArray q{};
+  if (p.kinematics.type == tsmh::master_devices::KinematicsType::kPantograph) {
+    q[0] = 2.0;
+    q[1] = 1.1;
+    return q;
+  }
+  for (std::size_t k = 0; k < p.kinematics.joints; ++k)
+    q[k] = 0.5 * (p.workspace_min[k] + p.workspace_max[k]);
+  return q;
+}
+
 struct ForceInbox {
-  std::array<double, FakeVendorMaster::kDof> torque{};
+  std::size_t joints = 0;  ///< the slave joints MASTER_STATE carries
+  tsmh::master_devices::JointArray torque{};
   bool enable = false;
   std::int64_t received_ns = 0;
   std::int64_t rejected = 0;
@@ -108,18 +159,19 @@ struct ForceInbox {
   }
 
   void on_force(const tsmh::master_force_t* msg) {
-    if (msg->num_joints != FakeVendorMaster::kDof) {
+    if (msg->num_joints != static_cast<int>(joints) ||
+        msg->torque.size() != static_cast<std::size_t>(msg->num_joints)) {
       ++rejected;
       return;
     }
-    for (int j = 0; j < FakeVendorMaster::kDof; ++j) {
-      if (!std::isfinite(msg->torque[static_cast<std::size_t>(j)])) {
+    for (std::size_t j = 0; j < joints; ++j) {
+      if (!std::isfinite(msg->torque[j])) {
         ++rejected;
         return;
       }
     }
-    for (int j = 0; j < FakeVendorMaster::kDof; ++j)
-      torque[j] = msg->torque[static_cast<std::size_t>(j)];
+    for (std::size_t j = 0; j < joints; ++j)
+      torque[j] = msg->torque[j];
     enable = msg->enable;
     received_ns = tsmh::realtime::monotonic_now_ns();
   }
@@ -195,6 +247,13 @@ int main(int argc, char** argv) {
   app.add_option("--watchdog-ms", watchdog_ms, "zero torque when MASTER_FORCE is older")
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
+  std::string profile_file, mapping_file;
+  app.add_option("--profile", profile_file,
+                 "master profile: kinematics, workspace, limits, buttons "
+                 "(master_devices/profiles/masters/*.yaml; default: a 2-joint console)");
+  app.add_option("--mapping", mapping_file,
+                 "the mapping to the slave's joints: joints: [{axis: NAME, scale: S}], "
+                 "buttons: {dead_man: NAME, clutch: NAME, ...} (needed with --profile)");
   tsmh::bridge::LinkSecurityOptions link;
   app.add_option("--key", link.key_file, tsmh::bridge::kKeyOptionHelp);
   app.add_flag("--insecure", link.insecure,
@@ -202,6 +261,29 @@ int main(int argc, char** argv) {
                "the master's motors (isolated networks only)");
   CLI11_PARSE(app, argc, argv);
   const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
+
+  tsmh::master_devices::MasterProfile profile;
+  tsmh::master_devices::MappingConfig mapping_cfg;
+  try {
+    if (profile_file.empty() != mapping_file.empty())
+      throw tsmh::master_devices::ConfigError("--profile and --mapping go together");
+    profile = profile_file.empty() ? default_profile()
+                                   : tsmh::master_devices::load_master_profile(profile_file);
+    const YAML::Node m =
+        mapping_file.empty() ? YAML::Load(kDefaultMapping) : YAML::LoadFile(mapping_file);
+    mapping_cfg = tsmh::master_devices::parse_mapping(
+        m, profile, mapping_file.empty() ? "built-in mapping" : mapping_file, "");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "external-master-adapter: error: %s\n", e.what());
+    return 2;
+  }
+  tsmh::master_devices::MasterMapping mapping(profile, mapping_cfg);
+  const std::size_t slave_joints = mapping.slave_joints();
+  std::fprintf(stderr,
+               "external-master-adapter: master %s (%zu joints, %s kinematics) -> %zu slave "
+               "joints\n",
+               profile.name.c_str(), profile.kinematics.joints,
+               std::string(to_string(profile.kinematics.type)).c_str(), slave_joints);
 
   tsmh::bridge::LinkSecurity security;
   try {
@@ -228,6 +310,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   ForceInbox inbox;
+  inbox.joints = slave_joints;
   inbox.verifier = verifier.get();
   lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_raw, &inbox);
   // ttl=0 means this host: LCM's socket listens on every interface, so
@@ -243,12 +326,21 @@ int main(int argc, char** argv) {
   const std::string state_channel = prefix + "MASTER_STATE";
   std::vector<std::uint8_t> bytes;
 
-  FakeVendorMaster device;
+  // The hand sweeps 0.2 rad at the joints, or 40 % of the half-workspace
+  // of a device that reports its handle (m).
+  const double amplitude =
+      profile.kinematics.type == tsmh::master_devices::KinematicsType::kIdentity &&
+              !profile_file.empty()
+          ? 0.4 * 0.5 * (profile.workspace_max[0] - profile.workspace_min[0])
+          : 0.2;
+  FakeVendorMaster device(profile.kinematics.joints, home_pose(profile), amplitude);
   zero_torque_on_crash(device);
   tsmh::master_state_t state;
-  state.num_joints = FakeVendorMaster::kDof;
-  state.q.resize(FakeVendorMaster::kDof);
-  state.qd.resize(FakeVendorMaster::kDof);
+  state.num_joints = static_cast<int>(slave_joints);
+  state.q.resize(slave_joints);
+  state.qd.resize(slave_joints);
+  tsmh::master_devices::JointArray v_prev{};
+  bool have_prev = false;
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
   const std::int64_t start = tsmh::realtime::monotonic_now_ns();
   std::int64_t next = start;
@@ -274,19 +366,27 @@ int main(int argc, char** argv) {
                    static_cast<double>(now - inbox.received_ns) * 1e-6);
     }
     was_fresh = fresh;
-    device.set_joint_torques(fresh && inbox.enable ? inbox.torque : std::array<double, 2>{});
-    device.step(static_cast<double>(period_ns) * 1e-9);
+    // Slave-joint torques -> the handle -> the device's joints (J^T), within
+    // the profile's limits; the pose is the one of the previous update.
+    device.set_joint_torques(fresh && inbox.enable ? mapping.joint_torques(inbox.torque)
+                                                   : tsmh::master_devices::JointArray{});
+    const double dt = static_cast<double>(period_ns) * 1e-9;
+    device.step(dt);
+    const bool pose_ok = mapping.update(device.joint_angles(), device.buttons());
 
     state.utime = now / 1000;
     state.seq = seq++;
-    const auto q = device.joint_angles();
-    const auto qd = device.joint_velocities();
-    for (int j = 0; j < FakeVendorMaster::kDof; ++j) {
-      state.q[static_cast<std::size_t>(j)] = q[j];
-      state.qd[static_cast<std::size_t>(j)] = qd[j];
+    const auto& v = mapping.slave_position();
+    for (std::size_t j = 0; j < slave_joints; ++j) {
+      state.q[j] = v[j];
+      state.qd[j] = have_prev ? (v[j] - v_prev[j]) / dt : 0.0;
     }
-    state.buttons = device.buttons();
-    state.status = 0;
+    v_prev = v;
+    have_prev = true;
+    const auto b = mapping.buttons();
+    state.buttons =
+        (b.dead_man ? 1 : 0) | (b.e_stop ? 2 : 0) | (b.clutch ? 4 : 0) | (b.calibrate ? 8 : 0);
+    state.status = pose_ok ? 0 : 1;  // bit 0 fault: no pose (the kinematics has no solution)
     const int size = state.getEncodedSize();
     const std::size_t trailer = signer ? tsmh::bridge::kAuthTrailerBytes : 0;
     bytes.resize(static_cast<std::size_t>(size) + trailer);  // allocates only the first time

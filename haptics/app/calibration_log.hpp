@@ -10,8 +10,10 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "haptics/drift_advice.hpp"
 #include "haptics/recalibration.hpp"
 
 namespace tsmh::haptic_server {
@@ -30,8 +32,15 @@ struct CalibrationEvent {
 class CalibrationLog {
  public:
   /// `live`: stderr carries the live status line, which each message clears.
-  CalibrationLog(haptics::Recalibration& calib, std::int64_t start_ns, bool live)
-      : calib_(calib), start_ns_(start_ns), live_(live) {}
+  /// `advice`: what the drift warning may recommend; `paper_joints[j]`: joint
+  /// j runs on the built-in `paper` preset (the warning names it as a cause).
+  CalibrationLog(haptics::Recalibration& calib, std::int64_t start_ns, bool live,
+                 haptics::DriftAdviceContext advice = {}, std::vector<bool> paper_joints = {})
+      : calib_(calib),
+        start_ns_(start_ns),
+        live_(live),
+        advice_(std::move(advice)),
+        paper_joints_(std::move(paper_joints)) {}
 
   void poll(std::int64_t now_ns) {
     const double t = static_cast<double>(now_ns - start_ns_) * 1e-9;
@@ -53,9 +62,10 @@ class CalibrationLog {
     for (int j = 0; j < calib_.joints(); ++j) {
       const bool now = (alarms >> j) & 1U, was = (alarms_ >> j) & 1U;
       if (now && !was) {
-        say("t = %.1f s: warning: friction drift suspected on joint %d (the free motion asks for "
-            "%.2fx the identified friction): recalibrate (master button or CALIBRATION_REQUEST)",
-            t, j, calib_.drift_scale(j));
+        advice_.paper_preset =
+            static_cast<std::size_t>(j) < paper_joints_.size() && paper_joints_[j];
+        say("t = %.1f s: warning: %s", t,
+            haptics::drift_advice(j, calib_.drift_scale(j), advice_).c_str());
         events_.push_back({t, "drift_alarm", j, calib_.drift_scale(j), ""});
       } else if (!now && was) {
         say("t = %.1f s: friction drift on joint %d cleared", t, j);
@@ -108,6 +118,8 @@ class CalibrationLog {
   haptics::Recalibration& calib_;
   std::int64_t start_ns_;
   bool live_;
+  haptics::DriftAdviceContext advice_;
+  std::vector<bool> paper_joints_;
   haptics::CalibrationState state_ = haptics::CalibrationState::kIdle;
   std::uint64_t results_ = 0;
   std::uint32_t alarms_ = 0;

@@ -596,7 +596,14 @@ int run(const Options& o, const sigset_t& stop_signals) {
                      .joints = cfg.loop.joints,
                      .live = live},
                     t0);
-    haptic_server::CalibrationLog calibration(loop.calibration(), t0, live);
+    std::vector<bool> paper_joints;
+    for (const auto& jc : cfg.joints)
+      paper_joints.push_back(jc.params == "paper");
+    haptic_server::CalibrationLog calibration(
+        loop.calibration(), t0, live,
+        {.config_path = o.config,
+         .master_has_calibrate_button = device->spec().has_calibrate_button},
+        std::move(paper_joints));
     const int sig = wait_for_stop(stop_signals, runner, events, calibration, *crash);
     events.poll();  // anything the loop reported in its last ticks
     calibration.poll(tsmh::realtime::monotonic_now_ns());

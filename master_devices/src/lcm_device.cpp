@@ -163,6 +163,7 @@ LcmDevice::LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm,
       clock_(clock ? std::move(clock) : monotonic_clock()) {
   spec_.model = "lcm:" + settings_.state_channel();
   spec_.driver = "lcm";
+  spec_.has_calibrate_button = true;  // MASTER_STATE buttons bit 3
   spec_.dof = static_cast<std::uint32_t>(settings_.dof);
   spec_.nominal_rate_hz = settings_.nominal_rate_hz;
   for (std::size_t j = 0; j < settings_.dof; ++j) {

@@ -9,7 +9,7 @@ work=$(mktemp -d)
 trap 'kill -INT $slave 2>/dev/null || true; rm -rf "$work"' EXIT
 url="udpm://239.255.76.67:${port}?ttl=0"
 
-"$bin/slave-node-skeleton" --lcm-url "$url" >"$work/slave.log" 2>&1 &
+"$bin/slave-node-skeleton" --prefix ARM1_ --lcm-url "$url" >"$work/slave.log" 2>&1 &
 slave=$!
 sleep 0.3
 "$bin/haptic-server" --config "$config" --lcm-url "$url" --duration 4 --quiet \

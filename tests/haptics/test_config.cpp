@@ -504,3 +504,28 @@ TEST(ServerConfigDelay, KeysAreReadAndBadOnesNamed) {
 
 }  // namespace
 }  // namespace tsmh::haptics
+
+namespace tsmh::haptics {
+namespace {
+
+// The real-robot first-session template (docs/real-robot.md) loads, and is as
+// timid as the checklist asks: a real console, a tenth of the estimate, a low
+// torque cap, the arm's prefix, fitted parameters beside the file, no truth.
+TEST(ServerConfigFile, FirstSessionTemplateLoadsAndIsTimid) {
+  const std::filesystem::path file =
+      std::filesystem::path(TSMH_SOURCE_DIR) / "examples/slave_node_skeleton/first-session.yaml";
+  const auto c = load_server_config(file);
+  EXPECT_EQ(c.device_driver, "hid");
+  EXPECT_EQ(c.lcm_prefix, "ARM1_");
+  ASSERT_EQ(c.joints.size(), 2U);
+  for (int j = 0; j < 2; ++j) {
+    EXPECT_LE(c.loop.force[j].scale, 0.1) << j;
+    EXPECT_LE(c.loop.limits[j].max_torque_nm, 0.05) << j;
+    EXPECT_EQ(std::filesystem::path(c.joints[j].params).filename(),
+              "params-joint" + std::to_string(j) + ".yaml");
+  }
+  EXPECT_FALSE(c.evaluation.truth);
+}
+
+}  // namespace
+}  // namespace tsmh::haptics

@@ -85,6 +85,8 @@ struct DeviceSpec {
   JointArray max_stiffness_nm_per_rad{};  ///< highest stable rendered stiffness at the nominal rate
                                           ///< (0 = unknown)
   double nominal_rate_hz = 0.0;           ///< rate at which the device produces samples
+  /// The operator can press a recalibrate button (Buttons::calibrate) on it.
+  bool has_calibrate_button = false;
 };
 
 /// The rules every driver applies to a reading before the loop sees it: with

@@ -1,0 +1,264 @@
+#pragma once
+// A compilable skeleton of a master device driver, the starting point of
+// docs/adding-a-driver.md. ctest builds it and runs it
+// (tests/master_devices/test_skeleton_driver.cpp). Copy it, rename
+// `skeleton`, and work through the numbered steps.
+//
+// Shape: the vendor's calls run on the driver's own I/O thread; the 1 kHz
+// loop only touches two LatestValue cells (readings in, commands out), so
+// nothing in read()/write_torque() blocks, allocates or locks.
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "master_devices/clock.hpp"
+#include "master_devices/device.hpp"
+#include "master_devices/registry.hpp"
+#include "master_devices/settings.hpp"
+#include "realtime/latest_value.hpp"
+
+namespace tsmh::master_devices::skeleton {
+
+// STEP 1. Settings, with defaults, parsed by FieldReader so that every error
+// names the file and the field (parse_settings below).
+struct Settings {
+  int dof = 2;
+  double peak_torque_nm = 0.2;
+  double rate_hz = 1000.0;
+  double stale_timeout_ms = 50.0;    ///< no new sample this long: DISCONNECTED
+  double command_timeout_ms = 20.0;  ///< no write_torque() this long: zero torque
+};
+
+inline Settings parse_settings(FieldReader& r) {
+  Settings s;
+  s.dof = static_cast<int>(r.get_int("dof", 2));
+  if (s.dof < 1 || s.dof > static_cast<int>(kMaxDof))
+    r.fail("dof", "must be 1.." + std::to_string(kMaxDof));
+  s.peak_torque_nm = r.get_positive("peak_torque_nm", s.peak_torque_nm);
+  s.rate_hz = r.get_positive("rate_hz", s.rate_hz);
+  s.stale_timeout_ms = r.get_positive("stale_timeout_ms", s.stale_timeout_ms);
+  s.command_timeout_ms = r.get_positive("command_timeout_ms", s.command_timeout_ms);
+  r.reject_unknown();
+  return s;
+}
+
+// STEP 2. The vendor's calls. This stand-in is a handle that sways slowly and
+// records the last torque it was given; replace its bodies with the SDK's.
+// It is shared with tests, which unplug it and look at the torque it got.
+class VendorLink {
+ public:
+  virtual ~VendorLink() = default;
+  /// One sample: joint angles (rad, already zeroed and signed) and buttons.
+  /// False: the device is gone (unplugged, SDK error).
+  virtual bool read_sample(JointArray& q, Buttons& buttons) {
+    if (!plugged.load()) return false;
+    const double t = static_cast<double>(++samples_) * 1e-3;
+    for (std::size_t j = 0; j < kMaxDof; ++j)
+      q[j] = 0.1 * std::sin(t + static_cast<double>(j));
+    buttons.dead_man = true;
+    return true;
+  }
+  /// Joint torques, N m; only ever called with limited values.
+  virtual void write_torques(const JointArray& tau) {
+    for (std::size_t j = 0; j < kMaxDof; ++j)
+      last_torque[j].store(tau[j]);
+  }
+  std::atomic<bool> plugged{true};
+  std::array<std::atomic<double>, kMaxDof> last_torque{};
+
+ private:
+  long samples_ = 0;
+};
+
+class SkeletonDevice final : public Device {
+ public:
+  SkeletonDevice(Settings s, std::shared_ptr<VendorLink> link,
+                 std::shared_ptr<const Clock> clock = monotonic_clock())
+      : s_(s), link_(std::move(link)), clock_(std::move(clock)) {
+    // STEP 3. The spec: everything the server's limits and scaling read.
+    spec_.model = "skeleton";
+    spec_.driver = "skeleton";
+    spec_.dof = static_cast<std::uint32_t>(s_.dof);
+    spec_.nominal_rate_hz = s_.rate_hz;
+    for (int j = 0; j < s_.dof; ++j) {
+      spec_.joint_names[static_cast<std::size_t>(j)] = "joint" + std::to_string(j);
+      spec_.peak_torque_nm[static_cast<std::size_t>(j)] = s_.peak_torque_nm;
+      spec_.max_continuous_torque_nm[static_cast<std::size_t>(j)] = s_.peak_torque_nm;
+      spec_.position_min_rad[static_cast<std::size_t>(j)] = -1.0;
+      spec_.position_max_rad[static_cast<std::size_t>(j)] = 1.0;
+    }
+  }
+  ~SkeletonDevice() override { close(); }
+
+  const DeviceSpec& spec() const override { return spec_; }
+
+  // STEP 4. open(): connect (throw DeviceError naming the cause), then start
+  // the I/O thread. Torque starts disabled.
+  void open() override {
+    if (running_.load()) return;
+    if (!link_->plugged.load())
+      throw DeviceError("skeleton: no device found (plugged in? permissions?)");
+    enabled_.store(false);
+    running_.store(true);
+    status_.store(DeviceStatus::kOk);
+    io_ = std::thread([this] { io_loop(); });
+  }
+
+  void close() noexcept override {
+    if (!running_.exchange(false)) return;
+    io_.join();
+    link_->write_torques({});  // zero torque on the way out
+    status_.store(DeviceStatus::kClosed);
+  }
+
+  std::string last_error() const override {
+    std::lock_guard<std::mutex> lock(error_mutex_);  // setup path only: a lock is fine here
+    return error_;
+  }
+
+  // STEP 5. Faults latch until clear_fault(), which fails while the cause persists.
+  bool clear_fault() override {
+    if (status_.load() != DeviceStatus::kFault) return true;
+    if (!link_->plugged.load()) return false;
+    fault_.store(FaultCode::kNone);
+    enabled_.store(false);  // back disabled
+    status_.store(DeviceStatus::kOk);
+    return true;
+  }
+
+  // STEP 6. read(): the newest sample from the cell, and the shared rules
+  // (stale -> DISCONNECTED, not OK -> disabled with nothing commanded).
+  DeviceReading read(std::int64_t now_ns) noexcept override {
+    Sample sample;
+    const bool fresh = samples_reader_.fetch(sample);
+    DeviceReading r;
+    r.t_ns = sample.t_ns;
+    r.sequence = sample.sequence;
+    r.dof = spec_.dof;
+    r.q = sample.q;
+    r.qd = sample.qd;
+    r.buttons = sample.buttons;
+    r.tau_commanded = commanded_;
+    r.status = status_.load();
+    if (r.status == DeviceStatus::kOk && !sample.connected) r.status = DeviceStatus::kDisconnected;
+    r.fault = fault_.load();
+    r.enabled = enabled_.load();
+    r.fresh = fresh;
+    apply_reading_rules(r, now_ns, static_cast<std::int64_t>(s_.stale_timeout_ms * 1e6), true);
+    last_status_ = r.status;
+    return r;
+  }
+
+  // STEP 7. write_torque(): NaN -> 0, clamp to the peak, zero unless OK and
+  // enabled; stamped with the clock so the I/O thread can time it out.
+  void write_torque(const JointArray& tau) noexcept override {
+    Command c;
+    const bool drive = last_status_ == DeviceStatus::kOk && enabled_.load();
+    for (int j = 0; j < s_.dof; ++j) {
+      const auto i = static_cast<std::size_t>(j);
+      const double t = std::isfinite(tau[i]) ? tau[i] : 0.0;
+      c.tau[i] = drive ? std::clamp(t, -s_.peak_torque_nm, s_.peak_torque_nm) : 0.0;
+    }
+    c.t_ns = clock_->now_ns();
+    commanded_ = c.tau;
+    commands_.store(c);
+  }
+
+  void set_enabled(bool on) noexcept override { enabled_.store(on); }
+  void raise_fault(FaultCode code) noexcept override {
+    fault_.store(code);
+    status_.store(DeviceStatus::kFault);
+    enabled_.store(false);
+  }
+  DeviceStatus status() const noexcept override { return status_.load(); }
+
+ private:
+  struct Sample {
+    std::int64_t t_ns = 0;
+    std::uint64_t sequence = 0;
+    JointArray q{}, qd{};
+    Buttons buttons;
+    bool connected = false;
+  };
+  struct Command {
+    JointArray tau{};
+    std::int64_t t_ns = 0;
+  };
+
+  // STEP 8. The I/O thread: paced on absolute deadlines, it reads the vendor,
+  // publishes the sample, and sends the newest command, or zero when the
+  // command is older than command_timeout_ms (the loop died) or the device
+  // is not OK.
+  void io_loop() {
+    realtime::LatestValueReader<Command> commands(commands_);
+    const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / s_.rate_hz));
+    auto next = std::chrono::steady_clock::now();
+    Sample s;
+    JointArray q_prev{};
+    while (running_.load()) {
+      next += period;
+      std::this_thread::sleep_until(next);
+      JointArray q{};
+      Buttons b;
+      const bool ok = link_->read_sample(q, b);
+      const std::int64_t now = clock_->now_ns();
+      if (ok) {
+        const double dt = 1.0 / s_.rate_hz;
+        for (std::size_t j = 0; j < kMaxDof; ++j)
+          s.qd[j] = s.sequence ? (q[j] - q_prev[j]) / dt : 0.0;
+        q_prev = q;
+        s.q = q;
+        s.buttons = b;
+        s.t_ns = now;
+        ++s.sequence;
+      } else if (s.connected) {
+        enabled_.store(false);  // a device that comes back comes back disabled
+        std::lock_guard<std::mutex> lock(error_mutex_);
+        error_ = "skeleton: device unplugged";
+      }
+      s.connected = ok;
+      samples_.store(s);
+      Command c;
+      commands.fetch(c);
+      const bool timely = now - c.t_ns <= static_cast<std::int64_t>(s_.command_timeout_ms * 1e6);
+      if (ok)
+        link_->write_torques(timely && status_.load() == DeviceStatus::kOk ? c.tau : JointArray{});
+    }
+  }
+
+  Settings s_;
+  std::shared_ptr<VendorLink> link_;
+  std::shared_ptr<const Clock> clock_;
+  DeviceSpec spec_;
+  realtime::LatestValue<Sample> samples_;
+  realtime::LatestValueReader<Sample> samples_reader_{samples_};
+  realtime::LatestValue<Command> commands_;
+  JointArray commanded_{};                            // loop thread only
+  DeviceStatus last_status_ = DeviceStatus::kClosed;  // loop thread only
+  std::atomic<DeviceStatus> status_{DeviceStatus::kClosed};
+  std::atomic<FaultCode> fault_{FaultCode::kNone};
+  std::atomic<bool> enabled_{false}, running_{false};
+  std::thread io_;
+  mutable std::mutex error_mutex_;
+  std::string error_;
+};
+
+// STEP 9. Register it by name where the registry is built (haptic-server's
+// make_registry(), tsm-devices): device: {driver: skeleton, settings: {...}}.
+inline void register_skeleton_driver(DriverRegistry& registry, std::shared_ptr<VendorLink> link,
+                                     std::shared_ptr<const Clock> clock = monotonic_clock()) {
+  registry.add("skeleton", "skeleton driver (docs/adding-a-driver.md)",
+               [link, clock](const YAML::Node& settings, const DriverContext& ctx) {
+                 FieldReader r(settings, ctx.source, ctx.path);
+                 return std::unique_ptr<Device>(
+                     std::make_unique<SkeletonDevice>(parse_settings(r), link, clock));
+               });
+}
+
+}  // namespace tsmh::master_devices::skeleton
