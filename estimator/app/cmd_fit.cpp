@@ -143,9 +143,10 @@ void add_fit_command(CLI::App& app, Context& ctx) {
                   "differentiator)")
       ->check(CLI::IsMember({"auto", "offline", "deployed"}));
   cmd->add_option("--method", opts->method,
-                  "Optimiser: lm (informed multi-start + Levenberg-Marquardt, default) or nlopt "
-                  "(MLSL + BOBYQA)")
-      ->check(CLI::IsMember({"lm", "nlopt"}));
+                  "Optimiser: lm (informed multi-start + Levenberg-Marquardt, default; for a "
+                  "model with distributed_slip: separable), separable (the weights solved "
+                  "exactly, the elements' spread searched) or nlopt (MLSL + BOBYQA)")
+      ->check(CLI::IsMember({"lm", "separable", "nlopt"}));
   add_free_motion_options(*cmd, opts->free_motion);
   add_master_scale_options(*cmd, opts->master);
   add_lcm_log_options(*cmd, ctx.lcm_log);

@@ -44,9 +44,12 @@ std::vector<double> causal_friction(const estimator::FrictionModel& model,
   diff.hindsight_lag = o.hindsight_lag;
   diff.quantum = o.encoder_quantum;
   estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0, diff, o.start);
+  const bool has_tensions = rec.T1.size() == rec.size() && rec.T3.size() == rec.size();
   std::vector<double> f(rec.size());
-  for (std::size_t i = 0; i < rec.size(); ++i)
-    f[i] = est.update(rec.t[i], rec.x_in[i], has_load ? rec.tau_in[i] : 0.0).friction;
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    const double tension = has_tensions ? 0.5 * (rec.T1[i] + rec.T3[i]) : std::nan("");
+    f[i] = est.update(rec.t[i], rec.x_in[i], has_load ? rec.tau_in[i] : 0.0, tension).friction;
+  }
   return f;
 }
 

@@ -99,7 +99,8 @@ void Recalibration::on_estimate(int joint, double t, double x_in, estimator::Est
   if (phase_.load(std::memory_order_relaxed) ==
           static_cast<std::int32_t>(CalibrationState::kCollecting) &&
       (mask_.load(std::memory_order_relaxed) & bit) != 0 && count_[j] < buffer_[j].size())
-    buffer_[j][count_[j]++] = Sample{t, x_in, e.xd, e.xdd, e.acc_sign, e.tau_in, radius_m * raw};
+    buffer_[j][count_[j]++] =
+        Sample{t, x_in, e.xd, e.xdd, e.acc_sign, e.tau_in, e.tension, radius_m * raw};
 }
 
 void Recalibration::on_tick(double now_s, double dt, bool button) noexcept {
@@ -250,7 +251,8 @@ double Recalibration::replay_sse(int joint, double k_positive, double k_negative
   // friction (free motion: tau_in / R), not the routing: left out.
   constexpr double kSettle = 0.3;  // s
   const auto motion = [&](const Sample& s) {
-    return estimator::Motion{s.t, s.x, s.xd, s.xdd, s.acc_sign, std::fabs(s.tau_in) / r};
+    return estimator::Motion{
+        s.t, s.x, s.xd, s.xdd, s.acc_sign, std::fabs(s.tau_in) / r, s.tau_in / r, s.tension};
   };
   model.reset();
   model.set_level_scales(k_positive, k_negative);

@@ -38,13 +38,15 @@ Samples encoder_samples(std::size_t n) {
 
 // One estimator step per iteration over the samples, repeated with a time
 // offset so that time keeps increasing.
-void run_estimator(benchmark::State& state, const Samples& s,
-                   const DifferentiatorConfig& diff = {}) {
-  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01, diff);
+void run_estimator(benchmark::State& state, const Samples& s, const DifferentiatorConfig& diff = {},
+                   const TsmModelSpec& spec = paper_spec()) {
+  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(spec), 0.01, diff);
   std::size_t i = 0;
   double t_offset = 0.0;
   for (auto _ : state) {
-    const auto e = est.update(s.t[i] + t_offset, s.x[i], s.tau[i]);
+    // Both tensions, as haptic-server passes them (tau_in = R (T1 - T3)).
+    const double t1 = 20.0 + 50.0 * s.tau[i], t3 = 20.0 - 50.0 * s.tau[i];
+    const auto e = est.update_tensions(s.t[i] + t_offset, s.x[i], t1, t3);
     benchmark::DoNotOptimize(e);
     if (++i == s.t.size()) i = 0, t_offset += 100.0;
   }
@@ -107,13 +109,35 @@ BENCHMARK(BM_EstimatorStepReversals)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);
 
-void BM_ModelStepOnly(benchmark::State& state) {
-  TsmFrictionModel model(paper_spec());
+// The distributed-slip model at its largest deployed form: 14 elements,
+// the sliding functions, tension and load copies (distributed_slip.hpp).
+TsmModelSpec distributed_with_copies() {
+  TsmModelSpec s = distributed_spec();
+  s.slip.tension_copies = true;
+  s.slip.load_copies = true;
+  for (std::size_t i = 0; i < kMaxSlipBasis; ++i) {
+    s.slip.tension_weight[i] = 0.01 * s.slip.weight[i];
+    s.slip.load_weight[i] = 0.005 * s.slip.weight[i];
+  }
+  return s;
+}
+
+void BM_EstimatorStepDistributed(benchmark::State& state) {
+  run_estimator(state, encoder_samples(1 << 16), {}, distributed_with_copies());
+}
+BENCHMARK(BM_EstimatorStepDistributed)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
+void model_step_only(benchmark::State& state, const TsmModelSpec& spec) {
+  TsmFrictionModel model(spec);
   std::vector<Motion> m;
   for (int i = 0; i < 4096; ++i) {
     const double t = i * 1e-3, w = 2 * std::numbers::pi * 0.5;
     const double xdd = -0.8 * w * w * std::sin(w * t);
-    m.push_back({t, 0.8 * std::sin(w * t), 0.8 * w * std::cos(w * t), xdd, sign_of(xdd), 10.0});
+    m.push_back({t, 0.8 * std::sin(w * t), 0.8 * w * std::cos(w * t), xdd, sign_of(xdd), 10.0,
+                 10.0 * std::sin(0.3 * w * t), 20.0});
   }
   std::size_t i = 0;
   for (auto _ : state) {
@@ -121,7 +145,19 @@ void BM_ModelStepOnly(benchmark::State& state) {
     i = (i + 1) & 4095;
   }
 }
+
+void BM_ModelStepOnly(benchmark::State& state) {
+  model_step_only(state, paper_spec());
+}
 BENCHMARK(BM_ModelStepOnly)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
+void BM_ModelStepOnlyDistributed(benchmark::State& state) {
+  model_step_only(state, distributed_with_copies());
+}
+BENCHMARK(BM_ModelStepOnlyDistributed)
     ->Repetitions(15)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);

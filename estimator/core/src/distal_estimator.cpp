@@ -16,7 +16,8 @@ DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> m
     throw std::invalid_argument("estimator: radius_m must be a finite number > 0");
   DynamicsState probe;
   hindsight_ = diff.hindsight_lag > 0.0 && diff.sign_mode == SignMode::kSmooth &&
-               diff.fine_psd > 0.0 && model_->save_state(probe);
+               diff.fine_psd > 0.0 && model_->save_state(probe) &&
+               model_->reads_acceleration_sign();
   // certain <= sure: a step at `sure` (the weight is 1 beyond it).
   const auto inverse_span = [](double sure, double certain) {
     return certain > sure ? 1.0 / (certain - sure) : std::numeric_limits<double>::infinity();
@@ -65,14 +66,15 @@ void DistalTorqueEstimator::forget_history() noexcept {
          (c.t[c.newest] - c.at(c.run - 1) >= diff_.config().settle_span || c.run == kCrossings);
 }
 
-Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noexcept {
+Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in,
+                                       double tension) noexcept {
   if (!std::isfinite(tau_in))
     return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
   const Derivatives d = diff_.update(t, x_in);
   if (!d.valid) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
   // A gap that restarts the differentiator breaks the history as well.
   const bool restart = diff_.restarted();
-  Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in);
+  Estimate e = finish(t, x_in, d.xd, d.xdd, d.acc_sign, tau_in, tension);
   if (!hindsight_) return e;
   if (restart) forget_history();
   // The encoder moves again after standing still for two samples or more:
@@ -92,7 +94,8 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in) noe
   }
   newest_ = size_ == 0 ? 0 : (newest_ + 1) % kHistory;
   Sample& s = history_[newest_];
-  s.m = Motion{t, x_in, d.xd, d.xdd, d.acc_sign, std::fabs(tau_in) / radius_};
+  s.m = Motion{t,      x_in, d.xd, d.xdd, d.acc_sign, std::fabs(tau_in) / radius_, tau_in / radius_,
+               tension};
   s.friction = e.friction;
   s.settled = false;
   model_->save_state(s.state);
@@ -359,23 +362,25 @@ void DistalTorqueEstimator::step_again_from(std::size_t back) noexcept {
 }
 
 Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, double xdd,
-                                             double tau_in) noexcept {
+                                             double tau_in, double tension) noexcept {
   const bool ok = std::isfinite(t) && std::isfinite(x_in) && std::isfinite(xd) &&
                   std::isfinite(xdd) && std::isfinite(tau_in) && (!started_ || t > t_prev_);
   if (!ok) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
-  return finish(t, x_in, xd, xdd, sign_of(xdd), tau_in);
+  return finish(t, x_in, xd, xdd, sign_of(xdd), tau_in, tension);
 }
 
 [[gnu::always_inline]] inline Estimate DistalTorqueEstimator::finish(double t, double x, double xd,
                                                                      double xdd, double acc_sign,
-                                                                     double tau_in) noexcept {
+                                                                     double tau_in,
+                                                                     double tension) noexcept {
   const double dt = started_ ? t - t_prev_ : 0.0;
-  const Motion m{t, x, xd, xdd, acc_sign, std::fabs(tau_in) / radius_};
+  const Motion m{t, x, xd, xdd, acc_sign, std::fabs(tau_in) / radius_, tau_in / radius_, tension};
   if (!started_ && start_ == StartState::kFreeTip) model_->preset(tau_in / radius_, m);
   started_ = true;
   t_prev_ = t;
   const double f = dt > 0.0 ? model_->step(m, dt) : model_->friction();
-  return {xd, xdd, acc_sign, tau_in, f, tau_in - radius_ * f, true, model_->sliding_friction()};
+  return {xd,     xdd, acc_sign, tau_in, f, tau_in - radius_ * f, true, model_->sliding_friction(),
+          tension};
 }
 
 }  // namespace tsmh::estimator

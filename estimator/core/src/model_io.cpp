@@ -44,8 +44,82 @@ void reject_unknown_keys(const YAML::Node& map, const std::set<std::string>& kno
   }
 }
 
+// A list of `count` numbers, named per basis function in errors.
+void read_weights(const YAML::Node& node, const DistributedSlipSpec& s, const std::string& origin,
+                  const std::string& field, std::array<double, kMaxSlipBasis>& out) {
+  const std::string where = "distributed_slip." + field;
+  if (!node.IsSequence() || node.size() != s.basis_count())
+    fail(origin, where,
+         "must be a list of " + std::to_string(s.basis_count()) + " numbers (one per element, " +
+             "then coulomb_positive, coulomb_negative, stribeck, viscous)");
+  for (std::size_t k = 0; k < s.basis_count(); ++k) {
+    const std::size_t i = s.basis_index(k);
+    out[i] = number(node[k], origin, where + "." + slip_basis_name(i));
+  }
+}
+
+DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin) {
+  if (!node.IsMap()) fail(origin, "distributed_slip", "must be a map");
+  reject_unknown_keys(node,
+                      {"elements", "width_min", "width_max", "smoothing", "stribeck_speed",
+                       "weights", "tension_ref", "tension_weights", "load_weights"},
+                      origin, "distributed_slip");
+  DistributedSlipSpec s;
+  s.enabled = true;
+  const double elements = number(node["elements"], origin, "distributed_slip.elements");
+  if (elements != std::round(elements) || elements < 1.0 ||
+      elements > static_cast<double>(kMaxSlipElements))
+    fail(origin, "distributed_slip.elements",
+         "must be an integer 1 .. " + std::to_string(kMaxSlipElements));
+  s.elements = static_cast<int>(elements);
+  s.width_min = number(node["width_min"], origin, "distributed_slip.width_min");
+  s.width_max = number(node["width_max"], origin, "distributed_slip.width_max");
+  s.smoothing = number(node["smoothing"], origin, "distributed_slip.smoothing");
+  s.stribeck_speed = number(node["stribeck_speed"], origin, "distributed_slip.stribeck_speed");
+  if (!node["weights"]) fail(origin, "distributed_slip.weights", "missing");
+  read_weights(node["weights"], s, origin, "weights", s.weight);
+  if (node["tension_weights"]) {
+    s.tension_copies = true;
+    s.tension_ref = number(node["tension_ref"], origin, "distributed_slip.tension_ref");
+    read_weights(node["tension_weights"], s, origin, "tension_weights", s.tension_weight);
+  } else if (node["tension_ref"]) {
+    s.tension_ref = number(node["tension_ref"], origin, "distributed_slip.tension_ref");
+  }
+  if (node["load_weights"]) {
+    s.load_copies = true;
+    read_weights(node["load_weights"], s, origin, "load_weights", s.load_weight);
+  }
+  return s;
+}
+
+void emit_weights(YAML::Emitter& out, const char* key, const DistributedSlipSpec& s,
+                  const std::array<double, kMaxSlipBasis>& w) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (std::size_t k = 0; k < s.basis_count(); ++k)
+    out << w[s.basis_index(k)];
+  out << YAML::EndSeq;
+}
+
+void emit_slip(YAML::Emitter& out, const DistributedSlipSpec& s) {
+  out << YAML::Key << "distributed_slip" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "elements" << YAML::Value << s.elements;
+  out << YAML::Key << "width_min" << YAML::Value << s.width_min;
+  out << YAML::Key << "width_max" << YAML::Value << s.width_max;
+  out << YAML::Key << "smoothing" << YAML::Value << s.smoothing;
+  out << YAML::Key << "stribeck_speed" << YAML::Value << s.stribeck_speed;
+  emit_weights(out, "weights", s, s.weight);
+  if (s.tension_copies) {
+    out << YAML::Key << "tension_ref" << YAML::Value << s.tension_ref;
+    emit_weights(out, "tension_weights", s, s.tension_weight);
+  }
+  if (s.load_copies) emit_weights(out, "load_weights", s, s.load_weight);
+  out << YAML::EndMap;
+}
+
 std::unique_ptr<FrictionModel> parse_tsm(const YAML::Node& root, const std::string& origin) {
-  reject_unknown_keys(root, {"model", "core", "terms", "fixed", "format", "radius_m"}, origin, "");
+  reject_unknown_keys(root,
+                      {"model", "core", "terms", "distributed_slip", "fixed", "format", "radius_m"},
+                      origin, "");
   TsmModelSpec spec;
   spec.fixed.clear();
   const YAML::Node core = root["core"];
@@ -55,10 +129,15 @@ std::unique_ptr<FrictionModel> parse_tsm(const YAML::Node& root, const std::stri
   spec.gamma = number(core["gamma"], origin, "core.gamma");
   spec.n = number(core["n"], origin, "core.n");
   spec.sigma = number(core["sigma"], origin, "core.sigma");
+  if (const YAML::Node slip = root["distributed_slip"]) spec.slip = parse_slip(slip, origin);
   const YAML::Node terms = root["terms"];
-  if (!terms || !terms.IsMap() || terms.size() == 0)
-    fail(origin, "terms", "missing (a map of term name to its parameters)");
-  for (const auto& kv : terms) {
+  const bool no_terms = !terms || (terms.IsMap() && terms.size() == 0);
+  if (no_terms && !spec.slip.enabled)
+    fail(origin, "terms",
+         "missing (a map of term name to its parameters; empty only with distributed_slip)");
+  if (terms && !terms.IsMap())
+    fail(origin, "terms", "must be a map of term name to its parameters");
+  for (const auto& kv : no_terms ? YAML::Node(YAML::NodeType::Map) : terms) {
     const auto name = kv.first.as<std::string>();
     const auto kind = term_kind_from_name(name);
     if (!kind) {
@@ -130,7 +209,8 @@ std::unique_ptr<FrictionModel> parse_baseline(const YAML::Node& root, const std:
 }  // namespace
 
 std::vector<std::string> preset_names() {
-  return {"paper", "paper_memory", "dahl", "dahl_classic", "lugre", "coulomb_capstan"};
+  return {"paper",        "paper_memory", "distributed",    "dahl",
+          "dahl_classic", "lugre",        "coulomb_capstan"};
 }
 
 std::unique_ptr<FrictionModel> parse_model(const std::string& text, const std::string& origin) {
@@ -155,6 +235,7 @@ std::unique_ptr<FrictionModel> parse_model(const std::string& text, const std::s
 std::unique_ptr<FrictionModel> load_model(const std::string& name) {
   if (name == "paper") return std::make_unique<TsmFrictionModel>(paper_spec());
   if (name == "paper_memory") return std::make_unique<TsmFrictionModel>(paper_memory_spec());
+  if (name == "distributed") return std::make_unique<TsmFrictionModel>(distributed_spec());
   if (name == "dahl") return std::make_unique<TsmFrictionModel>(dahl_spec());
   if (name == "dahl_classic") return std::make_unique<DahlModel>();
   if (name == "lugre") return std::make_unique<LuGreModel>();
@@ -193,6 +274,7 @@ std::string model_to_yaml(const FrictionModel& model, const std::vector<std::str
       out << YAML::EndMap;
     }
     out << YAML::EndMap;
+    if (s.slip.enabled) emit_slip(out, s.slip);
     out << YAML::Key << "fixed" << YAML::Value << YAML::Flow << s.fixed;
   } else {
     out << YAML::Key << "params" << YAML::Value << YAML::BeginMap;

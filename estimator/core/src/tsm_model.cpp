@@ -56,6 +56,12 @@ TsmModelSpec dahl_spec() {
   return s;
 }
 
+TsmModelSpec distributed_spec() {
+  TsmModelSpec s;
+  s.slip = default_distributed_slip();
+  return s;
+}
+
 void validate(const TsmModelSpec& s) {
   const auto bad = [](const std::string& field, const std::string& why) {
     throw std::invalid_argument(field + ": " + why);
@@ -71,7 +77,9 @@ void validate(const TsmModelSpec& s) {
   if (s.gamma <= 0.0) bad("core.gamma", "must be > 0");
   if (s.n < 1.0) bad("core.n", "must be >= 1");
   if (s.sigma < 0.5) bad("core.sigma", "must be >= 0.5 (smaller values make the state unbounded)");
-  if (s.terms.empty()) bad("terms", "at least one term (e.g. coulomb) is needed");
+  if (s.terms.empty() && !s.slip.enabled)
+    bad("terms", "at least one term (e.g. coulomb) is needed, or distributed_slip");
+  validate(s.slip);
   for (std::size_t i = 0; i < s.terms.size(); ++i) {
     const auto& info = term_info(s.terms[i].kind);
     for (std::size_t j = i + 1; j < s.terms.size(); ++j) {
@@ -98,6 +106,14 @@ TsmFrictionModel::TsmFrictionModel(TsmModelSpec spec) : spec_(std::move(spec)) {
 }
 
 void TsmFrictionModel::refresh_cache() {
+  bouc_wen_ = !spec_.terms.empty();
+  slip_on_ = spec_.slip.enabled;
+  if (slip_on_) {
+    slip_ = SlipKernel(spec_.slip);
+    slip_.set_level_scales(level_scale_positive_, level_scale_negative_);
+  }
+  reads_sign_ =
+      spec_.has(TermKind::kReversalOffset) || spec_.has(TermKind::kAccelerationDependence);
   shape_ = {spec_.theta, spec_.n, spec_.sigma};
   two_elements_ = false;
   w2_ = 0.0;
@@ -150,14 +166,90 @@ void TsmFrictionModel::refresh_cache() {
   }
 }
 
+namespace {
+
+// The distributed slip's parameters, after the terms': its shape (element
+// count and reference tension fixed: an integer and a chosen origin), then
+// the weights, then the copies in use.
+template <class IsFixed>
+void append_slip_parameters(const DistributedSlipSpec& s, const IsFixed& is_fixed,
+                            std::vector<Parameter>& out) {
+  const auto add = [&](const std::string& name, double v, double lo, double hi, bool fixed,
+                       const char* unit) {
+    const std::string q = "distributed_slip." + name;
+    out.push_back({q, v, lo, hi, fixed || is_fixed(q), unit});
+  };
+  add("elements", s.elements, 1.0, static_cast<double>(kMaxSlipElements), true, "");
+  add("width_min", s.width_min, 1e-4, 1.0, false, "rad");
+  add("width_max", s.width_max, 1e-3, 3.0, false, "rad");
+  add("smoothing", s.smoothing, 1e-4, 1.0, false, "rad/s");
+  add("stribeck_speed", s.stribeck_speed, 1e-3, 10.0, false, "rad/s");
+  add("tension_ref", s.tension_ref, -1e6, 1e6, true, "N");
+  for (std::size_t k = 0; k < s.basis_count(); ++k) {
+    const std::size_t i = s.basis_index(k);
+    const bool signed_weight = i == kSlidingIndex + 3;  // viscous may be negative
+    add(std::string("weights.") + slip_basis_name(i), s.weight[i], signed_weight ? -50.0 : 0.0,
+        50.0, false, i == kSlidingIndex + 3 ? "N s/rad" : "N");
+  }
+  if (s.tension_copies) {
+    for (std::size_t k = 0; k < s.basis_count(); ++k) {
+      const std::size_t i = s.basis_index(k);
+      add(std::string("tension_weights.") + slip_basis_name(i), s.tension_weight[i], -5.0, 5.0,
+          false, "1");
+    }
+  }
+  if (s.load_copies) {
+    for (std::size_t k = 0; k < s.basis_count(); ++k) {
+      const std::size_t i = s.basis_index(k);
+      add(std::string("load_weights.") + slip_basis_name(i), s.load_weight[i], -kMaxLoadSlope,
+          kMaxLoadSlope, false, "1");
+    }
+  }
+}
+
+std::size_t slip_parameter_count(const DistributedSlipSpec& s) {
+  if (!s.enabled) return 0;
+  return 6 + s.basis_count() * (1 + (s.tension_copies ? 1 : 0) + (s.load_copies ? 1 : 0));
+}
+
+// Reads append_slip_parameters()'s values back, from v[i] on.
+void read_slip_parameters(DistributedSlipSpec& s, std::span<const double> v, std::size_t& i) {
+  const double elements = v[i++];
+  if (elements != std::round(elements) || elements < 1.0 ||
+      elements > static_cast<double>(kMaxSlipElements))
+    throw std::invalid_argument("distributed_slip.elements: must be an integer 1 .. 24");
+  if (static_cast<int>(elements) != s.elements)
+    throw std::invalid_argument(
+        "distributed_slip.elements: cannot change through the parameter values");
+  s.width_min = v[i++];
+  s.width_max = v[i++];
+  s.smoothing = v[i++];
+  s.stribeck_speed = v[i++];
+  s.tension_ref = v[i++];
+  for (std::size_t k = 0; k < s.basis_count(); ++k)
+    s.weight[s.basis_index(k)] = v[i++];
+  if (s.tension_copies) {
+    for (std::size_t k = 0; k < s.basis_count(); ++k)
+      s.tension_weight[s.basis_index(k)] = v[i++];
+  }
+  if (s.load_copies) {
+    for (std::size_t k = 0; k < s.basis_count(); ++k)
+      s.load_weight[s.basis_index(k)] = v[i++];
+  }
+}
+
+}  // namespace
+
 std::vector<Parameter> TsmFrictionModel::parameters() const {
   std::vector<Parameter> out;
   const auto is_fixed = [&](const std::string& name) {
     return std::find(spec_.fixed.begin(), spec_.fixed.end(), name) != spec_.fixed.end();
   };
+  // Without level terms there is no Bouc-Wen part: its core values do nothing.
+  const bool unused = spec_.terms.empty();
   const auto core = [&](const char* name, double v, double lo, double hi, const char* unit) {
     std::string q = std::string("core.") + name;
-    out.push_back({q, v, lo, hi, is_fixed(q), unit});
+    out.push_back({q, v, lo, hi, unused || is_fixed(q), unit});
   };
   core("theta", spec_.theta, 0.1, 1000.0, "1/rad");
   core("gamma", spec_.gamma, 0.1, 100.0, "N");
@@ -172,6 +264,7 @@ std::vector<Parameter> TsmFrictionModel::parameters() const {
           {q, t.p[k], ps.lower, ps.upper, !ps.identified || is_fixed(q), std::string(ps.unit)});
     }
   }
+  if (spec_.slip.enabled) append_slip_parameters(spec_.slip, is_fixed, out);
   return out;
 }
 
@@ -179,6 +272,7 @@ void TsmFrictionModel::set_values(std::span<const double> v) {
   std::size_t expected = 4;
   for (const auto& t : spec_.terms)
     expected += term_info(t.kind).params.size();
+  expected += slip_parameter_count(spec_.slip);
   if (v.size() != expected)
     throw std::invalid_argument("tsm model: wrong number of parameter values");
   TsmModelSpec next = spec_;
@@ -191,6 +285,7 @@ void TsmFrictionModel::set_values(std::span<const double> v) {
     for (std::size_t k = 0; k < term_info(t.kind).params.size(); ++k)
       t.p[k] = v[i++];
   }
+  if (next.slip.enabled) read_slip_parameters(next.slip, v, i);
   validate(next);
   spec_ = std::move(next);
   refresh_cache();
@@ -203,6 +298,10 @@ void TsmFrictionModel::reset() noexcept {
   level_ = std::numeric_limits<double>::quiet_NaN();
   xd_prev_ = 0.0;
   started_ = false;
+  slip_state_ = {};
+  basis_ = {};
+  f_ = 0.0;
+  slip_level_ = std::numeric_limits<double>::quiet_NaN();
 }
 
 bool TsmFrictionModel::set_level_scales(double k_positive, double k_negative) noexcept {
@@ -210,6 +309,7 @@ bool TsmFrictionModel::set_level_scales(double k_positive, double k_negative) no
   if (!ok(k_positive) || !ok(k_negative)) return false;
   level_scale_positive_ = k_positive;
   level_scale_negative_ = k_negative;
+  if (slip_on_) slip_.set_level_scales(k_positive, k_negative);
   return true;
 }
 
@@ -238,6 +338,7 @@ double TsmFrictionModel::step(const Motion& m, double dt) noexcept {
   const double xd_mid = started_ ? 0.5 * (xd_prev_ + m.xd) : m.xd;
   xd_prev_ = m.xd;
   started_ = true;
+  if (slip_on_) return step_with_slip(m, dt, xd_mid);
   const double g = drive(xd_mid, m.acc_sign);
   level_ = sliding_level(m);
   if (!two_elements_) {
@@ -250,8 +351,62 @@ double TsmFrictionModel::step(const Motion& m, double dt) noexcept {
   return friction();
 }
 
+double TsmFrictionModel::step_with_slip(const Motion& m, double dt, double xd_mid) noexcept {
+  double bouc_wen = 0.0;
+  if (bouc_wen_) {
+    const double g = drive(xd_mid, m.acc_sign);
+    level_ = sliding_level(m);
+    if (!two_elements_) {
+      z_ = advance_bouc_wen_state(z_, level_, g, dt, shape_);
+    } else {
+      z1_ = advance_bouc_wen_state(z1_, level_, g, dt, shape_);
+      z2_ = advance_bouc_wen_state(z2_, level_, g, dt, shape2_);
+      z_ = (1.0 - w2_) * z1_ + w2_ * z2_;
+    }
+    bouc_wen = spec_.gamma * z_;
+  }
+  slip_.advance(slip_state_, m.x, m.xd, basis_);
+  f_ = slip_.friction(basis_, m.tension, m.drive, bouc_wen, slip_level_);
+  if (bouc_wen_) slip_level_ += spec_.gamma * level_;
+  return f_;
+}
+
+void TsmFrictionModel::save_slip(DynamicsState& out) const noexcept {
+  out.v[6] = slip_state_.x_prev;
+  out.v[7] = slip_state_.started ? 1.0 : 0.0;
+  out.v[8] = f_;
+  out.v[9] = slip_level_;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.slip.elements); ++i)
+    out.v[10 + i] = slip_state_.e[i];
+}
+
+void TsmFrictionModel::restore_slip(const DynamicsState& s) noexcept {
+  slip_state_.x_prev = s.v[6];
+  slip_state_.started = s.v[7] != 0.0;
+  f_ = s.v[8];
+  slip_level_ = s.v[9];
+  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.slip.elements); ++i)
+    slip_state_.e[i] = s.v[10 + i];
+}
+
 void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {
   if (!std::isfinite(friction)) return;
+  if (slip_on_) {
+    // The same fraction of each part's saturation: the Bouc-Wen part's
+    // gamma Ff and the elements' break forces (at rest the sliding functions
+    // add nothing).
+    const double bw = bouc_wen_ ? spec_.gamma * sliding_level(m) : 0.0;
+    const double capacity = bw + slip_.element_capacity(m.tension);
+    const double fraction = capacity > 0.0 ? std::clamp(friction / capacity, -1.0, 1.0) : 0.0;
+    if (bouc_wen_) {
+      level_ = bw / spec_.gamma;
+      z_ = z1_ = z2_ = fraction * level_;
+    }
+    slip_.preset(slip_state_, m.x, fraction);
+    f_ = fraction * capacity;
+    slip_level_ = capacity;
+    return;
+  }
   level_ = sliding_level(m);
   z_ = std::clamp(friction / spec_.gamma, -level_, level_);
   z1_ = z2_ = z_;

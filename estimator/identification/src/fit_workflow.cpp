@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "estimator/separable_fit.hpp"
 #include "estimator/tsm_model.hpp"
 #include "number_text.hpp"
 
@@ -20,6 +21,11 @@ std::string data_that_helps(const std::string& name) {
   if (has("acceleration_dependence"))
     return "the same speeds reached while accelerating and while decelerating, at several "
            "accelerations";
+  if (has("distributed_slip.load_weights"))
+    return "contact at several known loads (a tip sensor or a calibrated load): free motion "
+           "carries no distal load";
+  if (has("distributed_slip.tension_weights")) return "the same motion at several pretensions";
+  if (has("distributed_slip")) return "reversals of many sizes, small (a few mrad) to large";
   if (has("load")) return "the same motion at several loads";
   if (has("position")) return "motion over the whole stroke";
   if (has("time")) return "a longer recording";
@@ -100,6 +106,10 @@ FitVerdict judge_fit(const ErrorMetrics& train, const ErrorMetrics& val, double 
   if (u != nullptr) {
     for (const auto& p : u->parameters) {
       if (p.fixed || !p.at_bound) continue;
+      // A distributed-slip weight at 0 is the exact optimum of the
+      // nonnegative least squares (an element the data does not need), not
+      // a search stopped at its bound.
+      if (p.name.rfind("distributed_slip.weights.", 0) == 0 && p.value == 0.0) continue;
       ++at_bound;
       problems.push_back(p.name + " " + at_bound_text(p) + ": " + bound_consequence(p) +
                          "; data that would help: " + data_that_helps(p.name));
@@ -148,15 +158,28 @@ FitRun run_fit(const Recording& rec, const FrictionModel& initial, const std::st
   run.train = error_metrics(run.data, run.fit.simulated, SampleRole::kTrain);
   run.validation = error_metrics(run.data, run.fit.simulated, SampleRole::kValidation);
   run.regimes = regime_errors(run.data, run.fit.simulated, SampleRole::kValidation);
+  const bool separable = has_linear_block(*run.fit.model) && o.fit.method != "nlopt";
   if (o.uncertainty) {
-    run.uncertainty = estimate_uncertainty(*run.fit.model, run.data);
+    // With distributed slip, the uncertainty of the searched values only:
+    // the weights are the exact least-squares solution for them, and
+    // neighbouring elements' weights are correlated by construction (their
+    // sum is what the data determine), so per-weight errors say nothing.
+    if (separable) {
+      const auto& fitted = dynamic_cast<const TsmFrictionModel&>(*run.fit.model);
+      TsmModelSpec held = fitted.spec();
+      for (const auto& p : fitted.parameters())
+        if (p.name.find("weights.") != std::string::npos) held.fixed.push_back(p.name);
+      run.uncertainty = estimate_uncertainty(TsmFrictionModel(held), run.data);
+    } else {
+      run.uncertainty = estimate_uncertainty(*run.fit.model, run.data);
+    }
     // The fit's weak prior holds what the data leave undetermined; say which.
     std::string held;
     for (const auto& p : run.uncertainty.parameters) {
       if (!p.fixed && !p.at_bound && !p.well_identified)
         held += (held.empty() ? "" : ", ") + p.name;
     }
-    if (!held.empty() && o.fit.method == "lm")
+    if (!held.empty() && o.fit.method == "lm" && !separable)
       run.notes.push_back("regularised: " + held +
                           " poorly determined by this data; the fit's weak prior kept them near "
                           "their start (their combination that the data do determine is fitted)");

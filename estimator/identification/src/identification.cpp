@@ -17,6 +17,7 @@
 
 #include "estimator/fit_metrics.hpp"
 #include "estimator/parameter_map.hpp"
+#include "estimator/separable_fit.hpp"
 #include "estimator/simulate.hpp"
 #include "estimator/tsm_model.hpp"
 
@@ -929,9 +930,14 @@ FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, cons
 }  // namespace
 
 FitResult identify(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+  // A model with distributed slip is linear in most of its parameters: the
+  // separable method solves those exactly (separable_fit.hpp).
+  if (o.method == "separable" || (o.method == "lm" && has_linear_block(initial)))
+    return identify_separable(initial, data, o);
   if (o.method == "nlopt") return identify_nlopt(initial, data, o);
   if (o.method != "lm")
-    throw std::invalid_argument("identify: unknown method '" + o.method + "' (lm or nlopt)");
+    throw std::invalid_argument("identify: unknown method '" + o.method +
+                                "' (lm, separable or nlopt)");
   return identify_lm(initial, data, o);
 }
 

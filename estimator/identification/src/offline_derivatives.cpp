@@ -156,6 +156,7 @@ SmoothedDerivatives smooth_derivatives(std::span<const double> t, std::span<cons
 std::vector<Motion> offline_motion(const Recording& rec, const OfflineDerivativeConfig& cfg) {
   const auto sm = smooth_derivatives(rec.t, rec.x_in, cfg);
   const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m) && rec.radius_m > 0.0;
+  const bool has_tensions = rec.T1.size() == rec.size() && rec.T3.size() == rec.size();
   std::vector<Motion> motion(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
     Motion& m = motion[i];
@@ -171,6 +172,8 @@ std::vector<Motion> offline_motion(const Recording& rec, const OfflineDerivative
           std::fabs(sm.xdd[i]) > cfg.acc_sign_sigmas * sm.xdd_std[i] ? sign_of(sm.xdd[i]) : 0;
     }
     m.load = has_load ? std::fabs(rec.tau_in[i]) / rec.radius_m : 0.0;
+    if (has_load) m.drive = rec.tau_in[i] / rec.radius_m;
+    if (has_tensions) m.tension = 0.5 * (rec.T1[i] + rec.T3[i]);
   }
   return motion;
 }

@@ -12,6 +12,7 @@ std::vector<Motion> motion_from_recording(const Recording& rec, DerivativeSource
     throw DataError(rec.source, 0, "xd_in",
                     "exact derivatives requested but xd_in/xdd_in are missing");
   const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m);
+  const bool has_tensions = rec.T1.size() == rec.size() && rec.T3.size() == rec.size();
   std::vector<Motion> motion(rec.size());
   Differentiator d(diff);
   for (std::size_t i = 0; i < rec.size(); ++i) {
@@ -29,6 +30,8 @@ std::vector<Motion> motion_from_recording(const Recording& rec, DerivativeSource
       m.acc_sign = der.acc_sign;
     }
     m.load = has_load ? std::fabs(rec.tau_in[i]) / rec.radius_m : 0.0;
+    if (has_load) m.drive = rec.tau_in[i] / rec.radius_m;
+    if (has_tensions) m.tension = 0.5 * (rec.T1[i] + rec.T3[i]);
   }
   return motion;
 }

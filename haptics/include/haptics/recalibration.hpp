@@ -176,7 +176,8 @@ class Recalibration {
  private:
   struct Sample {
     double t, x, xd, xdd, acc_sign, tau_in;
-    double f_raw;  // R F of the model before output scaling, N m
+    double tension;  // N, mean proximal tension (NaN: not measured)
+    double f_raw;    // R F of the model before output scaling, N m
   };
   static std::size_t idx(int j) noexcept { return static_cast<std::size_t>(j); }
   void identify_joint(int j, CalibrationReason& why, CalibrationFigures& fig);

@@ -27,6 +27,8 @@ struct Estimate {
   /// to it while sliding one way; FrictionDynamics::sliding_friction). NaN
   /// when the model has none.
   double friction_level = std::numeric_limits<double>::quiet_NaN();
+  /// N, the mean proximal tension the model was given (NaN: none).
+  double tension = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The friction state the estimator starts from (and restarts from after
@@ -49,20 +51,25 @@ class DistalTorqueEstimator {
                         const DifferentiatorConfig& diff = {},
                         StartState start = StartState::kFreeTip);
 
-  /// One sample with the proximal torque given. Never allocates or throws.
-  Estimate update(double t, double x_in, double tau_in) noexcept;
-  /// One sample from the two proximal tensions (eq. 1).
+  /// One sample with the proximal torque given; `tension` (N) is the mean of
+  /// the two proximal tensions when known (models with tension copies use
+  /// it, distributed_slip.hpp), NaN otherwise. Never allocates or throws.
+  Estimate update(double t, double x_in, double tau_in,
+                  double tension = std::numeric_limits<double>::quiet_NaN()) noexcept;
+  /// One sample from the two proximal tensions (eq. 1): tau_in = R (T1 - T3),
+  /// and their mean for the model's tension copies.
   Estimate update_tensions(double t, double x_in, double t1, double t3) noexcept {
-    return update(t, x_in, radius_ * (t1 - t3));
+    return update(t, x_in, radius_ * (t1 - t3), 0.5 * (t1 + t3));
   }
   /// One sample with exact derivatives (a simulator that knows them).
-  Estimate update_exact(double t, double x_in, double xd, double xdd, double tau_in) noexcept;
+  Estimate update_exact(double t, double x_in, double xd, double xdd, double tau_in,
+                        double tension = std::numeric_limits<double>::quiet_NaN()) noexcept;
 
   void reset() noexcept;
   double radius() const { return radius_; }
   /// Whether the hindsight correction runs (DifferentiatorConfig::
   /// hindsight_lag > 0, the smooth sign with the fine channel, and a model
-  /// whose state can be saved).
+  /// whose state can be saved and that reads the sign of the acceleration).
   bool hindsight() const { return hindsight_; }
   /// Samples the hindsight correction stepped the model again for (the
   /// corrected sample and every later one), since construction.
@@ -75,8 +82,8 @@ class DistalTorqueEstimator {
   }
 
  private:
-  Estimate finish(double t, double x, double xd, double xdd, double acc_sign,
-                  double tau_in) noexcept;
+  Estimate finish(double t, double x, double xd, double xdd, double acc_sign, double tau_in,
+                  double tension) noexcept;
   void look_back(double t) noexcept;
   // Steps sample j again with the motion m from the state before it (on the
   // corrected path when `dirty`): true when that changed its friction, so

@@ -33,7 +33,9 @@ struct Parameter {
 /// stretch of samples can be stepped again from an earlier state (the
 /// estimator's hindsight correction). Its meaning is the model's own.
 struct DynamicsState {
-  std::array<double, 6> v{};
+  /// The paper's state (6), the distributed-slip elements and their last
+  /// angle, and the friction of the last step.
+  std::array<double, 34> v{};
 };
 
 /// The real-time face of a model: a stateful value object stepped once per
@@ -79,6 +81,10 @@ class FrictionDynamics {
   }
   /// The same scale both ways.
   bool set_level_scale(double k) noexcept { return set_level_scales(k, k); }
+  /// Whether step() reads Motion::acc_sign (the sign of the acceleration):
+  /// when it does not, the estimator's corrections of that sign have nothing
+  /// to correct and are skipped.
+  virtual bool reads_acceleration_sign() const noexcept { return true; }
   /// Copies the internal state into `out`; false (nothing written) for
   /// models that do not support it. Never allocates or throws.
   virtual bool save_state(DynamicsState& /*out*/) const noexcept { return false; }

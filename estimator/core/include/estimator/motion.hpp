@@ -2,6 +2,8 @@
 // What a friction model sees at one sample: the input pulley's motion (from
 // the differentiator, or exact), the transmitted load and the time.
 
+#include <limits>
+
 namespace tsmh::estimator {
 
 struct Motion {
@@ -16,6 +18,12 @@ struct Motion {
   /// either (docs/friction-model.md).
   double acc_sign = 0.0;
   double load = 0.0;  ///< N, transmitted load |tau_in| / R, for load-dependent terms
+  /// N, the signed proximal drive tau_in / R, from which the distributed-slip
+  /// terms solve the distal load (distributed_slip.hpp); NaN: unknown.
+  double drive = std::numeric_limits<double>::quiet_NaN();
+  /// N, the mean of the two proximal tensions (T1 + T3) / 2, which the
+  /// distributed-slip tension copies scale with; NaN: not measured.
+  double tension = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// sgn with sgn(0) = 0, as in the paper.

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "estimator/bouc_wen_state.hpp"
+#include "estimator/distributed_slip.hpp"
 #include "estimator/friction_model.hpp"
 #include "estimator/sliding_terms.hpp"
 
@@ -23,7 +24,11 @@ struct TsmModelSpec {
   double gamma = 9.5651;   ///< eq. (12) output gain, N per unit of z
   double n = 2.0;          ///< eq. (4) exponent
   double sigma = 1.0;      ///< eq. (4) shape
+  /// The level terms of eq. (5). Empty only with distributed slip: then the
+  /// model has no Bouc-Wen part (F is the distributed slip's alone).
   std::vector<Term> terms;
+  /// Distributed slip (distributed_slip.hpp), added to gamma z; off by default.
+  DistributedSlipSpec slip;
   /// Qualified parameter names excluded from identification. By default
   /// core.gamma (it trades exactly against a common scale of z, theta and
   /// every level term, so it is not identifiable), core.n (an integer
@@ -47,9 +52,14 @@ TsmModelSpec paper_memory_spec();
 /// With these, eq. (4) reduces exactly to Dahl's model with sigma0 = gamma
 /// theta and Fc = gamma rho1.
 TsmModelSpec dahl_spec();
+/// The `distributed` preset: distributed slip alone (no Bouc-Wen part), at
+/// its catalog start (default_distributed_slip()): a starting point for
+/// identifying a real sheath, docs/friction-model.md.
+TsmModelSpec distributed_spec();
 
 /// Throws std::invalid_argument naming the field when the spec is unusable
-/// (non-finite, theta/gamma <= 0, n < 1, sigma < 0.5, kappa4 <= 0, duplicate term).
+/// (non-finite, theta/gamma <= 0, n < 1, sigma < 0.5, kappa4 <= 0, duplicate term,
+/// a distributed-slip field out of range).
 void validate(const TsmModelSpec& spec);
 
 class TsmFrictionModel final : public FrictionModel {
@@ -61,10 +71,13 @@ class TsmFrictionModel final : public FrictionModel {
   void set_values(std::span<const double> values) override;
   void reset() noexcept override;
   double step(const Motion& m, double dt) noexcept override;
-  double friction() const noexcept override { return spec_.gamma * z_; }
+  double friction() const noexcept override { return slip_on_ ? f_ : spec_.gamma * z_; }
+  bool reads_acceleration_sign() const noexcept override { return reads_sign_; }
   void preset(double friction, const Motion& m) noexcept override;
   /// gamma Ff at the last step's (or preset's) motion; NaN before either.
-  double sliding_friction() const noexcept override { return spec_.gamma * level_; }
+  double sliding_friction() const noexcept override {
+    return slip_on_ ? slip_level_ : spec_.gamma * level_;
+  }
   /// Scales Ff (every level term, after their sum) by k_positive on the
   /// xd >= 0 branch, k_negative on the other; theta, the memory and the
   /// state stay. Kept through reset() and set_values().
@@ -74,7 +87,10 @@ class TsmFrictionModel final : public FrictionModel {
   }
   std::unique_ptr<FrictionModel> clone() const override;
   bool save_state(DynamicsState& out) const noexcept override {
-    out.v = {z_, z1_, z2_, level_, xd_prev_, started_ ? 1.0 : 0.0};
+    // Element by element: the paper's model writes only what it has.
+    out.v[0] = z_, out.v[1] = z1_, out.v[2] = z2_, out.v[3] = level_, out.v[4] = xd_prev_;
+    out.v[5] = started_ ? 1.0 : 0.0;
+    if (slip_on_) save_slip(out);
     return true;
   }
   void restore_state(const DynamicsState& s) noexcept override {
@@ -84,6 +100,7 @@ class TsmFrictionModel final : public FrictionModel {
     level_ = s.v[3];
     xd_prev_ = s.v[4];
     started_ = s.v[5] != 0.0;
+    if (slip_on_) restore_slip(s);
   }
 
   const TsmModelSpec& spec() const { return spec_; }
@@ -95,9 +112,16 @@ class TsmFrictionModel final : public FrictionModel {
   /// True when sliding_level() takes the flat evaluation of the paper's
   /// terms instead of the general sum (see FlatLevel).
   bool uses_flat_level() const noexcept { return flat_.enabled; }
+  /// The distributed slip's basis at the last step (identification reads it).
+  const SlipBasis& slip_basis() const noexcept { return basis_; }
+  /// gamma z of the last step: the Bouc-Wen part's friction (0 without one).
+  double bouc_wen_friction() const noexcept { return bouc_wen_ ? spec_.gamma * z_ : 0.0; }
 
  private:
   void refresh_cache();
+  double step_with_slip(const Motion& m, double dt, double xd_mid) noexcept;
+  void save_slip(DynamicsState& out) const noexcept;
+  void restore_slip(const DynamicsState& s) noexcept;
 
   // Ff of the paper's terms without the loop over the term list: when the
   // spec has only coulomb, direction_asymmetry, stribeck,
@@ -134,6 +158,15 @@ class TsmFrictionModel final : public FrictionModel {
   double level_ = std::numeric_limits<double>::quiet_NaN();  // Ff of the last step
   double xd_prev_ = 0.0;
   bool started_ = false;
+  // Distributed slip: its kernel, state, last basis and the total friction.
+  bool bouc_wen_ = true;  // terms present: the Bouc-Wen part gamma z
+  bool slip_on_ = false;
+  bool reads_sign_ = true;
+  SlipKernel slip_;
+  SlipState slip_state_;
+  SlipBasis basis_;
+  double f_ = 0.0;
+  double slip_level_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace tsmh::estimator

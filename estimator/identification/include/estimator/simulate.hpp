@@ -20,7 +20,8 @@ enum class DerivativeSource {
   kExact,           ///< xd_in/xdd_in (throws DataError when absent)
 };
 
-/// Motion samples for every row of `rec`. load = |tau_in|/R when both are known.
+/// Motion samples for every row of `rec`. load = |tau_in|/R and drive =
+/// tau_in/R when both are known; tension = (T1 + T3)/2 when both are present.
 std::vector<Motion> motion_from_recording(const Recording& rec, DerivativeSource source,
                                           const DifferentiatorConfig& diff = {});
 

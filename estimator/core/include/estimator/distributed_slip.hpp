@@ -1,0 +1,143 @@
+#pragma once
+// Distributed slip: the friction of a sheath whose slip spreads along its
+// length, as a family of elasto-slide (play, Maxwell-slip, Prandtl-Ishlinskii)
+// elements plus a smoothed-velocity sliding term, with copies of every basis
+// function scaled by the tension the tendons carry.
+//
+// Each element i is a spring of break displacement r_i (its "width") in series
+// with a slider: its normalised deflection e_i follows the input angle x,
+//   e_i <- clamp(e_i + dx / r_i, -k_neg, k_pos)
+// and carries the force w_i e_i (w_i its break force). Widths are spaced
+// log-uniformly from width_min to width_max: stiff elements (short widths)
+// slip first after a reversal, compliant ones last, so the transition after a
+// reversal is the sum of many saturations (a sheath whose segments slip one
+// after the other) instead of one Bouc-Wen curve. The output of one element
+// is exactly a Prandtl-Ishlinskii play operator's: y_i = x - r_i e_i.
+//
+// The sliding part is a function of the velocity alone, smoothed at rest:
+//   s = tanh(xd / smoothing)
+//   phi = [max(s, 0), min(s, 0), e^(-|xd| / stribeck_speed) s, xd]
+//   (Coulomb for each direction, a Stribeck rise, viscous drag).
+//
+// The basis phi_k (elements, then the four sliding functions) enters the
+// friction linearly:
+//   F = sum_k phi_k (w_k + t_k (T - T_ref) + l_k |D|)
+// T: the mean of the two proximal tensions (T1 + T3) / 2: the pretension the
+// pair carries. It does not contain the tip load (a tip torque raises one
+// tension and lowers the other) and it contains only the difference of the
+// two sheaths' frictions, not their sum, so a tension copy cannot read the
+// friction itself from its input (unlike |tau_in| / R, which is the friction
+// in free motion).
+// D: the distal load tau_out / R = tau_in / R - F, the capstan effect of the
+// load the tendon transmits to the tip. It contains F, so the model solves
+// F = A + B |u - F| exactly (u = tau_in / R): with |B| < 1 the right side's
+// slope is below one and there is one solution, on the branch u >= A or
+// u < A. In free motion D = 0: free-motion data cannot determine the l_k.
+//
+// No sign of the acceleration appears anywhere.
+
+#include <array>
+#include <cstddef>
+
+#include "estimator/motion.hpp"
+
+namespace tsmh::estimator {
+
+/// Most elements a model may have (the state is a fixed-size array).
+inline constexpr std::size_t kMaxSlipElements = 24;
+/// The sliding basis functions after the elements.
+inline constexpr std::size_t kSlidingFunctions = 4;
+/// Index of the first sliding function in the weight arrays (fixed, so that
+/// the element count can change without moving them).
+inline constexpr std::size_t kSlidingIndex = kMaxSlipElements;
+inline constexpr std::size_t kMaxSlipBasis = kMaxSlipElements + kSlidingFunctions;
+/// Bound on |dF/d|D|| the model uses, so that the distal load equation keeps
+/// one solution (the load weights are clamped to it at run time).
+inline constexpr double kMaxLoadSlope = 0.9;
+
+struct DistributedSlipSpec {
+  bool enabled = false;
+  int elements = 14;            ///< 1 .. kMaxSlipElements
+  double width_min = 1e-3;      ///< rad, the stiffest element's break displacement
+  double width_max = 0.3;       ///< rad, the most compliant one's (>= width_min)
+  double smoothing = 0.01;      ///< rad/s, tanh(xd / smoothing) in the sliding part
+  double stribeck_speed = 0.1;  ///< rad/s, decay of the Stribeck rise
+  double tension_ref = 20.0;    ///< N, the mean tension at which the tension copies add 0
+  bool tension_copies = false;  ///< the t_k are part of the model
+  bool load_copies = false;     ///< the l_k are part of the model
+  /// Weights per basis function, N: elements 0 .. elements-1, then the sliding
+  /// functions at kSlidingIndex + {0: coulomb +, 1: coulomb -, 2: stribeck,
+  /// 3: viscous (N s/rad)}. Unused entries are 0.
+  std::array<double, kMaxSlipBasis> weight{};
+  std::array<double, kMaxSlipBasis> tension_weight{};  ///< per N of (T - T_ref)
+  std::array<double, kMaxSlipBasis> load_weight{};     ///< per N of |D|
+
+  /// The indices of the basis functions in use, in order (elements, sliding).
+  std::size_t basis_count() const { return static_cast<std::size_t>(elements) + kSlidingFunctions; }
+  std::size_t basis_index(std::size_t k) const {
+    return k < static_cast<std::size_t>(elements) ? k : kSlidingIndex + (k - elements);
+  }
+  /// Width of element i (log-uniform from width_min to width_max).
+  double width(std::size_t i) const;
+};
+
+/// The catalog default: 14 elements over 1 mrad .. 0.3 rad, weights that
+/// sum to about the paper's sliding level, no copies.
+DistributedSlipSpec default_distributed_slip();
+
+/// Name of basis function k of the weight arrays ("e3", "coulomb_positive", ...).
+const char* slip_basis_name(std::size_t array_index);
+
+/// Throws std::invalid_argument naming the field ("distributed_slip.width_min: ...").
+void validate(const DistributedSlipSpec& spec);
+
+/// The elements' state and the last input angle: what step() changes.
+struct SlipState {
+  std::array<double, kMaxSlipElements> e{};
+  double x_prev = 0.0;
+  bool started = false;
+};
+
+/// The basis of one sample, weights applied later: phi by array index.
+struct SlipBasis {
+  std::array<double, kMaxSlipBasis> phi{};
+};
+
+/// Precomputed per-spec constants: inverse widths, the level scales.
+class SlipKernel {
+ public:
+  SlipKernel() = default;
+  explicit SlipKernel(const DistributedSlipSpec& spec);
+
+  /// Advances the elements to angle x and fills the basis at velocity xd.
+  /// Never allocates; non-finite input is the caller's to refuse.
+  void advance(SlipState& s, double x, double xd, SlipBasis& out) const noexcept;
+  /// The friction A + B |D| of a basis, solved for the distal load (see the
+  /// header): `extra` is friction the rest of the model adds (Bouc-Wen);
+  /// `tension` NaN or `drive` NaN turn the respective copies off.
+  /// `level` receives the sliding level at this basis: the elements'
+  /// saturation plus the magnitude of the sliding functions' friction, N.
+  double friction(const SlipBasis& b, double tension, double drive, double extra,
+                  double& level) const noexcept;
+  /// Sets every element's state to `fraction` of its saturation (preset).
+  void preset(SlipState& s, double x, double fraction) const noexcept;
+  /// The saturated elements' friction per unit of state (sum of weights).
+  double element_capacity(double tension) const noexcept;
+
+  void set_level_scales(double k_positive, double k_negative) noexcept {
+    k_pos_ = k_positive;
+    k_neg_ = k_negative;
+  }
+  const DistributedSlipSpec& spec() const { return spec_; }
+
+ private:
+  double weight(std::size_t idx, double tension_offset) const noexcept {
+    return spec_.weight[idx] + tension_offset * spec_.tension_weight[idx];
+  }
+  DistributedSlipSpec spec_;
+  std::array<double, kMaxSlipElements> inv_width_{};
+  double inv_smoothing_ = 1.0, inv_stribeck_ = 1.0;
+  double k_pos_ = 1.0, k_neg_ = 1.0;
+};
+
+}  // namespace tsmh::estimator

@@ -1,0 +1,140 @@
+#include "estimator/distributed_slip.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace tsmh::estimator {
+
+double DistributedSlipSpec::width(std::size_t i) const {
+  if (elements <= 1) return width_min;
+  const double f = static_cast<double>(i) / static_cast<double>(elements - 1);
+  return width_min * std::pow(width_max / width_min, f);
+}
+
+DistributedSlipSpec default_distributed_slip() {
+  DistributedSlipSpec s;
+  s.enabled = true;
+  // About the paper's sliding level (gamma rho1 ~ 10 N): 7 N over the
+  // elements, 3 N of smoothed Coulomb, a small Stribeck rise.
+  for (int i = 0; i < s.elements; ++i)
+    s.weight[static_cast<std::size_t>(i)] = 0.5;
+  s.weight[kSlidingIndex + 0] = 3.0;
+  s.weight[kSlidingIndex + 1] = 3.0;
+  s.weight[kSlidingIndex + 2] = 1.0;
+  return s;
+}
+
+const char* slip_basis_name(std::size_t idx) {
+  static constexpr const char* kSliding[] = {"coulomb_positive", "coulomb_negative", "stribeck",
+                                             "viscous"};
+  static constexpr const char* kElements[] = {
+      "e1",  "e2",  "e3",  "e4",  "e5",  "e6",  "e7",  "e8",  "e9",  "e10", "e11", "e12",
+      "e13", "e14", "e15", "e16", "e17", "e18", "e19", "e20", "e21", "e22", "e23", "e24"};
+  static_assert(std::size(kElements) == kMaxSlipElements);
+  return idx < kSlidingIndex ? kElements[idx] : kSliding[idx - kSlidingIndex];
+}
+
+void validate(const DistributedSlipSpec& s) {
+  if (!s.enabled) return;
+  const auto bad = [](const std::string& field, const std::string& why) {
+    throw std::invalid_argument("distributed_slip." + field + ": " + why);
+  };
+  const auto positive = [&](const char* field, double v) {
+    if (!std::isfinite(v) || !(v > 0.0)) bad(field, "must be a finite number > 0");
+  };
+  if (s.elements < 1 || s.elements > static_cast<int>(kMaxSlipElements))
+    bad("elements", "must be 1 .. " + std::to_string(kMaxSlipElements));
+  positive("width_min", s.width_min);
+  positive("width_max", s.width_max);
+  if (s.width_max < s.width_min) bad("width_max", "must be >= width_min");
+  if (s.width_max > 10.0) bad("width_max", "must be <= 10 rad");
+  positive("smoothing", s.smoothing);
+  positive("stribeck_speed", s.stribeck_speed);
+  if (!std::isfinite(s.tension_ref)) bad("tension_ref", "must be a finite number");
+  for (std::size_t k = 0; k < s.basis_count(); ++k) {
+    const std::size_t idx = s.basis_index(k);
+    const std::string name = slip_basis_name(idx);
+    if (!std::isfinite(s.weight[idx])) bad("weights." + name, "must be a finite number");
+    if (idx < kSlidingIndex + 3 && s.weight[idx] < 0.0)
+      bad("weights." + name, "must be >= 0 (a negative break force is not passive)");
+    if (!std::isfinite(s.tension_weight[idx]))
+      bad("tension_weights." + name, "must be a finite number");
+    if (!std::isfinite(s.load_weight[idx]) || std::fabs(s.load_weight[idx]) > kMaxLoadSlope)
+      bad("load_weights." + name, "must be a finite number within +-0.9");
+  }
+}
+
+SlipKernel::SlipKernel(const DistributedSlipSpec& spec) : spec_(spec) {
+  validate(spec_);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.elements); ++i)
+    inv_width_[i] = 1.0 / spec_.width(i);
+  inv_smoothing_ = 1.0 / spec_.smoothing;
+  inv_stribeck_ = 1.0 / spec_.stribeck_speed;
+  // Entries beyond the copies in use are zero, so the sums below need no flags.
+  if (!spec_.tension_copies) spec_.tension_weight.fill(0.0);
+  if (!spec_.load_copies) spec_.load_weight.fill(0.0);
+}
+
+void SlipKernel::advance(SlipState& s, double x, double xd, SlipBasis& out) const noexcept {
+  const double dx = s.started ? x - s.x_prev : 0.0;
+  s.x_prev = x;
+  s.started = true;
+  const std::size_t n = static_cast<std::size_t>(spec_.elements);
+  const double lo = -k_neg_, hi = k_pos_;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double e = std::min(std::max(s.e[i] + dx * inv_width_[i], lo), hi);
+    s.e[i] = e;
+    out.phi[i] = e;
+  }
+  const double smooth = std::tanh(xd * inv_smoothing_);
+  const double k = xd < 0.0 ? k_neg_ : k_pos_;
+  out.phi[kSlidingIndex + 0] = k_pos_ * std::max(smooth, 0.0);
+  out.phi[kSlidingIndex + 1] = k_neg_ * std::min(smooth, 0.0);
+  out.phi[kSlidingIndex + 2] = k * std::exp(-std::fabs(xd) * inv_stribeck_) * smooth;
+  out.phi[kSlidingIndex + 3] = k * xd;
+}
+
+double SlipKernel::friction(const SlipBasis& b, double tension, double drive, double extra,
+                            double& level) const noexcept {
+  const double dt = std::isfinite(tension) ? tension - spec_.tension_ref : 0.0;
+  const std::size_t n = static_cast<std::size_t>(spec_.elements);
+  double elements = 0.0, capacity = 0.0, sliding = 0.0, slope = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w = weight(i, dt);
+    elements += b.phi[i] * w;
+    capacity += w;
+    slope += b.phi[i] * spec_.load_weight[i];
+  }
+  for (std::size_t i = kSlidingIndex; i < kMaxSlipBasis; ++i) {
+    sliding += b.phi[i] * weight(i, dt);
+    slope += b.phi[i] * spec_.load_weight[i];
+  }
+  const double a = elements + sliding + extra;
+  // Where the input slides, the elements saturate at the direction's scale.
+  level = (sliding < 0.0 ? k_neg_ : k_pos_) * capacity + std::fabs(sliding);
+  if (slope == 0.0 || !std::isfinite(drive)) return a;
+  // F = a + B |u - F|, |B| < 1: the root lies where u - F has the sign of u - a.
+  const double bs = std::clamp(slope, -kMaxLoadSlope, kMaxLoadSlope);
+  return drive >= a ? (a + bs * drive) / (1.0 + bs) : (a - bs * drive) / (1.0 - bs);
+}
+
+double SlipKernel::element_capacity(double tension) const noexcept {
+  const double dt = std::isfinite(tension) ? tension - spec_.tension_ref : 0.0;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.elements); ++i)
+    sum += weight(i, dt);
+  return sum;
+}
+
+void SlipKernel::preset(SlipState& s, double x, double fraction) const noexcept {
+  const double u = std::clamp(fraction, -1.0, 1.0);
+  const double e = u >= 0.0 ? u * k_pos_ : u * k_neg_;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.elements); ++i)
+    s.e[i] = e;
+  s.x_prev = x;
+  s.started = true;
+}
+
+}  // namespace tsmh::estimator

@@ -1,0 +1,364 @@
+// Distributed slip: the element family, its tension and load copies, the
+// params file, the estimator's tension input and the exact solve of the
+// linear block.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "estimator/distal_estimator.hpp"
+#include "estimator/model_io.hpp"
+#include "estimator/separable_fit.hpp"
+#include "estimator/simulate.hpp"
+#include "estimator/tsm_model.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+// A slip-only model: elements with the given widths and break forces, no
+// sliding functions.
+TsmModelSpec elements_only(int n, double wmin, double wmax, const std::vector<double>& w) {
+  TsmModelSpec s;
+  s.slip.enabled = true;
+  s.slip.elements = n;
+  s.slip.width_min = wmin;
+  s.slip.width_max = wmax;
+  for (int i = 0; i < n; ++i)
+    s.slip.weight[static_cast<std::size_t>(i)] = w[static_cast<std::size_t>(i)];
+  return s;
+}
+
+// An input with reversals of many sizes (nested minor loops).
+std::vector<double> wandering_angle(std::size_t n, double dt) {
+  std::vector<double> x(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) * dt;
+    x[i] = 0.4 * std::sin(1.1 * t) + 0.05 * std::sin(7.3 * t + 0.4) + 0.004 * std::sin(31.0 * t);
+  }
+  return x;
+}
+
+TEST(DistributedSlip, ElementFamilyIsAPrandtlIshlinskiiOperator) {
+  // Prandtl-Ishlinskii: F = sum_i k_i (x - y_i), y_i the play operator of
+  // half-width r_i: y_i = max(x - r_i, min(x + r_i, y_i)), starting at x(0).
+  const int n = 7;
+  const std::vector<double> w = {0.3, 0.9, 0.2, 1.4, 0.6, 0.05, 1.1};
+  TsmFrictionModel model(elements_only(n, 2e-3, 0.25, w));
+  const TsmModelSpec spec = model.spec();
+  const double dt = 1e-3;
+  const auto x = wandering_angle(20000, dt);
+  std::vector<double> y(static_cast<std::size_t>(n), x[0]);
+  model.reset();
+  double worst = 0.0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    Motion m;
+    m.t = static_cast<double>(k) * dt;
+    m.x = x[k];
+    const double f = model.step(m, dt);
+    double ref = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      const double r = spec.slip.width(u);
+      y[u] = std::max(x[k] - r, std::min(x[k] + r, y[u]));
+      ref += w[u] / r * (x[k] - y[u]);
+    }
+    worst = std::max(worst, std::fabs(f - ref));
+  }
+  EXPECT_LT(worst, 1e-9);
+  // Log-uniform widths.
+  EXPECT_NEAR(spec.slip.width(0), 2e-3, 1e-15);
+  EXPECT_NEAR(spec.slip.width(6), 0.25, 1e-12);
+  EXPECT_NEAR(spec.slip.width(3), std::sqrt(2e-3 * 0.25), 1e-12);
+}
+
+TEST(DistributedSlip, SaveRestoreAndLevelScalesKeepTheFriction) {
+  TsmFrictionModel model(distributed_spec());
+  EXPECT_FALSE(model.reads_acceleration_sign());
+  const auto x = wandering_angle(3000, 1e-3);
+  Motion m;
+  for (std::size_t k = 0; k < 1500; ++k) {
+    m.t = static_cast<double>(k) * 1e-3, m.x = x[k], m.xd = (x[k + 1] - x[k]) / 1e-3;
+    model.step(m, 1e-3);
+  }
+  DynamicsState saved;
+  ASSERT_TRUE(model.save_state(saved));
+  std::vector<double> first, second;
+  for (std::size_t k = 1500; k < 1600; ++k) {
+    m.t = static_cast<double>(k) * 1e-3, m.x = x[k], m.xd = (x[k + 1] - x[k]) / 1e-3;
+    first.push_back(model.step(m, 1e-3));
+  }
+  model.restore_state(saved);
+  for (std::size_t k = 1500; k < 1600; ++k) {
+    m.t = static_cast<double>(k) * 1e-3, m.x = x[k], m.xd = (x[k + 1] - x[k]) / 1e-3;
+    second.push_back(model.step(m, 1e-3));
+  }
+  EXPECT_EQ(first, second);
+  // A level scale leaves the friction of the instant (the elements' state
+  // stays; at rest the sliding functions add nothing), and scales the level.
+  TsmFrictionModel unscaled = model;
+  ASSERT_TRUE(model.set_level_scales(1.5, 1.5));
+  m.t += 1e-3;  // same angle, at rest
+  m.xd = 0.0;
+  EXPECT_EQ(model.step(m, 1e-3), unscaled.step(m, 1e-3));
+  for (int k = 0; k < 3000; ++k) {
+    m.t += 1e-3, m.x += 2e-3, m.xd = 2.0;
+    model.step(m, 1e-3);
+    unscaled.step(m, 1e-3);
+  }
+  // Catalog start: 7 N of elements + 3 N Coulomb (the Stribeck rise has
+  // decayed at 2 rad/s).
+  EXPECT_NEAR(unscaled.sliding_friction(), 10.0, 0.01);
+  EXPECT_NEAR(model.sliding_friction(), 15.0, 0.015);
+  EXPECT_NEAR(model.friction(), 15.0, 0.015);
+}
+
+TEST(DistributedSlip, LoadCopiesSolveTheDistalLoadExactly) {
+  // F = A + B |u - F| with u = F + D: the model must return F for any D.
+  TsmModelSpec s = distributed_spec();
+  s.slip.load_copies = true;
+  for (std::size_t i = 0; i < 14; ++i)
+    s.slip.load_weight[i] = 0.02;
+  s.slip.load_weight[kSlidingIndex] = 0.05;
+  s.slip.load_weight[kSlidingIndex + 1] = 0.03;
+  TsmFrictionModel with_load(s);
+  TsmModelSpec plain_spec = s;
+  plain_spec.slip.load_copies = false;
+  TsmFrictionModel plain(plain_spec);
+  const auto x = wandering_angle(4000, 1e-3);
+  double worst = 0.0, largest_effect = 0.0;
+  for (std::size_t k = 0; k + 1 < x.size(); ++k) {
+    Motion m;
+    m.t = static_cast<double>(k) * 1e-3, m.x = x[k], m.xd = (x[k + 1] - x[k]) / 1e-3;
+    const double a = plain.step(m, 1e-3);
+    // The basis is the same: B from the load weights.
+    const SlipBasis& b = plain.slip_basis();
+    double slope = 0.0;
+    for (std::size_t i = 0; i < kMaxSlipBasis; ++i)
+      slope += b.phi[i] * s.slip.load_weight[i];
+    const double distal = 30.0 * std::sin(0.9 * m.t);  // N, tau_out / R
+    const double f = a + slope * std::fabs(distal);
+    m.drive = f + distal;
+    const double got = with_load.step(m, 1e-3);
+    worst = std::max(worst, std::fabs(got - f));
+    largest_effect = std::max(largest_effect, std::fabs(f - a));
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_GT(largest_effect, 1.0);  // the copies mattered
+}
+
+TEST(DistributedSlip, EstimatorCarriesTheTensionsAndSkipsTheSignCorrections) {
+  TsmModelSpec s = distributed_spec();
+  s.slip.tension_copies = true;
+  s.slip.tension_ref = 20.0;
+  for (std::size_t i = 0; i < 14; ++i)
+    s.slip.tension_weight[i] = 0.05;  // each element 5 % of 1 N more per N of tension
+  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(s), 0.01);
+  EXPECT_FALSE(est.hindsight());  // nothing reads sgn(xdd)
+  DistalTorqueEstimator est2(std::make_unique<TsmFrictionModel>(s), 0.01);
+  // The same drive torque R (T1 - T3), different pretension: the estimate
+  // must differ by the tension copies' share (elements saturated).
+  Estimate low, high;
+  for (int k = 0; k < 2000; ++k) {
+    const double t = k * 1e-3, x = 0.5 * t;         // slides at 0.5 rad/s
+    low = est.update_tensions(t, x, 25.0, 15.0);    // mean 20 N
+    high = est2.update_tensions(t, x, 35.0, 25.0);  // mean 30 N
+  }
+  ASSERT_TRUE(low.valid && high.valid);
+  EXPECT_NEAR(low.tension, 20.0, 1e-12);
+  EXPECT_NEAR(high.friction - low.friction, 7.0, 1e-6)
+      << "10 N more mean tension x 0.05 per element x 14 saturated elements";
+}
+
+TEST(DistributedSlip, ParamsFileRoundTripsAndNamesBadFields) {
+  TsmModelSpec s = distributed_spec();
+  s.slip.tension_copies = true;
+  s.slip.tension_ref = 21.5;
+  s.slip.tension_weight[3] = 0.01;
+  s.slip.load_copies = true;
+  s.slip.load_weight[kSlidingIndex + 2] = -0.2;
+  TsmFrictionModel model(s);
+  const std::string yaml = model_to_yaml(model);
+  const auto back = parse_model(yaml, "round.yaml");
+  ASSERT_EQ(back->parameters().size(), model.parameters().size());
+  for (std::size_t i = 0; i < model.parameters().size(); ++i) {
+    EXPECT_EQ(back->parameters()[i].name, model.parameters()[i].name);
+    EXPECT_NEAR(back->parameters()[i].value, model.parameters()[i].value,
+                1e-9 * (1.0 + std::fabs(model.parameters()[i].value)));  // 10 digits in the file
+  }
+  const auto expect_error = [&](const std::string& from, const std::string& to,
+                                const std::string& field) {
+    std::string bad = yaml;
+    const auto at = bad.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    bad.replace(at, from.size(), to);
+    try {
+      parse_model(bad, "bad.yaml");
+      ADD_FAILURE() << "accepted " << to;
+    } catch (const ParamsError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  expect_error("width_max: 0.3", "width_max: 0.0001", "distributed_slip.width_max");
+  expect_error("elements: 14", "elements: 30", "distributed_slip.elements");
+  expect_error("elements: 14", "elements: 2.5", "distributed_slip.elements");
+  expect_error("smoothing: 0.01", "smoothing: -1", "distributed_slip.smoothing");
+  expect_error("load_weights: [0", "load_weights: [1.5", "distributed_slip.load_weights.e1");
+  expect_error("weights: [0.5", "weights: [-0.5", "distributed_slip.weights.e1");
+  expect_error("weights: [0.5", "weights: [0.1, 0.5", "distributed_slip.weights");
+}
+
+TEST(DistributedSlip, NonnegativeLeastSquaresMatchesEnumeration) {
+  // 4 variables, the first three >= 0: compare with the best of all active sets.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::MatrixXd a(30, 4);
+    Eigen::VectorXd y(30);
+    for (int i = 0; i < 30; ++i) {
+      for (int j = 0; j < 4; ++j)
+        a(i, j) = g(rng);
+      y(i) = g(rng);
+    }
+    const Eigen::MatrixXd gram = a.transpose() * a;
+    const Eigen::VectorXd h = a.transpose() * y;
+    const std::vector<bool> nonneg = {true, true, true, false};
+    const auto x = nonnegative_least_squares({gram.data(), gram.data() + 16},
+                                             {h.data(), h.data() + 4}, nonneg);
+    const auto cost = [&](const Eigen::VectorXd& v) { return (a * v - y).squaredNorm(); };
+    double best = std::numeric_limits<double>::infinity();
+    for (int mask = 0; mask < 8; ++mask) {  // which constrained ones are free
+      std::vector<int> idx = {3};
+      for (int j = 0; j < 3; ++j)
+        if (mask & (1 << j)) idx.push_back(j);
+      Eigen::MatrixXd sub(30, static_cast<Eigen::Index>(idx.size()));
+      for (std::size_t c = 0; c < idx.size(); ++c)
+        sub.col(static_cast<Eigen::Index>(c)) = a.col(idx[c]);
+      const Eigen::VectorXd s = sub.colPivHouseholderQr().solve(y);
+      Eigen::VectorXd v = Eigen::VectorXd::Zero(4);
+      bool feasible = true;
+      for (std::size_t c = 0; c < idx.size(); ++c) {
+        v(idx[c]) = s(static_cast<Eigen::Index>(c));
+        if (idx[c] < 3 && v(idx[c]) < 0.0) feasible = false;
+      }
+      if (feasible) best = std::min(best, cost(v));
+    }
+    Eigen::VectorXd xv(4);
+    for (int j = 0; j < 4; ++j)
+      xv(j) = x[static_cast<std::size_t>(j)];
+    for (int j = 0; j < 3; ++j)
+      EXPECT_GE(xv(j), 0.0);
+    EXPECT_NEAR(cost(xv), best, 1e-9 * (1.0 + best)) << "trial " << trial;
+  }
+}
+
+// Synthetic data from a known distributed-slip model with tension and load
+// copies: motion, mean tension and distal load varying independently.
+FitData synthetic(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
+  FitData d;
+  const double dt = 1e-3;
+  const std::size_t n = 40000;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, noise);
+  TsmModelSpec plain = truth;
+  plain.slip.load_copies = false;
+  TsmFrictionModel model(plain);
+  model.reset();
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    Motion m;
+    m.t = t;
+    m.x = 0.5 * std::sin(0.7 * t) + 0.15 * std::sin(2.9 * t + 1.0) + 0.02 * std::sin(11.0 * t);
+    m.xd = 0.35 * std::cos(0.7 * t) + 0.435 * std::cos(2.9 * t + 1.0) + 0.22 * std::cos(11.0 * t);
+    m.tension = 20.0 + 6.0 * std::sin(0.13 * t + 0.5);
+    const double distal = 25.0 * std::sin(0.21 * t) * std::sin(0.05 * t + 0.3);
+    const double a = model.step(m, dt);
+    double slope = 0.0;
+    for (std::size_t i = 0; i < kMaxSlipBasis; ++i)
+      slope += model.slip_basis().phi[i] * truth.slip.load_weight[i];
+    const double f = a + slope * std::fabs(distal);
+    m.drive = f + distal;
+    d.motion.push_back(m);
+    d.measured.push_back(f + g(rng));
+    d.role.push_back(t < 0.5
+                         ? SampleRole::kIgnored
+                         : (static_cast<int>((t - 0.5) / 2.0) % 2 == 0 ? SampleRole::kTrain
+                                                                       : SampleRole::kValidation));
+  }
+  d.radius_m = 0.01;
+  return d;
+}
+
+TsmModelSpec known_truth() {
+  TsmModelSpec s;
+  s.slip.enabled = true;
+  s.slip.elements = 10;
+  s.slip.width_min = 2e-3;
+  s.slip.width_max = 0.15;
+  s.slip.smoothing = 0.02;
+  s.slip.stribeck_speed = 0.15;
+  s.slip.tension_copies = true;
+  s.slip.tension_ref = 20.0;
+  s.slip.load_copies = true;
+  const double w[10] = {0.2, 0.5, 0.9, 0.0, 1.2, 0.7, 0.4, 0.0, 0.8, 0.3};
+  for (std::size_t i = 0; i < 10; ++i) {
+    s.slip.weight[i] = w[i];
+    s.slip.tension_weight[i] = 0.03 * w[i];  // friction grows 3 % per N of tension
+    s.slip.load_weight[i] = 0.01 * w[i];
+  }
+  s.slip.weight[kSlidingIndex + 0] = 3.0;
+  s.slip.weight[kSlidingIndex + 1] = 2.5;
+  s.slip.weight[kSlidingIndex + 2] = 1.0;
+  s.slip.weight[kSlidingIndex + 3] = 0.5;
+  s.slip.tension_weight[kSlidingIndex + 0] = 0.09;
+  s.slip.tension_weight[kSlidingIndex + 1] = 0.075;
+  s.slip.load_weight[kSlidingIndex + 0] = 0.03;
+  s.slip.load_weight[kSlidingIndex + 1] = 0.025;
+  return s;
+}
+
+TEST(DistributedSlip, LeastSquaresRecoversKnownWeightsAndCopies) {
+  const TsmModelSpec truth = known_truth();
+  const FitData d = synthetic(truth, 0.05, 11);
+  const CopiesInData copies = copies_in_data(d);
+  EXPECT_TRUE(copies.tension);
+  EXPECT_TRUE(copies.load);
+  TsmModelSpec s = truth;
+  s.slip.weight.fill(1.0);
+  s.slip.tension_weight.fill(0.0);
+  s.slip.load_weight.fill(0.0);
+  const double mse = solve_slip_weights(s, d);
+  EXPECT_NEAR(std::sqrt(mse), 0.05, 0.005);  // at the noise
+  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
+    const std::size_t i = truth.slip.basis_index(k);
+    EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
+    EXPECT_NEAR(s.slip.tension_weight[i], truth.slip.tension_weight[i], 0.01) << slip_basis_name(i);
+    EXPECT_NEAR(s.slip.load_weight[i], truth.slip.load_weight[i], 0.005) << slip_basis_name(i);
+  }
+}
+
+TEST(DistributedSlip, SeparableFitFindsTheSpreadFromTheCatalogStart) {
+  const TsmModelSpec truth = known_truth();
+  const FitData d = synthetic(truth, 0.05, 12);
+  FitOptions o;
+  const auto r = identify(TsmFrictionModel(distributed_spec()), d, o);
+  const auto* fitted = dynamic_cast<const TsmFrictionModel*>(r.model.get());
+  ASSERT_NE(fitted, nullptr);
+  EXPECT_TRUE(fitted->spec().slip.tension_copies);
+  EXPECT_TRUE(fitted->spec().slip.load_copies);
+  // Within 10 % of the noise floor on train, and on validation too.
+  EXPECT_LT(r.train_rmse, 1.1 * 0.05);
+  double sse = 0.0, n = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (d.role[i] == SampleRole::kValidation) {
+      const double e = r.simulated[i] - d.measured[i];
+      sse += e * e, n += 1.0;
+    }
+  EXPECT_LT(std::sqrt(sse / n), 1.15 * 0.05);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
