@@ -8,8 +8,8 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
-#include <fstream>
-#include <sstream>
+
+#include "files/input_file.hpp"
 
 namespace tsmh::bridge {
 namespace {
@@ -140,11 +140,14 @@ LinkKey LinkKey::load(const std::filesystem::path& file) {
                        "its owner only (chmod 600 " +
                        name + ")");
   }
-  std::ifstream in(file);
-  if (!in) throw LinkKeyError("link key " + name + ": cannot open: " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  std::string s = text.str();
+  // Bounded (a key is 65 bytes) and never blocking, even if the file was
+  // replaced by a FIFO since the stat() above.
+  std::string s;
+  try {
+    s = files::read_file(file, files::kMaxKeyBytes);
+  } catch (const files::FileError& e) {
+    throw LinkKeyError(std::string("link key ") + e.what());
+  }
   LinkKey k = from_hex(s, "link key " + name);
   sodium_memzero(s.data(), s.size());
   return k;

@@ -19,7 +19,8 @@ struct ConvertOptions {
 };
 
 void run_convert(const ConvertOptions& o) {
-  check_outputs({{"--output", o.output, OutputKind::kFile}});
+  check_outputs({{"--output", o.output, OutputKind::kFile}},
+                {{"the log", o.log}, key_input(o.sel)});
   std::string summary;
   const auto rec = recording_from_lcm_log(o.log, o.sel, std::nullopt, {}, &summary);
   estimator::write_recording_csv(rec, o.output);

@@ -52,7 +52,8 @@ std::string progress_text(const estimator::FitProgress& p) {
 void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
   check_outputs(
-      {{"--output", o.output, OutputKind::kFile}, {"--report", o.report, OutputKind::kFolder}});
+      {{"--output", o.output, OutputKind::kFile}, {"--report", o.report, OutputKind::kFolder}},
+      {{"the data", o.data}, model_input("--model", o.model), key_input(ctx.lcm_log)});
   const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
   const auto& rec = loaded.recording;
   const auto initial = estimator::load_model(o.model);

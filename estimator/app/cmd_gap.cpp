@@ -41,7 +41,8 @@ struct GapCliOptions {
 
 void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
-  check_outputs({{"--output", o.output, OutputKind::kFolder}});
+  check_outputs({{"--output", o.output, OutputKind::kFolder}},
+                {{"the data", o.data}, model_input("--base", o.base), key_input(ctx.lcm_log)});
   const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
   const auto& rec = loaded.recording;
   const auto base = estimator::load_model(o.base);

@@ -73,7 +73,9 @@ std::string simulate_comparison(const estimator::Recording& rec, const std::vect
 }
 
 void run_simulate(const SimulateOptions& o, const Context& ctx) {
-  check_outputs({{"--output", o.output, OutputKind::kFile}});
+  check_outputs(
+      {{"--output", o.output, OutputKind::kFile}},
+      {{"the input", o.input}, model_input("--params", o.params), key_input(ctx.lcm_log)});
   auto model = estimator::load_model(o.params);
   const auto rec = ctx.sources.load(o.input, o.radius, {});
   const bool exact =

@@ -2,6 +2,8 @@
 
 #include <iostream>
 
+#include "files/input_file.hpp"
+
 namespace tsmh::tsm_cli {
 
 estimator::Recording DataSources::load(const std::filesystem::path& path,
@@ -11,6 +13,14 @@ estimator::Recording DataSources::load(const std::filesystem::path& path,
     throw estimator::DataError(path.string(), 0, "", "no such file");
   estimator::Recording rec;
   bool read = false;
+  // Before any source looks at its first bytes: a FIFO or a device is
+  // refused at once (opening a FIFO to sniff it blocked), and so is a
+  // recording over the size bound.
+  try {
+    files::InputFile probe(path, files::kMaxRecordingBytes);
+  } catch (const files::FileError& e) {
+    throw estimator::DataError(path.string(), 0, "", e.why());
+  }
   for (const auto& s : sources_) {
     if (s.accepts(path)) {
       rec = s.load(path, radius, need);
@@ -22,6 +32,8 @@ estimator::Recording DataSources::load(const std::filesystem::path& path,
   // Said once, here, for every command that reads DATA.
   for (const auto& w : rec.warnings)
     std::cerr << "tsm: warning: " << path.string() << ": " << w << "\n";
+  for (const auto& note : rec.notes)
+    std::cerr << "tsm: note: " << note << "\n";
   return rec;
 }
 

@@ -7,10 +7,15 @@
 #include "estimator/model_io.hpp"
 #include "estimator/table.hpp"
 #include "tsmh/cli_words.hpp"
+#include "files/file_size_limit.hpp"
+#include "output_checks.hpp"
 #include "tsmh/version.hpp"
 
 int main(int argc, char** argv) {
   using namespace tsmh::tsm_cli;
+  // Under a file-size limit a write fails with EFBIG and is reported, the
+  // temporary file removed, instead of SIGXFSZ killing tsm silently.
+  tsmh::files::ignore_file_size_signal();
   CLI::App app{
       "tsm: tendon-sheath friction models: simulate, identify, find model gaps; LCM link key"};
   app.set_version_flag("--version", tsmh::version_line("tsm"));
@@ -30,6 +35,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const tsmh::estimator::DataError& e) {
+    std::cerr << "tsm: error: " << e.what() << "\n";
+    return 2;
+  } catch (const UsageError& e) {
     std::cerr << "tsm: error: " << e.what() << "\n";
     return 2;
   } catch (const tsmh::estimator::ParamsError& e) {

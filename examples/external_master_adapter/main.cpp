@@ -48,6 +48,7 @@
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
+#include "files/cli_numbers.hpp"
 #include "master_devices/axis_mapping.hpp"
 #include "realtime/clock.hpp"
 
@@ -243,10 +244,11 @@ int main(int argc, char** argv) {
                  "per-arm channel prefix, e.g. LEFT_ -> LEFT_MASTER_STATE (--channel-prefix: old "
                  "name)");
   app.add_option("--rate-hz", rate_hz, "device read / MASTER_STATE rate")
-      ->check(CLI::Range(1.0, 20000.0));
+      ->check(tsmh::files::finite_range(1.0, 20000.0, "Hz"));
   app.add_option("--watchdog-ms", watchdog_ms, "zero torque when MASTER_FORCE is older")
       ->check(CLI::PositiveNumber);
-  app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)")
+      ->check(tsmh::files::finite_range(0.0, 1e7, "s"));
   std::string profile_file, mapping_file;
   app.add_option("--profile", profile_file,
                  "master profile: kinematics, workspace, limits, buttons "

@@ -35,6 +35,7 @@
 #include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
+#include "files/cli_numbers.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
@@ -178,11 +179,12 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   app.add_option("--prefix", prefix, "per-arm channel prefix, e.g. ARM1_ -> ARM1_SLAVE_STATE");
   app.add_option("--rate-hz", rate_hz, "control and SLAVE_STATE rate")
-      ->check(CLI::Range(100.0, 4000.0));
+      ->check(tsmh::files::finite_range(100.0, 4000.0, "Hz"));
   app.add_option("--command-timeout-ms", command_timeout_ms,
                  "hold when the newest MASTER_COMMAND is older")
       ->check(CLI::PositiveNumber);
-  app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)");
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)")
+      ->check(tsmh::files::finite_range(0.0, 1e7, "s"));
   tsmh::bridge::LinkSecurityOptions link;
   app.add_option("--key", link.key_file, tsmh::bridge::kKeyOptionHelp);
   app.add_flag("--insecure", link.insecure,

@@ -17,8 +17,10 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <iostream>
 #include <optional>
@@ -31,6 +33,8 @@
 #include "calibration_log.hpp"
 #include "crash_outputs.hpp"
 #include "estimator/model_io.hpp"
+#include "files/cli_numbers.hpp"
+#include "files/distinct_outputs.hpp"
 #include "haptics/evaluation.hpp"
 #include "haptics/lcm_slave_link.hpp"
 #include "haptics/loop_runner.hpp"
@@ -462,6 +466,40 @@ void cap_torque_to_device(haptics::ServerConfig& cfg, const master_devices::Devi
   }
 }
 
+// No output may be an input of the run (its configuration, the link key,
+// a joint's params file, the device profile) or the other output: `--trace
+// link.key` replaced the key, `--trace X --report X` lost the trace. Checked
+// before anything is opened (files/distinct_outputs.hpp); exit 2.
+void check_outputs(const haptics::ServerConfig& cfg, const Options& o) {
+  std::vector<files::NamedInput> inputs{{"the configuration", o.config}};
+  try {
+    if (const auto key = bridge::find_key_file(o.link.key_file, std::getenv(bridge::kLinkKeyEnv),
+                                               std::getenv("XDG_CONFIG_HOME"), std::getenv("HOME")))
+      inputs.push_back({"the link key", *key});
+  } catch (const std::exception&) {
+    // resolve_link_security() reports a key that cannot be found.
+  }
+  const auto presets = estimator::preset_names();
+  for (const auto& j : cfg.joints) {
+    if (std::find(presets.begin(), presets.end(), j.params) == presets.end())
+      inputs.push_back({"the params of joint '" + j.name + "'", j.params});
+  }
+  const YAML::Node profile = cfg.device_settings["profile"];
+  if (profile && profile.IsScalar()) {
+    std::filesystem::path file(profile.Scalar());
+    if (file.is_relative()) file = std::filesystem::path(cfg.source).parent_path() / file;
+    inputs.push_back({"the device profile", file});
+  }
+  const char* trace_role = o.trace.empty() ? "evaluation.trace" : "--trace";
+  const char* report_role = o.report.empty() ? "evaluation.report" : "--report";
+  try {
+    files::check_distinct_outputs(
+        inputs, {{trace_role, cfg.evaluation.trace}, {report_role, cfg.evaluation.report}});
+  } catch (const files::FileError& e) {
+    throw haptics::ConfigError(e.what());
+  }
+}
+
 // Trace and report: rows stream to an unlinked spool file beside the output
 // through a fixed ring (memory does not grow with the run). The output
 // folders must exist: checked before anything is opened. nullptr: neither
@@ -522,6 +560,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
   int exit_code = kExitClean;
   haptics::ServerConfig cfg = haptics::load_server_config(o.config);
   apply_command_line(cfg, o);
+  check_outputs(cfg, o);
   auto estimators = make_estimators(cfg);
 
   haptics::LcmSlaveLinkConfig link_cfg;
@@ -651,10 +690,11 @@ int main(int argc, char** argv) {
                  "LCM channel prefix of the arm, e.g. ARM1_ (overrides lcm.prefix in the config)");
   app.add_option("--duration", o.duration,
                  "Stop after this many seconds (default: until SIGINT/SIGTERM)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(files::finite_range(0.0, 1e7, "s"));
   app.add_option("--feedback", o.feedback, "What to render: estimated (default), naive, none")
       ->check(CLI::IsMember({"estimated", "naive", "none"}));
-  app.add_option("--rate", o.rate, "Loop rate in Hz (1..4000)");
+  app.add_option("--rate", o.rate, "Loop rate in Hz (1..4000)")
+      ->check(files::finite_range(1.0, 4000.0, "Hz"));
   app.add_option("--trace", o.trace, "Write a per-tick CSV trace here at exit");
   app.add_option("--report", o.report, "Write the JSON evaluation report here at exit");
   app.add_flag("--list-devices", o.list_devices,

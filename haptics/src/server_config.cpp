@@ -3,9 +3,10 @@
 #include <sched.h>
 
 #include <cmath>
-#include <fstream>
 #include <set>
 #include <sstream>
+
+#include "files/input_file.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -287,11 +288,14 @@ void check_against_device(const ServerConfig& c, const master_devices::DeviceSpe
 }
 
 ServerConfig load_server_config(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path.string() + ": cannot open the configuration file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_server_config(ss.str(), path.string(), path.parent_path());
+  // Bounded and never blocking (a FIFO or /dev/zero is refused at once).
+  std::string text;
+  try {
+    text = files::read_file(path, files::kMaxConfigBytes);
+  } catch (const files::FileError& e) {
+    throw ConfigError(std::string("configuration ") + e.what());
+  }
+  return parse_server_config(text, path.string(), path.parent_path());
 }
 
 }  // namespace tsmh::haptics

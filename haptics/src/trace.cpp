@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "estimator/atomic_file.hpp"
+#include "files/file_size_limit.hpp"
 
 namespace tsmh::haptics {
 
@@ -146,22 +147,31 @@ void TraceSpool::run() noexcept {
     while (ring_->pop(row)) {
       any = true;
       encode_trace_row(row, joints_, buf.data());
-      if (std::fwrite(buf.data(), sizeof(double), buf.size(), file_) != buf.size())
-        failed_.store(true, std::memory_order_relaxed);
-      else
+      if (std::fwrite(buf.data(), sizeof(double), buf.size(), file_) != buf.size()) {
+        if (!failed_.exchange(true, std::memory_order_relaxed))
+          failed_errno_.store(errno, std::memory_order_relaxed);
+      } else
         written_.fetch_add(1, std::memory_order_relaxed);
     }
     if (stopping) break;
     if (!any) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  if (std::fflush(file_) != 0) failed_.store(true, std::memory_order_relaxed);
+  if (std::fflush(file_) != 0 && !failed_.exchange(true, std::memory_order_relaxed))
+    failed_errno_.store(errno, std::memory_order_relaxed);
 }
 
 Trace TraceSpool::finish() {
   stop_.store(true, std::memory_order_release);
   if (writer_.joinable()) writer_.join();
-  if (failed_.load())
-    throw std::runtime_error("writing the trace's spool file failed (disk full?)");
+  if (failed_.load()) {
+    struct stat st {};
+    const std::uint64_t size = ::fstat(fd_, &st) == 0 ? static_cast<std::uint64_t>(st.st_size) : 0;
+    if (files::hit_file_size_limit(failed_errno_.load(), size))
+      throw std::runtime_error(files::file_size_limit_message("the trace's spool file") +
+                               ": no trace or report written");
+    throw std::runtime_error(std::string("writing the trace's spool file failed (") +
+                             std::strerror(failed_errno_.load()) + ")");
+  }
   const std::uint64_t rows = written_.load();
   const std::size_t bytes = rows * trace_row_width(joints_) * sizeof(double);
   if (rows == 0) return Trace(joints_, nullptr, 0, nullptr, dropped());

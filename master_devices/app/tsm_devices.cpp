@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "files/cli_numbers.hpp"
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/profile.hpp"
@@ -55,7 +56,8 @@ int main(int argc, char** argv) {
   app.add_flag("--drivers", drivers, "the same as the subcommand drivers");
   app.add_option("--monitor", monitor, "the same as the subcommand monitor DRIVER");
   app.add_option("--config", config, "YAML file with the driver's settings map (for monitor)");
-  app.add_option("--seconds", seconds, "how long to monitor")->check(CLI::PositiveNumber);
+  app.add_option("--seconds", seconds, "how long to monitor")
+      ->check(tsmh::files::finite_range(0.001, 1e7, "s"));
   std::string lcm_url;
   std::string prefix;
   app.add_option("--lcm-url", lcm_url,
@@ -103,7 +105,7 @@ int main(int argc, char** argv) {
       YAML::Node settings;
       md::DriverContext ctx;
       if (!config.empty()) {
-        settings = YAML::LoadFile(config);
+        settings = md::load_yaml_file(config, "settings");
         ctx.source = config;
         ctx.path = "";
         ctx.base_dir = std::filesystem::path(config).parent_path();

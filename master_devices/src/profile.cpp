@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <numbers>
 
 namespace tsmh::master_devices {
@@ -84,15 +83,7 @@ DeviceProfile parse_profile(const YAML::Node& root, const std::string& source) {
 }
 
 DeviceProfile load_profile(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path.string() + ": cannot open profile");
-  YAML::Node root;
-  try {
-    root = YAML::Load(in);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(path.string() + ": not valid YAML: " + e.what());
-  }
-  return parse_profile(root, path.string());
+  return parse_profile(load_yaml_file(path, "profile"), path.string());
 }
 
 std::vector<DeviceProfile> load_profiles(const std::filesystem::path& dir) {

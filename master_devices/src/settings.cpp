@@ -1,8 +1,12 @@
 #include "master_devices/settings.hpp"
 
 #include <cmath>
+#include <string>
 #include <utility>
 #include <vector>
+
+#include "files/input_file.hpp"
+#include "files/yaml_keys.hpp"
 
 namespace tsmh::master_devices {
 
@@ -15,33 +19,26 @@ std::string line_of(const YAML::Node& n) {
 }
 }  // namespace
 
-namespace {
-void reject_duplicates_below(const YAML::Node& n, const std::string& source,
-                             const std::string& path) {
-  if (n.IsSequence()) {
-    for (std::size_t i = 0; i < n.size(); ++i)
-      reject_duplicates_below(n[i], source, path + "[" + std::to_string(i) + "]");
-    return;
-  }
-  if (!n.IsMap()) return;
-  std::vector<std::pair<std::string, YAML::Mark>> seen;
-  for (const auto& kv : n) {
-    const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : std::string("(complex key)");
-    const std::string field = path.empty() ? key : path + "." + key;
-    for (const auto& [k, mark] : seen) {
-      if (k != key) continue;
-      throw ConfigError(source + ": " + field + ": duplicate key (line " +
-                        std::to_string(kv.first.Mark().line + 1) + "; first at line " +
-                        std::to_string(mark.line + 1) + ")");
-    }
-    seen.emplace_back(key, kv.first.Mark());
-    reject_duplicates_below(kv.second, source, field);
-  }
-}
-}  // namespace
-
 void reject_duplicate_keys(const YAML::Node& root, const std::string& source) {
-  reject_duplicates_below(root, source, "");
+  if (const auto dup = files::find_duplicate_key(root, source)) throw ConfigError(*dup);
+}
+
+YAML::Node load_yaml_file(const std::filesystem::path& path, std::string_view what) {
+  std::string text;
+  try {
+    text = files::read_file(path, files::kMaxConfigBytes);
+  } catch (const files::FileError& e) {
+    throw ConfigError(std::string(what) + " " + e.what());
+  }
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path.string() + ": not valid YAML (line " + std::to_string(e.mark.line + 1) +
+                      "): " + e.msg);
+  }
+  reject_duplicate_keys(root, path.string());
+  return root;
 }
 
 void config_fail(const std::string& source, const std::string& field, std::string_view message,

@@ -8,6 +8,9 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "files/file_size_limit.hpp"
+#include "files/link_target.hpp"
+
 namespace tsmh::estimator {
 namespace {
 
@@ -17,19 +20,16 @@ std::string errno_text() {
   return errno != 0 ? std::string(" (") + std::strerror(errno) + ")" : std::string();
 }
 
-// The file a path finally names: itself, or what its chain of symbolic links
-// points to (relative links resolve against their own folder). A dangling
-// link resolves to the file it would name, which is then created.
-fs::path resolve_links(const fs::path& path) {
-  fs::path p = path;
-  for (int depth = 0; depth < 40; ++depth) {
-    std::error_code ec;
-    if (!fs::is_symlink(fs::symlink_status(p, ec))) return p;
-    const fs::path target = fs::read_symlink(p, ec);
-    if (ec) return p;
-    p = target.is_absolute() ? target : p.parent_path() / target;
-  }
-  throw std::runtime_error(path.string() + ": too many levels of symbolic links");
+// A failed write: under a file-size limit (ulimit -f) say so plainly, naming
+// the file the user asked for (not the temporary one).
+[[noreturn]] void write_failed(const fs::path& path, const fs::path& written) {
+  const int err = errno;
+  std::error_code ec;
+  const auto size = fs::file_size(written, ec);
+  if (files::hit_file_size_limit(err, ec ? 0 : size))
+    throw std::runtime_error(files::file_size_limit_message(path.string()));
+  errno = err;
+  throw std::runtime_error(path.string() + ": write failed" + errno_text());
 }
 
 }  // namespace
@@ -38,7 +38,12 @@ void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& write) {
   // A symbolic link stays a link: its target is what gets written (atomically,
   // beside the target), never the link replaced by a regular file.
-  const fs::path target = resolve_links(path);
+  fs::path target;
+  try {
+    target = files::final_link_target(path);
+  } catch (const files::FileError& e) {
+    throw std::runtime_error(e.what());
+  }
   std::error_code ec;
   const fs::file_status st = fs::status(target, ec);
   if (fs::is_directory(st)) throw std::runtime_error(path.string() + ": is a directory");
@@ -51,7 +56,7 @@ void write_file_atomically(const std::filesystem::path& path,
     if (!out) throw std::runtime_error(path.string() + ": cannot open for writing" + errno_text());
     write(out);
     out.flush();
-    if (!out) throw std::runtime_error(path.string() + ": write failed" + errno_text());
+    if (!out) write_failed(path, target);
     return;
   }
   const fs::path tmp = target.string() + ".tmp-" + std::to_string(static_cast<long>(::getpid()));
@@ -61,9 +66,9 @@ void write_file_atomically(const std::filesystem::path& path,
     if (!out) throw std::runtime_error(path.string() + ": cannot open for writing" + errno_text());
     write(out);
     out.flush();
-    if (!out) throw std::runtime_error(path.string() + ": write failed" + errno_text());
+    if (!out) write_failed(path, tmp);
     out.close();
-    if (!out) throw std::runtime_error(path.string() + ": write failed" + errno_text());
+    if (!out) write_failed(path, tmp);
   } catch (...) {
     fs::remove(tmp, ec);
     throw;

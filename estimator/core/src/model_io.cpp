@@ -3,12 +3,12 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include "estimator/atomic_file.hpp"
 #include "estimator/baselines.hpp"
+#include "files/input_file.hpp"
+#include "files/yaml_keys.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -221,6 +221,8 @@ std::unique_ptr<FrictionModel> parse_model(const std::string& text, const std::s
     fail(origin, "", "not valid YAML (line " + std::to_string(e.mark.line + 1) + "): " + e.msg);
   }
   if (!root.IsMap()) fail(origin, "", "expected a YAML map with a 'model' field");
+  // `core: {theta: 15.5, theta: 99}` would otherwise use the first value.
+  if (const auto dup = files::find_duplicate_key(root, origin)) throw ParamsError(*dup);
   const YAML::Node kind = root["model"];
   if (!kind || !kind.IsScalar())
     fail(origin, "model", "missing (tsm, dahl, lugre or coulomb_capstan)");
@@ -240,16 +242,22 @@ std::unique_ptr<FrictionModel> load_model(const std::string& name) {
   if (name == "dahl_classic") return std::make_unique<DahlModel>();
   if (name == "lugre") return std::make_unique<LuGreModel>();
   if (name == "coulomb_capstan") return std::make_unique<CoulombCapstanModel>();
-  std::ifstream in(name);
-  if (!in) {
+  std::error_code ec;
+  if (!std::filesystem::exists(std::filesystem::symlink_status(name, ec))) {
     std::string list;
     for (const auto& p : preset_names())
       list += (list.empty() ? "" : ", ") + p;
     throw ParamsError(name + ": no such file, and not a preset (" + list + ")");
   }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_model(ss.str(), name);
+  // Bounded and never blocking: `params: /dev/zero` grew the server to
+  // 24 GB, and a FIFO stopped its start-up where no signal reached it.
+  std::string text;
+  try {
+    text = files::read_file(name, files::kMaxConfigBytes);
+  } catch (const files::FileError& e) {
+    throw ParamsError(e.what());
+  }
+  return parse_model(text, name);
 }
 
 std::string model_to_yaml(const FrictionModel& model, const std::vector<std::string>& header) {

@@ -16,8 +16,15 @@ std::optional<double> parse_radius(const Table& table) {
   double v = 0.0;
   const auto& s = it->second;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || ptr != s.data() + s.size() || !(v > 0.0) || !std::isfinite(v))
-    throw DataError(table.source, 0, "", "comment '# radius_m: " + s + "' is not a radius > 0");
+  if (ec != std::errc() || ptr != s.data() + s.size() || !std::isfinite(v))
+    throw DataError(
+        table.source, 0, "radius_m",
+        "comment '# radius_m: " + excerpt(s) + "' is not a number; " + kRadiusRangeText);
+  // 1e308 passed as "> 0" and simulate wrote -inf rows with exit 0.
+  if (!(v >= kMinRadiusM && v <= kMaxRadiusM))
+    throw DataError(
+        table.source, 0, "radius_m",
+        "comment '# radius_m: " + excerpt(s) + "' is out of range; " + kRadiusRangeText);
   return v;
 }
 
@@ -76,9 +83,10 @@ Recording recording_from_table(const Table& table, std::optional<double> radius_
                                const RecordingRequirements& need) {
   Recording rec;
   rec.source = table.source;
+  rec.notes = table.notes;
   if (radius_override) {
-    if (!(*radius_override > 0.0) || !std::isfinite(*radius_override))
-      throw DataError(table.source, 0, "", "--radius must be a number > 0");
+    if (!(*radius_override >= kMinRadiusM && *radius_override <= kMaxRadiusM))
+      throw DataError(table.source, 0, "", std::string("--radius: ") + kRadiusRangeText);
     rec.radius_m = *radius_override;
   } else if (auto r = parse_radius(table)) {
     rec.radius_m = *r;

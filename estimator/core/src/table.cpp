@@ -4,11 +4,13 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <cstring>
+#include <optional>
 #include <sstream>
 #include <system_error>
 
 #include "estimator/atomic_file.hpp"
+#include "files/input_file.hpp"
 
 namespace tsmh::estimator {
 
@@ -99,22 +101,80 @@ void Table::set(const std::string& name, std::vector<double> values) {
   }
 }
 
+namespace {
+
+// Lines of a file, each at most kMaxLineBytes, read in chunks: a 1 GB file
+// without a newline is refused after 1 MiB, not after reading it all.
+class LineSource {
+ public:
+  explicit LineSource(files::InputFile& in) : in_(in) {}
+
+  /// The next line without its '\n'; false at the end. `too_long` is set
+  /// (and the line cut after kMaxLineBytes + 1 bytes) when it has no end in sight.
+  bool next(std::string& line, bool& too_long) {
+    line.clear();
+    too_long = false;
+    while (true) {
+      if (pos_ == end_) {
+        end_ = in_.read_some(buf_, sizeof buf_);
+        pos_ = 0;
+        if (end_ == 0) return !line.empty();
+      }
+      const char* start = buf_ + pos_;
+      const auto* nl = static_cast<const char*>(std::memchr(start, '\n', end_ - pos_));
+      const std::size_t n = nl ? static_cast<std::size_t>(nl - start) : end_ - pos_;
+      line.append(start, n);
+      pos_ += n + (nl ? 1 : 0);
+      if (line.size() > kMaxLineBytes) {
+        too_long = true;
+        return true;
+      }
+      if (nl) return true;
+    }
+  }
+
+ private:
+  files::InputFile& in_;
+  char buf_[65536];
+  std::size_t pos_ = 0;
+  std::size_t end_ = 0;
+};
+
+}  // namespace
+
 Table read_csv_table(const std::filesystem::path& path) {
   const std::string file = path.string();
-  std::ifstream in(path);
-  if (!in) throw DataError(file, 0, "", "cannot open for reading");
+  // A regular file within the recording bound, opened without blocking: a
+  // FIFO or a device is refused at once.
+  std::optional<files::InputFile> input;
+  try {
+    input.emplace(path, files::kMaxRecordingBytes);
+  } catch (const files::FileError& e) {
+    throw DataError(file, 0, "", e.why());
+  }
+  LineSource in(*input);
   Table table;
   table.source = file;
   std::string line;
   long line_no = 0;
   bool have_header = false;
-  while (std::getline(in, line)) {
+  bool too_long = false;
+  while (true) {
+    try {
+      if (!in.next(line, too_long)) break;
+    } catch (const files::FileError& e) {
+      throw DataError(file, line_no + 1, "", e.why());
+    }
     ++line_no;
-    if (line.size() > kMaxLineBytes)
+    // A spreadsheet's UTF-8 byte-order mark: skipped, and said so.
+    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) {
+      line.erase(0, 3);
+      table.notes.push_back(file + ": skipped the UTF-8 byte-order mark at the start of the file");
+    }
+    if (too_long)
       throw DataError(file, line_no, "",
-                      "line is " + std::to_string(line.size()) + " bytes long (at most " +
-                          std::to_string(kMaxLineBytes) + "): not a CSV line; it starts '" +
-                          excerpt(line) + "'");
+                      "line is longer than " + std::to_string(kMaxLineBytes) +
+                          " bytes: not a CSV line; it starts '" + excerpt(line) + "'");
     if (const auto nul = line.find('\0'); nul != std::string::npos)
       throw DataError(file, line_no, "",
                       "binary data (a NUL byte at column " + std::to_string(nul + 1) +
@@ -166,7 +226,6 @@ Table read_csv_table(const std::filesystem::path& path) {
     }
     table.line_of_row.push_back(line_no);
   }
-  if (in.bad()) throw DataError(file, line_no, "", "read error");
   if (!have_header)
     throw DataError(file, 0, "", "no header line (the file is empty or all comments)");
   return table;

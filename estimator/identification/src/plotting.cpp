@@ -14,6 +14,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "files/file_size_limit.hpp"
+
 namespace tsmh::estimator {
 namespace {
 
@@ -129,9 +131,13 @@ void write_or_throw(const fs::path& path, const std::function<void(std::ostream&
   f.flush();
   if (f) f.close();
   if (!f) {
-    const std::string why = errno != 0 ? std::string(" (") + std::strerror(errno) + ")" : "";
+    const int err = errno;
+    const std::string why = err != 0 ? std::string(" (") + std::strerror(err) + ")" : "";
     std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    const bool limit = files::hit_file_size_limit(err, ec ? 0 : size);
     fs::remove(path, ec);
+    if (limit) throw std::runtime_error(files::file_size_limit_message(path.string()));
     throw std::runtime_error(path.string() + ": write failed" + why);
   }
 }
@@ -292,12 +298,11 @@ PlotOutcome plot_xy(const fs::path& dir, const std::string& name,
   const std::string term = plot_terminal();
   const std::string ext = extension(term);
   const fs::path dat = dir / (name + ".csv");
-  {
-    std::ofstream f(dat);
+  write_or_throw(dat, [&](std::ostream& f) {
     f << "x,y\n";
     for (const auto& [x, y] : points)
       f << x << "," << y << "\n";
-  }
+  });
   std::ostringstream s;
   s << "set datafile separator ','\n"
     << terminal_line(term, 900, 500) << "set output " << quoted(name + ext) << "\nset title "
@@ -305,10 +310,7 @@ PlotOutcome plot_xy(const fs::path& dir, const std::string& name,
     << "\nset grid\nset key off\nplot " << quoted(dat.filename().string())
     << " using 1:2 every ::1 with points pt 7 ps 0.4\n";
   const fs::path script = dir / (name + ".gp");
-  {
-    std::ofstream f(script);
-    f << s.str();
-  }
+  write_or_throw(script, [&](std::ostream& f) { f << s.str(); });
   out.error = run_gnuplot(script);
   if (out.error.empty()) out.files = {name + ext};
   return out;

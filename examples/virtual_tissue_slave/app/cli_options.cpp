@@ -6,6 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "files/cli_numbers.hpp"
 #include "virtual_tissue_slave/effects.hpp"
 
 namespace tsmh::virtual_tissue_slave::app {
@@ -15,7 +16,7 @@ void add_options(CLI::App& app, CliOptions& o) {
                "run faster than real time on --scenario and write --output (no LCM)");
   app.add_option("--duration", o.duration_s,
                  "seconds to run (offline: default per scenario; real time: 0 = until SIGINT)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(files::finite_range(0.0, 1e7, "s"));
   app.add_option("--scenario", o.scenario,
                  "offline scenario: sine, multisine, palpate, chirp, excite, identify");
   app.add_option("--output", o.output,

@@ -6,6 +6,7 @@
 #include <exception>
 
 #include "cli_options.hpp"
+#include "files/file_size_limit.hpp"
 #include "offline_mode.hpp"
 #include "realtime_mode.hpp"
 #include "tsmh/cli_words.hpp"
@@ -20,6 +21,9 @@ int main(int argc, char** argv) {
       "sensors, controller). Real time at 1 kHz over LCM (MASTER_COMMAND in; SLAVE_STATE, "
       "SLAVE_TRUTH out), or --offline to write a recording. See docs/virtual-slave.md."};
   cli.set_version_flag("--version", tsmh::version_line("virtual-slave"));
+  // A file-size limit fails the write with a message (and no temporary file
+  // left), instead of SIGXFSZ killing the program.
+  tsmh::files::ignore_file_size_signal();
   app::CliOptions options;
   app::add_options(cli, options);
   // A typo is named with the nearest option (tsmh/cli_words.hpp).

@@ -1,14 +1,49 @@
 #include "offline_mode.hpp"
 
 #include <cstdio>
+#include <cstdlib>
 #include <estimator/recording.hpp>
 #include <estimator/table.hpp>
+#include <filesystem>
 #include <stdexcept>
 
+#include "bridge/link_security.hpp"
+#include "files/distinct_outputs.hpp"
+
 namespace tsmh::virtual_tissue_slave::app {
+namespace {
+
+// Before the simulation, not after it: the output's folder exists, and the
+// output is not the link key (files/distinct_outputs.hpp).
+void check_output(const CliOptions& o) {
+  const std::filesystem::path out(o.output);
+  const std::filesystem::path folder = out.parent_path().empty() ? "." : out.parent_path();
+  std::error_code ec;
+  if (!std::filesystem::is_directory(folder, ec))
+    throw std::invalid_argument("--output " + o.output + ": the folder '" + folder.string() +
+                                "' does not exist (outputs are written into existing folders)");
+  if (std::filesystem::is_directory(out, ec))
+    throw std::invalid_argument("--output " + o.output + ": is a folder; name a file to write");
+  std::vector<files::NamedInput> inputs;
+  try {
+    if (const auto key = bridge::find_key_file(o.key_file, std::getenv(bridge::kLinkKeyEnv),
+                                               std::getenv("XDG_CONFIG_HOME"), std::getenv("HOME")))
+      inputs.push_back({"the link key", *key});
+  } catch (const std::exception&) {
+    // No key to protect.
+  }
+  try {
+    files::check_distinct_outputs(inputs, {{"--output", o.output}});
+  } catch (const files::FileError& e) {
+    throw std::invalid_argument(e.what());
+  }
+}
+
+}  // namespace
 
 int run_offline_mode(const CliOptions& o) {
   if (o.output.empty()) throw std::invalid_argument("--offline needs --output DATA.csv");
+  check_output(o);
   const Scenario scenario = make_scenario(o.scenario);
   const Setup setup = make_setup(o, &scenario);
 

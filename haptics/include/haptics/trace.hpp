@@ -132,6 +132,8 @@ class TraceSpool final : public TraceSink {
   std::atomic<std::uint64_t> written_{0};
   std::atomic<bool> stop_{false};
   std::atomic<bool> failed_{false};
+  std::atomic<int> failed_errno_{
+      0};  ///< errno of the first failed write (EFBIG: a file-size limit)
   std::unique_ptr<bridge::SpscQueue<TraceRow, kRingRows>> ring_;
   std::thread writer_;
 };

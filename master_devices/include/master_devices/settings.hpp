@@ -12,6 +12,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -76,7 +77,14 @@ class FieldReader {
 /// M)" for the first map anywhere under `root` that holds a key twice.
 /// yaml-cpp keeps both entries and lookups return the first, so without this
 /// `max_torque_nm: 0.3` followed by `max_torque_nm: 50` would pass silently.
+/// The check itself is files::find_duplicate_key, shared by every YAML reader.
 void reject_duplicate_keys(const YAML::Node& root, const std::string& source);
+
+/// A YAML file read within files::kMaxConfigBytes, refusing anything but a
+/// regular file (a FIFO, /dev/zero) without blocking, parsed, and checked
+/// for duplicate keys. `what` names the file's role in errors ("profile",
+/// "settings"). Throws ConfigError.
+YAML::Node load_yaml_file(const std::filesystem::path& path, std::string_view what);
 
 /// "source: field: message (line N)" for a node outside any FieldReader.
 [[noreturn]] void config_fail(const std::string& source, const std::string& field,

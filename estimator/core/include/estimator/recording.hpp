@@ -12,6 +12,14 @@
 
 namespace tsmh::estimator {
 
+/// The pulley radii a recording (its '# radius_m:' comment, or --radius) may
+/// give: a tenth of a millimetre to a metre. Beyond them the model's torques
+/// overflow or the number is a typo.
+inline constexpr double kMinRadiusM = 1e-4;
+inline constexpr double kMaxRadiusM = 1.0;
+inline constexpr const char* kRadiusRangeText =
+    "a pulley radius in m within [0.0001, 1] (e.g. 0.01 for 10 mm)";
+
 struct Recording {
   std::string source;                 ///< where it came from, for messages
   double radius_m = std::nan("");     ///< pulley radius R, m (NaN when unknown)
@@ -25,6 +33,7 @@ struct Recording {
   /// What the reader noticed but did not refuse (recording_checks.hpp): a
   /// header word that is not a contract column, times that look like ms.
   std::vector<std::string> warnings;
+  std::vector<std::string> notes;     ///< what reading tolerated (Table::notes)
 
   std::size_t size() const { return t.size(); }
   bool has_tau_in() const { return !tau_in.empty(); }

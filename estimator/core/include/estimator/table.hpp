@@ -37,6 +37,7 @@ struct Table {
   std::vector<long> line_of_row;             ///< file line of each row (for error messages)
   std::map<std::string, std::string> meta;   ///< "# key: value" comment lines
   std::string source;                        ///< file name, for error messages
+  std::vector<std::string> notes;            ///< what reading tolerated (a byte-order mark)
 
   std::size_t rows() const { return columns.empty() ? 0 : columns.front().size(); }
   bool has(const std::string& name) const;
@@ -47,7 +48,10 @@ struct Table {
 };
 
 /// Reads a CSV file: one header line, '#' comment lines anywhere ("# key: value"
-/// becomes meta), every cell a finite number. Throws DataError.
+/// becomes meta), every cell a finite number. Only a regular file of at most
+/// files::kMaxRecordingBytes with lines of at most 1 MiB, checked while
+/// reading; a leading UTF-8 byte-order mark is skipped (and noted). Throws
+/// DataError.
 Table read_csv_table(const std::filesystem::path& path);
 
 /// Writes `table` as CSV with its meta as "# key: value" lines first. Values are
