@@ -119,7 +119,6 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "random seed (same seed, same drops and jitter)");
   app.add_option("--duration", duration_s, "stop after S seconds (0: until a stop signal)")
       ->check(tsmh::files::finite_range(0.0, 1e7, "s"));
-  app.add_option("--duration", duration_s, "stop after S seconds (0: until a stop signal)");
   // A typo is named with the nearest option (tsmh/cli_words.hpp).
   if (const int rc = tsmh::cli_words::check_words(app, argc, argv)) return rc;
   CLI11_PARSE(app, argc, argv);
