@@ -1,10 +1,7 @@
 #include "bridge/codec.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <lcm/lcm-cpp.hpp>
-#include <limits>
-#include <new>
 
 #include "bridge/link_auth.hpp"
 #include "bridge/validation.hpp"
@@ -24,20 +21,6 @@ void get(const std::vector<double>& v, std::int32_t n, JointArray& a) noexcept {
   const std::size_t k = std::min(joints(n), v.size());
   std::copy_n(v.begin(), k, a.begin());
   std::fill(a.begin() + static_cast<std::ptrdiff_t>(k), a.end(), 0.0);
-}
-
-std::int64_t read_be64(const unsigned char* p) noexcept {
-  std::uint64_t v = 0;
-  for (int i = 0; i < 8; ++i)
-    v = (v << 8) | p[i];
-  return static_cast<std::int64_t>(v);
-}
-
-std::int32_t read_be32(const unsigned char* p) noexcept {
-  std::uint32_t v = 0;
-  for (int i = 0; i < 4; ++i)
-    v = (v << 8) | p[i];
-  return static_cast<std::int32_t>(v);
 }
 
 }  // namespace
@@ -191,60 +174,20 @@ void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcep
   get(m.drift_scale, m.num_joints, s.drift_scale);
 }
 
-bool peek_header(const void* data, std::size_t size, RawHeader& out) noexcept {
-  if (data == nullptr || size < kRawHeaderBytes) return false;
-  const auto* p = static_cast<const unsigned char*>(data);
-  out.hash = read_be64(p);
-  out.utime = read_be64(p + 8);
-  out.seq = read_be64(p + 16);
-  out.num_joints = read_be32(p + 24);
-  return true;
-}
-
 template <class Sample>
 std::optional<Rejection> Decoder<Sample>::decode(const void* data, std::size_t size,
                                                  Sample& out) noexcept {
-  char what[128];  // longer than Rejection::what: make_rejection truncates
-  RawHeader h;
-  if (!peek_header(data, size, h)) {
-    std::snprintf(what, sizeof what, "truncated: %zu bytes, header needs %zu", size,
-                  kRawHeaderBytes);
-    return make_rejection(RejectReason::kDecode, what, static_cast<double>(size));
+  const auto error = decoder_.decode(data, size);
+  if (!error) {
+    from_message(decoder_.message(), out);
+    return std::nullopt;
   }
-  if (h.hash != Message::getHash()) {
-    std::snprintf(what, sizeof what, "not a %s (type hash differs)", Message::getTypeName());
-    auto r = make_rejection(RejectReason::kDecode, what, static_cast<double>(size));
-    return r;
-  }
-  if (auto r = check_joint_count(h.num_joints, 0)) {
-    r->seq = h.seq;
-    return r;
-  }
-  // num_joints is now small, so sizing a message for it cannot blow up.
-  msg_.num_joints = h.num_joints;
-  const auto expected = static_cast<std::size_t>(msg_.getEncodedSize());
-  if (size != expected) {
-    std::snprintf(what, sizeof what, "%s: %zu bytes, expected %zu for %d joints",
-                  size < expected ? "truncated" : "trailing bytes", size, expected,
-                  static_cast<int>(h.num_joints));
-    auto r = make_rejection(RejectReason::kDecode, what, static_cast<double>(size));
-    r.seq = h.seq;
-    return r;
-  }
-  try {
-    if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
-        msg_.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) {
-      auto r =
-          make_rejection(RejectReason::kDecode, "lcm decode failed", static_cast<double>(size));
-      r.seq = h.seq;
-      return r;
-    }
-  } catch (const std::bad_alloc&) {  // unreachable after the checks above; never let it escape
-    return make_rejection(RejectReason::kDecode, "out of memory while decoding",
-                          static_cast<double>(size));
-  }
-  from_message(msg_, out);
-  return std::nullopt;
+  std::optional<Rejection> r;
+  if (error->fault == lcmtypes::DecodeFault::kJointCount)
+    r = check_joint_count(error->num_joints, 0);
+  if (!r) r = make_rejection(RejectReason::kDecode, error->what.data(), static_cast<double>(size));
+  r->seq = error->seq;
+  return r;
 }
 
 template <class Sample>

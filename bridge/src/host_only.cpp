@@ -7,35 +7,17 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 
-#include <charconv>
 #include <cstdlib>
 #include <string>
+
+#include "lcmtypes/lcm_url.hpp"
 
 namespace tsmh::bridge {
 
 std::optional<int> host_only_udpm_port(std::string_view url) {
-  constexpr std::string_view scheme = "udpm://";
-  if (url.substr(0, scheme.size()) != scheme) return std::nullopt;
-  const std::string_view rest = url.substr(scheme.size());
-  const auto query = rest.find('?');
-  const std::string_view address = rest.substr(0, query);
-  const auto colon = address.rfind(':');
-  if (colon == std::string_view::npos || query == std::string_view::npos) return std::nullopt;
-  int port = 0;
-  const std::string_view digits = address.substr(colon + 1);
-  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), port);
-  if (ec != std::errc{} || end != digits.data() + digits.size() || port <= 0 || port > 65535)
-    return std::nullopt;
-  // Options: key=value joined by '&'; only an explicit ttl=0 counts.
-  std::string_view options = rest.substr(query + 1);
-  while (!options.empty()) {
-    const auto amp = options.find('&');
-    const std::string_view option = options.substr(0, amp);
-    if (option == "ttl=0") return port;
-    if (amp == std::string_view::npos) break;
-    options.remove_prefix(amp + 1);
-  }
-  return std::nullopt;
+  const lcmtypes::LcmUrl parsed = lcmtypes::parse_lcm_url(url);
+  if (!parsed.host_only()) return std::nullopt;
+  return parsed.port;
 }
 
 int restrict_udp_port_to_host(int port) noexcept {

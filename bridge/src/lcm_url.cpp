@@ -6,8 +6,14 @@
 namespace tsmh::bridge {
 
 std::string resolve_lcm_url(std::string_view cli_url, const char* env_value) {
-  if (!cli_url.empty()) return std::string(cli_url);
-  if (env_value != nullptr && env_value[0] != '\0') return env_value;
+  if (!cli_url.empty()) return lcmtypes::parse_lcm_url(cli_url).text;
+  if (env_value != nullptr && env_value[0] != '\0') {
+    try {
+      return lcmtypes::parse_lcm_url(env_value).text;
+    } catch (const LcmUrlError& e) {
+      throw LcmUrlError(std::string("$LCM_DEFAULT_URL: ") + e.what());
+    }
+  }
   return std::string(kDefaultLcmUrl);
 }
 
@@ -16,6 +22,7 @@ std::string resolve_lcm_url(std::string_view cli_url) {
 }
 
 std::unique_ptr<lcm::LCM> open_lcm(const std::string& url) {
+  lcmtypes::parse_lcm_url(url);  // LcmUrlError before LCM reads it its own way
   auto lcm = std::make_unique<lcm::LCM>(url);
   if (lcm->good()) return lcm;
   std::string msg = "cannot open LCM at '" + url + "'";

@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <system_error>
 
-#include "bridge/host_only.hpp"
+#include "lcmtypes/lcm_url.hpp"
 
 namespace tsmh::bridge {
 
@@ -38,11 +38,14 @@ std::optional<std::filesystem::path> find_key_file(std::string_view flag, const 
 }
 
 bool is_host_local_url(std::string_view url) {
-  return url.rfind("memq://", 0) == 0 || url.rfind("file://", 0) == 0 ||
-         host_only_udpm_port(url).has_value();
+  const lcmtypes::LcmUrl parsed = lcmtypes::parse_lcm_url(url);
+  return parsed.provider == lcmtypes::LcmProvider::kMemq ||
+         parsed.provider == lcmtypes::LcmProvider::kFile || parsed.host_only();
 }
 
 LinkSecurity resolve_link_security(std::string_view url, const LinkSecurityOptions& options) {
+  // A URL LCM could read two ways is an error with or without a key.
+  lcmtypes::parse_lcm_url(url);
   const auto file = find_key_file(options.key_file, std::getenv(kLinkKeyEnv),
                                   std::getenv("XDG_CONFIG_HOME"), std::getenv("HOME"));
   LinkSecurity s;

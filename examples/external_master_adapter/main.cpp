@@ -22,7 +22,8 @@
 //                           [--duration S] [--key FILE | --insecure]
 // With the installation's link key (docs/bridge.md, "Authentication") every
 // MASTER_STATE carries a MAC and only MASTER_FORCE that verifies drives the
-// motors; the bridge's link_auth.hpp is the only project code it uses.
+// motors. Project code it uses: the bridge's link_auth.hpp and the message
+// decoder every receiver of ours uses (lcmtypes/message_decoder.hpp).
 // Server side: device: {driver: lcm, settings: {channel_prefix: LEFT_}}
 
 #include <pthread.h>
@@ -49,6 +50,7 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "files/cli_numbers.hpp"
+#include "lcmtypes/message_decoder.hpp"
 #include "master_devices/axis_mapping.hpp"
 #include "realtime/clock.hpp"
 
@@ -130,15 +132,30 @@ tsmh::master_devices::JointArray home_pose(const tsmh::master_devices::MasterPro
 }
 
 struct ForceInbox {
-  std::size_t joints = 0;  ///< the slave joints MASTER_STATE carries
+  explicit ForceInbox(std::size_t slave_joints)
+      : joints(slave_joints),
+        decoder({static_cast<std::int32_t>(slave_joints), static_cast<std::int32_t>(slave_joints)}) {}
+  std::size_t joints;  ///< the slave joints MASTER_STATE carries
   tsmh::master_devices::JointArray torque{};
   bool enable = false;
   std::int64_t received_ns = 0;
   std::int64_t rejected = 0;
   std::int64_t unauthentic = 0;
+  /// Why the last force was rejected (fixed size: no allocation per message).
+  std::array<char, 96> last_rejection{};
   /// Null: unauthenticated (no key, host-local URL or --insecure).
   tsmh::bridge::MessageVerifier* verifier = nullptr;
-  tsmh::master_force_t decoded;
+  /// The project's MASTER_FORCE decoder: exactly `joints` joints and the exact
+  /// size for them, checked before anything is allocated. lcm-gen's decode()
+  /// alone sizes its arrays for whatever num_joints the bytes claim: a key
+  /// holder's (or, without a key, anyone's) MASTER_FORCE claiming 2^28 joints
+  /// made it allocate gigabytes and crash.
+  tsmh::lcmtypes::MessageDecoder<tsmh::master_force_t> decoder;
+
+  void reject(const char* why) {
+    ++rejected;
+    std::snprintf(last_rejection.data(), last_rejection.size(), "%s", why);
+  }
 
   void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
@@ -152,28 +169,22 @@ struct ForceInbox {
       }
       size = auth.payload_size;
     }
-    if (decoded.decode(data, 0, static_cast<int>(size)) < 0) {
-      ++rejected;
-      return;
-    }
-    on_force(&decoded);
+    // Without a key, another peer's MAC trailer is left unread (as by every
+    // LCM tool); with one, the verified payload must be exactly the message.
+    const auto trailing =
+        verifier != nullptr ? tsmh::lcmtypes::Trailing::kReject : tsmh::lcmtypes::Trailing::kIgnore;
+    if (const auto error = decoder.decode(data, size, trailing)) return reject(error->what.data());
+    on_force(decoder.message());
   }
 
-  void on_force(const tsmh::master_force_t* msg) {
-    if (msg->num_joints != static_cast<int>(joints) ||
-        msg->torque.size() != static_cast<std::size_t>(msg->num_joints)) {
-      ++rejected;
-      return;
-    }
+  // `msg` holds exactly `joints` joints (the decoder's range).
+  void on_force(const tsmh::master_force_t& msg) {
     for (std::size_t j = 0; j < joints; ++j) {
-      if (!std::isfinite(msg->torque[j])) {
-        ++rejected;
-        return;
-      }
+      if (!std::isfinite(msg.torque[j])) return reject("torque is not finite");
     }
     for (std::size_t j = 0; j < joints; ++j)
-      torque[j] = msg->torque[j];
-    enable = msg->enable;
+      torque[j] = msg.torque[j];
+    enable = msg.enable;
     received_ns = tsmh::realtime::monotonic_now_ns();
   }
 };
@@ -293,6 +304,9 @@ int main(int argc, char** argv) {
   } catch (const tsmh::bridge::LinkKeyError& e) {
     std::fprintf(stderr, "external-master-adapter: error: %s\n", e.what());
     return 2;
+  } catch (const tsmh::bridge::LcmUrlError& e) {
+    std::fprintf(stderr, "external-master-adapter: error: %s\n", e.what());
+    return 2;
   }
   std::fprintf(stderr, "external-master-adapter: %s\n", security.notice.c_str());
   std::unique_ptr<tsmh::bridge::MessageSigner> signer;
@@ -311,8 +325,7 @@ int main(int argc, char** argv) {
         url.empty() ? "" : " at ", url.c_str());
     return 1;
   }
-  ForceInbox inbox;
-  inbox.joints = slave_joints;
+  ForceInbox inbox(slave_joints);
   inbox.verifier = verifier.get();
   lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_raw, &inbox);
   // ttl=0 means this host: LCM's socket listens on every interface, so
@@ -401,8 +414,10 @@ int main(int argc, char** argv) {
   device.set_joint_torques({});
   std::printf(
       "external-master-adapter: sent %lld MASTER_STATE, watchdog trips %lld, rejected forces "
-      "%lld, unauthenticated forces %lld\n",
+      "%lld%s%s%s, unauthenticated forces %lld\n",
       static_cast<long long>(seq), static_cast<long long>(watchdog_trips),
-      static_cast<long long>(inbox.rejected), static_cast<long long>(inbox.unauthentic));
+      static_cast<long long>(inbox.rejected), inbox.rejected > 0 ? " (the last: " : "",
+      inbox.last_rejection.data(), inbox.rejected > 0 ? ")" : "",
+      static_cast<long long>(inbox.unauthentic));
   return 0;
 }

@@ -1,6 +1,7 @@
 // slave-node-skeleton: the minimal slave node of a real tendon-sheath robot
 // for haptic-server (docs/real-robot.md). It is what a robot integrator
-// writes; it depends on nothing of ours but the generated LCM types and the
+// writes; it depends on nothing of ours but the generated LCM types, their
+// decoder for untrusted bytes (lcmtypes/message_decoder.hpp) and the
 // bridge's message authentication (bridge/link_auth.hpp: a MAC trailer on
 // every message, docs/bridge.md "Authentication").
 //
@@ -36,6 +37,7 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "files/cli_numbers.hpp"
+#include "lcmtypes/message_decoder.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
@@ -104,11 +106,15 @@ class StubRobot final : public RobotIo {
 /// The newest MASTER_COMMAND and when it arrived (this node's clock: the
 /// server's utime is on another host's clock when the nodes are apart).
 struct CommandInbox {
+  explicit CommandInbox(int n) : joints(n), decoder({n, n}) {}
   int joints = 0;
   /// Null: unauthenticated (no key, host-local URL or --insecure).
   tsmh::bridge::MessageVerifier* verifier = nullptr;
   tsmh::master_command_t newest;
-  tsmh::master_command_t decoded;
+  /// Exactly `joints` joints and the exact size for them, checked before
+  /// anything is allocated (lcm-gen's decode() alone sizes its arrays for
+  /// whatever num_joints the bytes claim).
+  tsmh::lcmtypes::MessageDecoder<tsmh::master_command_t> decoder;
   std::int64_t received_ns = 0;
   std::int64_t last_seq = -1;
   std::int64_t rejected = 0;
@@ -125,15 +131,19 @@ struct CommandInbox {
       }
       size = auth.payload_size;
     }
-    if (decoded.decode(data, 0, static_cast<int>(size)) < 0) {
-      ++rejected;
+    // Without a key, another peer's MAC trailer is left unread (as by every
+    // LCM tool); with one, the verified payload must be exactly the message.
+    const auto trailing =
+        verifier != nullptr ? tsmh::lcmtypes::Trailing::kReject : tsmh::lcmtypes::Trailing::kIgnore;
+    if (decoder.decode(data, size, trailing)) {
+      ++rejected;  // truncated, another type, wrong joint count: never decoded by lcm-gen
       return;
     }
-    on_command(decoded);
+    on_command(decoder.message());
   }
   void on_command(const tsmh::master_command_t& m) {
     const auto* msg = &m;
-    bool ok = msg->num_joints == joints && msg->seq > last_seq;
+    bool ok = msg->seq > last_seq;
     for (int j = 0; ok && j < msg->num_joints; ++j)
       ok = std::isfinite(msg->position_ref[static_cast<std::size_t>(j)]);
     if (!ok) {
@@ -201,6 +211,9 @@ int main(int argc, char** argv) {
   } catch (const tsmh::bridge::LinkKeyError& e) {
     std::fprintf(stderr, "slave-node-skeleton: error: %s\n", e.what());
     return 2;
+  } catch (const tsmh::bridge::LcmUrlError& e) {
+    std::fprintf(stderr, "slave-node-skeleton: error: %s\n", e.what());
+    return 2;
   }
   std::fprintf(stderr, "slave-node-skeleton: %s\n", security.notice.c_str());
   std::unique_ptr<tsmh::bridge::MessageSigner> signer;
@@ -220,8 +233,7 @@ int main(int argc, char** argv) {
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
   StubRobot robot(static_cast<double>(period_ns) * 1e-9);  // REAL DRIVER: your RobotIo
   const int n = robot.joints();
-  CommandInbox inbox;
-  inbox.joints = n;
+  CommandInbox inbox(n);
   inbox.verifier = verifier.get();
   lcm.subscribe(prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
   // ttl=0 means this host: LCM's socket listens on every interface, so

@@ -271,10 +271,18 @@ int list_devices() {
   return 0;
 }
 
+/// The `lcm` master device listens where the server's own link does
+/// (--lcm-url, else the config's lcm.url, else $LCM_DEFAULT_URL, else the
+/// default) unless its settings name a `url`: one flag moves the whole run.
+void lcm_device_follows_link_url(haptics::ServerConfig& cfg, const std::string& link_url) {
+  const YAML::Node& settings = cfg.device_settings;
+  if (cfg.device_driver == "lcm" && !settings["url"]) cfg.device_settings["url"] = link_url;
+}
+
 /// The `lcm` master driver's own LCM link (its `url` setting, else the
-/// default): the same rules as the bridge's. No key on a network URL is
-/// refused without --insecure; on udpm ttl=0 its receive socket is confined
-/// to this host like the Receiver's (bridge/host_only.hpp).
+/// server's: lcm_device_follows_link_url): the same rules as the bridge's. No key on a network URL
+/// is refused without --insecure; on udpm ttl=0 its receive socket is confined to this host like
+/// the Receiver's (bridge/host_only.hpp).
 void confine_lcm_device(const haptics::ServerConfig& cfg, const bridge::LinkSecurityOptions& link,
                         const bridge::LinkSecurity& security) {
   const YAML::Node url_node = cfg.device_settings["url"];
@@ -578,6 +586,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
 
   const auto device_auth = haptics::make_lcm_device_auth(security.key);
   const auto registry = make_registry(device_auth);
+  lcm_device_follows_link_url(cfg, link_cfg.bridge.url);
   std::unique_ptr<master_devices::Device> device = create_device(cfg, registry);
   haptics::check_against_device(cfg, device->spec());
   cap_torque_to_device(cfg, device->spec());
@@ -662,6 +671,11 @@ int run(const Options& o, const sigset_t& stop_signals) {
     if (exit_code == kExitFault && loop.state() == haptics::LoopState::kFault)
       verdict_text += std::string(": ") + std::string(to_string(loop.fault()));
     print_summary(loop, link, slave_channel, seconds, exit_code, verdict_text.c_str());
+    if (const auto* lcm_device = dynamic_cast<const master_devices::LcmDevice*>(device.get());
+        lcm_device != nullptr && lcm_device->rejected_messages() > 0)
+      std::fprintf(stderr, "  device: %llu MASTER_STATE rejected, never used; the last: %s\n",
+                   static_cast<unsigned long long>(lcm_device->rejected_messages()),
+                   lcm_device->last_rejection().c_str());
     if (trace) write_trace_and_report(loop, *trace, cfg, calibration, o.quiet);
   } catch (...) {
     loop.shutdown();  // zero torque before anything else happens
@@ -728,6 +742,9 @@ int main(int argc, char** argv) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
     return kExitConfig;
   } catch (const bridge::LinkKeyError& e) {
+    std::cerr << "haptic-server: error: " << e.what() << "\n";
+    return kExitConfig;
+  } catch (const bridge::LcmUrlError& e) {
     std::cerr << "haptic-server: error: " << e.what() << "\n";
     return kExitConfig;
   } catch (const DeviceError& e) {

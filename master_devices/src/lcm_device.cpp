@@ -8,11 +8,21 @@
 #include <tsmh/master_state_t.hpp>
 #include <vector>
 
+#include "lcmtypes/lcm_url.hpp"
+#include "lcmtypes/message_decoder.hpp"
+
 namespace tsmh::master_devices {
 
 LcmSettings parse_lcm_settings(FieldReader& r) {
   LcmSettings s;
   s.url = r.get_string("url", "");
+  if (!s.url.empty()) {
+    try {
+      lcmtypes::parse_lcm_url(s.url);
+    } catch (const lcmtypes::LcmUrlError& e) {
+      r.fail("url", e.what());
+    }
+  }
   s.channel_prefix = r.get_string("channel_prefix", "");
   const long long dof = r.get_int("dof", 2);
   if (dof < 1 || dof > static_cast<long long>(kMaxDof))
@@ -49,26 +59,35 @@ LcmSettings parse_lcm_settings(FieldReader& r) {
 struct LcmDevice::Impl {
   LcmDevice& device;
   lcm::Subscription* subscription = nullptr;
-  tsmh::master_state_t state;  // decoded in place: its vectors keep their capacity
+  // The project's one MASTER_STATE decoder: exactly `dof` joints and the
+  // exact size for them, checked from the raw bytes before lcm-gen's decode()
+  // may size anything (a body claiming 2^28 joints once made it allocate 2 GB).
+  lcmtypes::MessageDecoder<tsmh::master_state_t> decoder;
   tsmh::master_force_t force;  // preallocated: its vector keeps its capacity
   std::vector<std::uint8_t> force_bytes;
   std::string auth_error;  // why the last message failed authentication
   std::uint64_t count = 0;
   std::int64_t force_seq = 0;
 
-  explicit Impl(LcmDevice& d) : device(d) {
+  explicit Impl(LcmDevice& d)
+      : device(d),
+        decoder({static_cast<std::int32_t>(d.settings_.dof),
+                 static_cast<std::int32_t>(d.settings_.dof)}) {
     force.num_joints = static_cast<int32_t>(d.settings_.dof);
     force.torque.assign(d.settings_.dof, 0.0);
   }
 
   void reject(const std::string& why) {
     device.rejected_++;
-    device.set_error(device.settings_.state_channel() + ": " + why);
+    const std::string text = device.settings_.state_channel() + ": " + why;
+    device.set_error(text);
+    std::lock_guard lock(device.error_mutex_);
+    device.last_rejection_ = text;
   }
 
   // Raw: authenticate before decoding (a message that fails never reaches
   // the decoder); without auth, trailing bytes (another peer's MAC) are
-  // ignored by the decoder as by every LCM tool.
+  // left unread as by every LCM tool; everything before them is checked.
   void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
     std::size_t size = rbuf->data_size;
@@ -77,8 +96,10 @@ struct LcmDevice::Impl {
       if (!payload) return reject("not authenticated: " + auth_error);
       size = *payload;
     }
-    if (state.decode(data, 0, static_cast<int>(size)) < 0) return reject("cannot decode");
-    on_state(&state);
+    const auto trailing =
+        device.settings_.auth ? lcmtypes::Trailing::kReject : lcmtypes::Trailing::kIgnore;
+    if (const auto error = decoder.decode(data, size, trailing)) return reject(error->what.data());
+    on_state(decoder.message());
   }
 
   void publish_force() {
@@ -96,24 +117,21 @@ struct LcmDevice::Impl {
                          static_cast<unsigned>(force_bytes.size()));
   }
 
-  void on_state(const tsmh::master_state_t* msg) {
+  // `m` holds exactly dof joints (the decoder's range).
+  void on_state(const tsmh::master_state_t& m) {
     const std::int64_t now = device.clock_->now_ns();
     const std::size_t dof = device.settings_.dof;
-    if (msg->num_joints != static_cast<int32_t>(dof)) {
-      reject("num_joints " + std::to_string(msg->num_joints) + ", expected " + std::to_string(dof));
-      return;
-    }
     for (std::size_t j = 0; j < dof; ++j) {
-      if (!std::isfinite(msg->q[j]) || !std::isfinite(msg->qd[j])) {
+      if (!std::isfinite(m.q[j]) || !std::isfinite(m.qd[j])) {
         reject("q[" + std::to_string(j) + "] or qd[" + std::to_string(j) + "] is not finite");
         return;
       }
     }
-    if (msg->buttons & ~0xF) {
-      reject("buttons " + std::to_string(msg->buttons) + " has undefined bits (0..3 defined)");
+    if (m.buttons & ~0xF) {
+      reject("buttons " + std::to_string(m.buttons) + " has undefined bits (0..3 defined)");
       return;
     }
-    if (msg->status & 0x1) {
+    if (m.status & 0x1) {
       FaultCode expected = FaultCode::kNone;
       if (device.fault_.compare_exchange_strong(expected, FaultCode::kDeviceReported)) {
         device.enable_requested_ = false;
@@ -132,16 +150,16 @@ struct LcmDevice::Impl {
     r.sequence = ++count;
     r.dof = static_cast<std::uint32_t>(dof);
     for (std::size_t j = 0; j < dof; ++j) {
-      r.q[j] = msg->q[j];
-      r.qd[j] = msg->qd[j];
+      r.q[j] = m.q[j];
+      r.qd[j] = m.qd[j];
       const double peak = device.spec_.peak_torque_nm[j];
       const double tau =
           drive && std::isfinite(cmd.tau[j]) ? std::clamp(cmd.tau[j], -peak, peak) : 0.0;
       r.tau_commanded[j] = tau;
       force.torque[j] = tau;
     }
-    r.buttons = Buttons{(msg->buttons & 1) != 0, (msg->buttons & 2) != 0, (msg->buttons & 4) != 0,
-                        (msg->buttons & 8) != 0};
+    r.buttons = Buttons{(m.buttons & 1) != 0, (m.buttons & 2) != 0, (m.buttons & 4) != 0,
+                        (m.buttons & 8) != 0};
     r.enabled = drive;
     r.status = DeviceStatus::kOk;
     device.readings_.store(r);
@@ -183,7 +201,16 @@ LcmDevice::~LcmDevice() {
 void LcmDevice::open() {
   if (opened_) return;
   if (!lcm_) {
-    // An empty URL lets LCM honour $LCM_DEFAULT_URL, as its own tools do.
+    // An empty URL lets LCM honour $LCM_DEFAULT_URL, as its own tools do;
+    // that one is held to the same strict reading as a configured url.
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    if (settings_.url.empty() && env != nullptr && env[0] != '\0') {
+      try {
+        lcmtypes::parse_lcm_url(env);
+      } catch (const lcmtypes::LcmUrlError& e) {
+        throw DeviceError(std::string("lcm: $LCM_DEFAULT_URL: ") + e.what());
+      }
+    }
     lcm_ = std::make_shared<lcm::LCM>(settings_.url);
   }
   if (!lcm_->good()) {
@@ -218,6 +245,11 @@ std::string LcmDevice::last_error() const {
   std::lock_guard lock(error_mutex_);
   if (error_.empty() && fault_ == FaultCode::kHostRequested) return "fault raised by the host";
   return error_;
+}
+
+std::string LcmDevice::last_rejection() const {
+  std::lock_guard lock(error_mutex_);
+  return last_rejection_;
 }
 
 void LcmDevice::set_error(const std::string& text) {

@@ -7,7 +7,14 @@
 //   3. one-way latency on loopback udpm (utime -> receive thread, every
 //      message) and the age of what a 1 kHz loop reads, for the same three
 //      ways of sending
+//   0. what decoding one received message costs the receive thread: lcm-gen's
+//      decode() alone vs the checked decoder (lcmtypes::MessageDecoder: type
+//      hash, num_joints, exact size from the raw bytes first) and the bridge's
+//      Decoder (the same, plus the copy into a sample); and refusing the
+//      MASTER_STATE that claims 2^28 joints. Per message, from batches of 32
+//      (a clock read costs about as much as one decode)
 // Usage: bench_bridge [--count N] (messages per latency run, default 5000)
+//        bench_bridge --decode-only   (section 0 only: no LCM needed)
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -15,10 +22,13 @@
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
+#include <tsmh/master_state_t.hpp>
 #include <vector>
 
+#include "bridge/codec.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
+#include "lcmtypes/message_decoder.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
@@ -255,16 +265,92 @@ void bench_latency(const std::string& prefix, int count, const Mode& mode, const
               static_cast<unsigned long long>(st.dropped()));
 }
 
+// ns per call of `f`, one value per batch of 32 calls, `batches` values.
+template <class F>
+std::vector<double> per_call_ns(int batches, F&& f) {
+  constexpr int kBatch = 32;
+  std::vector<double> ns;
+  ns.reserve(static_cast<std::size_t>(batches));
+  for (int i = 0; i < 1000; ++i)
+    f();  // warm the caches and the branch predictors
+  for (int b = 0; b < batches; ++b) {
+    const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();
+    for (int i = 0; i < kBatch; ++i)
+      f();
+    ns.push_back(static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0) / kBatch);
+  }
+  return ns;
+}
+
+void bench_decode() {
+  print_header("0. decoding one received message, ns per message (batches of 32)");
+  constexpr int kBatches = 20000;
+  std::vector<std::uint8_t> state_bytes;
+  encode_sample(sample(1), state_bytes);
+  volatile int sink = 0;
+
+  tsmh::slave_state_t plain;  // lcm-gen alone, reusing its vectors
+  print_row("SLAVE_STATE 2j: lcm-gen decode() alone", "ns", per_call_ns(kBatches, [&] {
+              sink =
+                  sink + plain.decode(state_bytes.data(), 0, static_cast<int>(state_bytes.size()));
+            }));
+  tsmh::lcmtypes::MessageDecoder<tsmh::slave_state_t> checked({1, kMaxJoints});
+  print_row("SLAVE_STATE 2j: MessageDecoder (checked)", "ns", per_call_ns(kBatches, [&] {
+              sink = sink + static_cast<int>(
+                                checked.decode(state_bytes.data(), state_bytes.size()).has_value());
+            }));
+  Decoder<SlaveStateSample> bridge_decoder;
+  SlaveStateSample out;
+  print_row(
+      "SLAVE_STATE 2j: bridge Decoder (+ sample)", "ns", per_call_ns(kBatches, [&] {
+        sink = sink +
+               static_cast<int>(
+                   bridge_decoder.decode(state_bytes.data(), state_bytes.size(), out).has_value());
+      }));
+
+  tsmh::master_state_t m{};
+  m.num_joints = 2;
+  m.q.assign(2, 0.1);
+  m.qd.assign(2, 0.2);
+  std::vector<std::uint8_t> master_bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(master_bytes.data(), 0, static_cast<int>(master_bytes.size()));
+  tsmh::master_state_t master_plain;
+  print_row("MASTER_STATE 2j: lcm-gen decode() alone", "ns", per_call_ns(kBatches, [&] {
+              sink = sink + master_plain.decode(master_bytes.data(), 0,
+                                                static_cast<int>(master_bytes.size()));
+            }));
+  tsmh::lcmtypes::MessageDecoder<tsmh::master_state_t> master_checked({2, 2});
+  print_row("MASTER_STATE 2j: MessageDecoder (checked)", "ns", per_call_ns(kBatches, [&] {
+              sink =
+                  sink +
+                  static_cast<int>(
+                      master_checked.decode(master_bytes.data(), master_bytes.size()).has_value());
+            }));
+  auto hostile = master_bytes;
+  hostile[24] = 0x10;  // num_joints 2^28, body of 2 joints
+  hostile[27] = 0x00;
+  print_row("MASTER_STATE claiming 2^28 joints: refused", "ns", per_call_ns(kBatches, [&] {
+              sink = sink + static_cast<int>(
+                                master_checked.decode(hostile.data(), hostile.size()).has_value());
+            }));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int count = 5000;
   for (int i = 1; i + 1 < argc; ++i)
     if (std::string(argv[i]) == "--count") count = std::max(100, std::atoi(argv[i + 1]));
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--decode-only") {
+      bench_decode();
+      return 0;
+    }
   const std::string prefix = "BENCH" + std::to_string(getpid()) + "_";
   std::printf("bench_bridge: LCM udpm %s, %d messages per run, utime resolution 1 us\n",
               std::string(kDefaultLcmUrl).c_str(), count);
   try {
+    bench_decode();
     bench_read(prefix);
     bench_publish_cost(prefix, count);
     bench_latency(prefix, count, kNotify, "LATN_");

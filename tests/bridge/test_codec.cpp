@@ -104,31 +104,6 @@ TEST(Codec, EveryTypeRoundTrips) {
   EXPECT_EQ(t2.tau_out[1], t.tau_out[1]);
 }
 
-// The raw pre-checks rely on every message leading with utime, seq, num_joints.
-template <class Sample>
-void expect_header_invariant() {
-  Sample s;
-  s.utime = 0x0102030405060708;
-  s.seq = 77;
-  s.num_joints = 3;
-  std::vector<std::uint8_t> bytes;
-  encode_sample(s, bytes);
-  RawHeader h;
-  ASSERT_TRUE(peek_header(bytes.data(), bytes.size(), h));
-  EXPECT_EQ(h.hash, SampleTraits<Sample>::Message::getHash());
-  EXPECT_EQ(h.utime, s.utime);
-  EXPECT_EQ(h.seq, 77);
-  EXPECT_EQ(h.num_joints, 3);
-}
-
-TEST(Codec, EveryMessageLeadsWithUtimeSeqNumJoints) {
-  expect_header_invariant<SlaveStateSample>();
-  expect_header_invariant<SlaveTruthSample>();
-  expect_header_invariant<MasterCommandSample>();
-  expect_header_invariant<HapticStatusSample>();
-  expect_header_invariant<CalibrationRequestSample>();
-}
-
 // Overwrites the big-endian num_joints of an encoded message.
 void set_num_joints(std::vector<std::uint8_t>& bytes, std::int32_t n) {
   const auto u = static_cast<std::uint32_t>(n);

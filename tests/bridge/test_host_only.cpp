@@ -9,6 +9,8 @@
 #include <string>
 
 #include "bridge/host_only.hpp"
+#include "bridge/lcm_url.hpp"
+#include "bridge/link_security.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/sender.hpp"
 #include "process.hpp"
@@ -25,11 +27,33 @@ TEST(HostOnly, OnlyUdpmWithTtlZeroIsHostOnly) {
   EXPECT_EQ(host_only_udpm_port("udpm://239.255.76.67:7667?ttl=0"), 7667);
   EXPECT_EQ(host_only_udpm_port("udpm://239.255.76.67:7731?recv_buf_size=2097152&ttl=0"), 7731);
   EXPECT_EQ(host_only_udpm_port("udpm://239.255.76.67:7667?ttl=1"), std::nullopt);
-  EXPECT_EQ(host_only_udpm_port("udpm://239.255.76.67:7667?ttl=01"), std::nullopt);
   EXPECT_EQ(host_only_udpm_port("udpm://239.255.76.67:7667"), std::nullopt) << "no explicit ttl";
-  EXPECT_EQ(host_only_udpm_port("udpm://239.255.76.67?ttl=0"), std::nullopt) << "no port";
+  EXPECT_EQ(host_only_udpm_port("udpm://?ttl=0"), 7667) << "LCM's default group and port";
   EXPECT_EQ(host_only_udpm_port("memq://"), std::nullopt);
-  EXPECT_EQ(host_only_udpm_port("file:///tmp/x.lcmlog?ttl=0"), std::nullopt);
+  // What LCM would read otherwise is an error, not "not host-only" (and never "host-only").
+  EXPECT_THROW(host_only_udpm_port("udpm://239.255.76.67:7667?ttl=01"), LcmUrlError);
+  EXPECT_THROW(host_only_udpm_port("udpm://239.255.76.67?ttl=0"), LcmUrlError) << "no port";
+  EXPECT_THROW(host_only_udpm_port("file:///tmp/x.lcmlog?ttl=0"), LcmUrlError);
+}
+
+// LCM keeps the last of a repeated option, so this URL sends with TTL 1: it
+// was taken as confined to this host, and a program ran without the link key.
+TEST(HostOnly, ARepeatedTtlIsNeitherHostOnlyNorAllowedWithoutAKey) {
+  for (const char* url :
+       {"udpm://239.255.76.67:7667?ttl=0&ttl=1", "udpm://239.255.76.67:7667?ttl=1&ttl=0",
+        "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4096&ttl=0"}) {
+    SCOPED_TRACE(url);
+    EXPECT_THROW(host_only_udpm_port(url), LcmUrlError);
+    EXPECT_THROW(is_host_local_url(url), LcmUrlError);
+    try {
+      resolve_link_security(url, LinkSecurityOptions{.key_file = "", .insecure = false});
+      ADD_FAILURE() << "no error";
+    } catch (const LcmUrlError& e) {
+      EXPECT_NE(std::string(e.what()).find("option 'ttl' is given twice"), std::string::npos)
+          << e.what();
+    }
+    EXPECT_THROW(resolve_lcm_url(url, nullptr), LcmUrlError);
+  }
 }
 
 /// A second "host": a network namespace with a veth pair, 10.88.N.1 here and

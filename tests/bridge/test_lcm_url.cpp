@@ -17,10 +17,28 @@ TEST(LcmUrl, CommandLineThenEnvironmentThenDefault) {
 TEST(LcmUrl, BadProviderIsAClearError) {
   try {
     open_lcm("nosuchprovider://x");
-    FAIL() << "expected BridgeError";
-  } catch (const BridgeError& e) {
+    FAIL() << "expected LcmUrlError";
+  } catch (const LcmUrlError& e) {
     EXPECT_NE(std::string(e.what()).find("nosuchprovider://x"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown provider"), std::string::npos) << e.what();
   }
+}
+
+// Every URL a program resolves goes through the strict parser, from the
+// command line or from $LCM_DEFAULT_URL (named in the error).
+TEST(LcmUrl, ResolvedUrlsAreReadStrictly) {
+  EXPECT_THROW(resolve_lcm_url("udpm://239.255.76.67:7667?ttl=0&ttl=1", nullptr), LcmUrlError);
+  try {
+    resolve_lcm_url("", "udpm://239.255.76.67:7667?ttl=0&ttl=1");
+    FAIL() << "expected LcmUrlError";
+  } catch (const LcmUrlError& e) {
+    EXPECT_NE(std::string(e.what()).find("$LCM_DEFAULT_URL: LCM URL "
+                                         "'udpm://239.255.76.67:7667?ttl=0&ttl=1': option 'ttl' "
+                                         "is given twice"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(open_lcm("udpm://239.255.76.67:7667?ttl=0&ttl=1"), LcmUrlError);
 }
 
 // In a fresh network namespace only a downed loopback exists, so LCM's

@@ -129,9 +129,10 @@ TEST(LcmDevice, RejectsMalformedStateMessages) {
       << "nothing valid received yet";
 }
 
-// The lcm driver is the one place MASTER_STATE is checked (the bridge has no
-// codec for it): bytes that are no master_state_t, and non-finite angles or
-// velocities, are counted, named in last_error() and never answered.
+// The lcm driver is the one place MASTER_STATE is checked after decoding
+// (lcmtypes' decoder does the bytes): bytes that are no master_state_t, and
+// non-finite angles or velocities, are counted, named in last_error() and
+// never answered.
 TEST(LcmDevice, RejectsUndecodableAndNonFiniteStateAndNamesWhy) {
   Rig rig;
   const std::uint8_t garbage[5] = {1, 2, 3, 4, 5};
@@ -139,7 +140,8 @@ TEST(LcmDevice, RejectsUndecodableAndNonFiniteStateAndNamesWhy) {
   for (int i = 0; i < 500 && rig.device->rejected_messages() == 0; ++i)
     std::this_thread::sleep_for(1ms);
   EXPECT_EQ(rig.device->rejected_messages(), 1u);
-  EXPECT_NE(rig.device->last_error().find("MASTER_STATE: cannot decode"), std::string::npos)
+  EXPECT_NE(rig.device->last_error().find("MASTER_STATE: truncated: 5 bytes, the header needs 28"),
+            std::string::npos)
       << rig.device->last_error();
 
   rig.send_state(0.1, std::numeric_limits<double>::infinity());
@@ -147,6 +149,48 @@ TEST(LcmDevice, RejectsUndecodableAndNonFiniteStateAndNamesWhy) {
   EXPECT_NE(rig.device->last_error().find("q[1] or qd[1] is not finite"), std::string::npos)
       << rig.device->last_error();
   EXPECT_EQ(rig.log.count(), 0u) << "a rejected MASTER_STATE is never answered";
+}
+
+// A 2-joint body whose num_joints says 2^28: lcm-gen's decode() resized q and
+// qd to 2^28 doubles (2 GiB each) on the driver's thread, and haptic-server
+// died. Refused from the raw bytes, counted, named, never answered; the next
+// good message is used.
+TEST(LcmDevice, AMasterStateClaiming2pow28JointsIsRefusedFromItsRawBytes) {
+  Rig rig;
+  tsmh::master_state_t m;
+  m.num_joints = 2;
+  m.q.assign(2, 0.5);
+  m.qd.assign(2, 0.0);
+  m.buttons = 1;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  bytes[24] = 0x10;  // num_joints, big-endian at 24..27: 0x10000000
+  bytes[27] = 0x00;
+  rig.lcm->publish(rig.device_state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  for (int i = 0; i < 500 && rig.device->rejected_messages() == 0; ++i)
+    std::this_thread::sleep_for(1ms);
+  EXPECT_EQ(rig.device->rejected_messages(), 1u);
+  EXPECT_EQ(rig.device->last_rejection(), "MASTER_STATE: num_joints 268435456, expected 2");
+  EXPECT_EQ(rig.log.count(), 0u);
+  rig.send_state(0.25, 0.0);
+  EXPECT_EQ(rig.log.count(), 1u);
+  EXPECT_DOUBLE_EQ(rig.device->read(rig.now()).q[0], 0.25);
+}
+
+// The url setting is read by the one strict LCM URL parser: LCM would send
+// this one with TTL 1.
+TEST(LcmDevice, AnAmbiguousUrlIsASettingsError) {
+  DriverRegistry registry;
+  register_lcm_driver(registry);
+  try {
+    registry.create("lcm", YAML::Load("url: 'udpm://239.255.76.67:7667?ttl=0&ttl=1'\n"),
+                    DriverContext{"server.yaml", "device.settings", {}});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("device.settings.url"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("option 'ttl' is given twice"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(LcmDevice, ExternalFaultLatchesAndStaleStateDisconnects) {

@@ -1,13 +1,8 @@
 #pragma once
 // Conversion between the fixed-size samples and the lcm-gen message classes,
-// and a decoder that does not trust its input. lcm-gen's decode() resizes its
-// vectors to whatever num_joints the bytes claim, so a hostile or corrupt
-// message (num_joints = -1 or 2^31-1) would throw or exhaust memory: Decoder
-// checks length, type hash and joint count from the raw header first.
-//
-// Every message of ours leads with int64 utime, int64 seq, int32 num_joints
-// (after LCM's 8-byte type hash); docs/lcm-messages.md states this invariant
-// and tests/bridge checks it for all six types.
+// and the samples' decoder: lcmtypes' MessageDecoder (which checks the raw
+// bytes before lcm-gen's decode() may size anything) turned into samples and
+// the bridge's rejections.
 
 #include <cstddef>
 #include <cstdint>
@@ -24,6 +19,7 @@
 #include "bridge/limits.hpp"
 #include "bridge/rejection.hpp"
 #include "bridge/samples.hpp"
+#include "lcmtypes/message_decoder.hpp"
 
 namespace lcm {
 class LCM;
@@ -76,30 +72,18 @@ void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m);
 void to_message(const CalibrationRequestSample& s, tsmh::calibration_request_t& m);
 
 // Message -> sample. Precondition: 0 <= m.num_joints <= kMaxJoints and the
-// arrays hold num_joints entries (Decoder guarantees it). receive_ns is left as is.
+// arrays hold num_joints entries (MessageDecoder guarantees it). receive_ns is left as is.
 void from_message(const tsmh::slave_state_t& m, SlaveStateSample& s) noexcept;
 void from_message(const tsmh::slave_truth_t& m, SlaveTruthSample& s) noexcept;
 void from_message(const tsmh::master_command_t& m, MasterCommandSample& s) noexcept;
 void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcept;
 void from_message(const tsmh::calibration_request_t& m, CalibrationRequestSample& s) noexcept;
 
-/// The fields every message of ours starts with, read from raw bytes.
-struct RawHeader {
-  std::int64_t hash = 0;
-  std::int64_t utime = 0;
-  std::int64_t seq = 0;
-  std::int32_t num_joints = 0;
-};
-inline constexpr std::size_t kRawHeaderBytes = 8 + 8 + 8 + 4;
-
-/// Reads the leading hash, utime, seq and num_joints (big-endian, as LCM
-/// encodes them). False when fewer than kRawHeaderBytes bytes.
-bool peek_header(const void* data, std::size_t size, RawHeader& out) noexcept;
-
-/// Decodes untrusted bytes into a sample, reusing its message object so that
-/// steady-state decoding does not allocate. Checks, in order: size, type
-/// hash, joint count in 1..kMaxJoints, exact encoded size, then decodes.
-/// Content (NaN, ranges) is validate()'s job.
+/// Decodes untrusted bytes into a sample through the project's one message
+/// decoder (lcmtypes/message_decoder.hpp: size, type hash, joint count in
+/// 1..kMaxJoints and exact encoded size checked from the raw bytes before
+/// anything is allocated), reusing its message so that steady-state decoding
+/// does not allocate. Content (NaN, ranges) is validate()'s job.
 template <class Sample>
 class Decoder {
  public:
@@ -110,7 +94,7 @@ class Decoder {
   std::optional<Rejection> decode(const void* data, std::size_t size, Sample& out) noexcept;
 
  private:
-  Message msg_{};
+  lcmtypes::MessageDecoder<Message> decoder_{{1, kMaxJoints}};
 };
 
 /// Encodes a sample into `bytes` (resized to the encoded size). Allocates:

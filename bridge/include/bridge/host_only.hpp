@@ -17,6 +17,8 @@ namespace tsmh::bridge {
 
 /// The port of a udpm URL whose options say ttl=0 ("udpm://239.255.76.67:7667?ttl=0&...");
 /// nullopt for any other URL (another provider, another TTL, no explicit ttl).
+/// The URL is read by the strict parser (lcmtypes/lcm_url.hpp): one that
+/// LCM could read otherwise ("?ttl=0&ttl=1" sends with TTL 1) throws LcmUrlError.
 std::optional<int> host_only_udpm_port(std::string_view url);
 
 /// Attaches the host-only filter to every IPv4 UDP socket of this process

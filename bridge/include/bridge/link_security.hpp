@@ -35,7 +35,8 @@ std::optional<std::filesystem::path> find_key_file(std::string_view flag, const 
 /// process), file:// (a log), and udpm with ttl=0, whose receive socket the
 /// bridge restricts to this host (bridge/host_only.hpp; a Receiver that
 /// cannot do so refuses to start). Any other udpm URL is reachable from the
-/// network.
+/// network. Throws LcmUrlError for a URL the strict parser refuses
+/// (lcmtypes/lcm_url.hpp): "?ttl=0&ttl=1" is not host-local, it is an error.
 bool is_host_local_url(std::string_view url);
 
 /// The --key option's help, the same for every program (the search order
@@ -57,6 +58,7 @@ struct LinkSecurity {
 /// Finds and loads the key (find_key_file with the real environment). With
 /// no key: allowed on a host-local URL, or with options.insecure; otherwise
 /// throws LinkKeyError saying where it looked and how to create a key.
+/// A URL the strict parser refuses throws LcmUrlError, key or not.
 LinkSecurity resolve_link_security(std::string_view url, const LinkSecurityOptions& options);
 
 }  // namespace tsmh::bridge

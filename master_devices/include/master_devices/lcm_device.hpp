@@ -31,7 +31,10 @@ class LCM;
 namespace tsmh::master_devices {
 
 struct LcmSettings {
-  std::string url;             ///< "" = $LCM_DEFAULT_URL, else LCM's default
+  /// "" = $LCM_DEFAULT_URL, else LCM's default. haptic-server sets it to its
+  /// own link's URL when the settings name none. Read by the strict parser
+  /// (lcmtypes/lcm_url.hpp): a bad one is a settings error.
+  std::string url;
   std::string channel_prefix;  ///< per-arm prefix, e.g. "LEFT_" -> LEFT_MASTER_STATE
   std::size_t dof = 2;         ///< num_joints the adapter must send
   double nominal_rate_hz = 1000.0;
@@ -75,9 +78,13 @@ class LcmDevice final : public Device {
   void raise_fault(FaultCode code) noexcept override;
   DeviceStatus status() const noexcept override;
 
+  /// MASTER_STATE dropped before use: not authentic, not decodable (size,
+  /// type, joint count: lcmtypes/message_decoder.hpp) or not plausible.
   std::uint64_t rejected_messages() const { return rejected_.load(); }
   /// As given (the URL unresolved: "" means $LCM_DEFAULT_URL, else LCM's default).
   const LcmSettings& settings() const noexcept { return settings_; }
+  /// Why the last one was dropped, naming the channel ("" if none was).
+  std::string last_rejection() const;
 
   struct Impl;  // the LCM side (internal)
 
@@ -108,6 +115,7 @@ class LcmDevice final : public Device {
   std::thread thread_;
   mutable std::mutex error_mutex_;
   std::string error_;
+  std::string last_rejection_;
 };
 
 /// Registers the `lcm` driver; its devices read `clock`, and authenticate
