@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "estimator/quantile.hpp"
+
 namespace tsmh::estimator {
 namespace {
 
@@ -16,20 +18,6 @@ constexpr std::size_t kMinPerSide = 30;  // samples per bin and direction (30 ms
 // reversal count.
 constexpr double kSettleRad = kContactSettleRad;
 constexpr double kReversalRad = 0.05;  // the angle must retreat this far to count as a reversal
-
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  const auto mid = v.begin() + static_cast<long>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  const auto k = static_cast<long>(q * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[static_cast<std::size_t>(k)];
-}
 
 std::string num(double v, int digits = 3) {
   std::ostringstream s;

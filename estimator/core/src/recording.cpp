@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "estimator/quantile.hpp"
 #include "estimator/recording_checks.hpp"
 
 namespace tsmh::estimator {
@@ -53,10 +54,7 @@ void check_time_column(const Table& table, const std::vector<double>& t) {
   std::vector<double> steps(t.size() - 1);
   for (std::size_t i = 1; i < t.size(); ++i)
     steps[i - 1] = t[i] - t[i - 1];
-  std::vector<double> sorted = steps;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
-                   sorted.end());
-  const double median = sorted[sorted.size() / 2];
+  const double median = estimator::median(steps);
   const double limit = std::max(60.0, 1e4 * median);
   for (std::size_t i = 0; i < steps.size(); ++i) {
     if (steps[i] > limit) {

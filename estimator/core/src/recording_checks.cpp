@@ -5,6 +5,8 @@
 #include <cctype>
 #include <cstdio>
 
+#include "estimator/quantile.hpp"
+
 namespace tsmh::estimator {
 namespace {
 
@@ -88,8 +90,7 @@ std::string time_unit_warning(const std::vector<double>& t) {
   std::vector<double> steps(t.size() - 1);
   for (std::size_t i = 1; i < t.size(); ++i)
     steps[i - 1] = t[i] - t[i - 1];
-  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
-  const double median = steps[steps.size() / 2];
+  const double median = estimator::median(std::move(steps));
   if (!(median >= 0.5)) return {};
   char b[400];
   std::snprintf(b, sizeof b,

@@ -5,25 +5,9 @@
 #include <cstdio>
 #include <limits>
 
+#include "estimator/quantile.hpp"
+
 namespace tsmh::estimator {
-namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[static_cast<std::size_t>(k)];
-}
-
-}  // namespace
-
 ErrorMetrics error_metrics(std::span<const double> y, std::span<const double> f,
                            const std::function<bool(std::size_t)>& select) {
   ErrorMetrics m;

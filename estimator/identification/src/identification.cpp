@@ -17,6 +17,7 @@
 
 #include "estimator/fit_metrics.hpp"
 #include "estimator/parameter_map.hpp"
+#include "estimator/quantile.hpp"
 #include "estimator/separable_fit.hpp"
 #include "estimator/simulate.hpp"
 #include "estimator/tsm_model.hpp"
@@ -387,13 +388,6 @@ LmOutcome levenberg_marquardt(LmProblem& p, std::vector<double> u, int max_itera
   return out;
 }
 
-double quantile_of(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[static_cast<std::size_t>(k)];
-}
-
 // What the data says about the tendon-sheath model's scale: the sliding
 // plateaus (median friction at high speed, each direction) give the levels,
 // the slope of F against x where F crosses zero after a reversal gives
@@ -414,7 +408,7 @@ std::optional<Plateaus> sliding_plateaus(const FitData& d, double gamma) {
     if (d.role[i] != SampleRole::kIgnored) speed.push_back(std::fabs(d.motion[i].xd));
   }
   Plateaus p;
-  p.v_fast = 0.5 * quantile_of(speed, 0.95);
+  p.v_fast = 0.5 * quantile(speed, 0.95);
   std::vector<double> fpos, fneg, vfast;
   for (std::size_t i = 0; i < d.size(); ++i) {
     if (d.role[i] == SampleRole::kIgnored) continue;
@@ -423,9 +417,9 @@ std::optional<Plateaus> sliding_plateaus(const FitData& d, double gamma) {
     if (std::fabs(d.motion[i].xd) > p.v_fast) vfast.push_back(std::fabs(d.motion[i].xd));
   }
   if (fpos.size() < 20 || fneg.size() < 20) return std::nullopt;
-  p.level_pos = std::max(0.02, quantile_of(fpos, 0.5) / gamma);
-  p.level_neg = std::max(0.02, quantile_of(fneg, 0.5) / gamma);
-  p.v_mid = quantile_of(vfast, 0.5);
+  p.level_pos = std::max(0.02, quantile(fpos, 0.5) / gamma);
+  p.level_neg = std::max(0.02, quantile(fneg, 0.5) / gamma);
+  p.v_mid = quantile(vfast, 0.5);
   return p;
 }
 
@@ -461,7 +455,7 @@ std::optional<double> reversal_slope(const FitData& d, double f_band) {
   }
   flush();
   if (slopes.empty()) return std::nullopt;
-  return quantile_of(slopes, 0.5);
+  return quantile(slopes, 0.5);
 }
 
 // One start of the grid: the spec with the read levels and slope, the grid's
@@ -950,9 +944,7 @@ std::string adapt_scale_to_data(FrictionModel& model, const FitData& data) {
     if (data.role[i] != SampleRole::kIgnored) mag.push_back(std::fabs(data.measured[i]));
   }
   if (mag.empty()) return "";
-  const auto k = static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(mag.size() - 1));
-  std::nth_element(mag.begin(), mag.begin() + k, mag.end());
-  const double scale = mag[static_cast<std::size_t>(k)];
+  const double scale = quantile(std::move(mag), 0.9);
   const double level = scale / tsm->spec().gamma;  // the level the fit would need
   if (!(scale > 0.0) || (level >= 0.1 && level <= 5.0)) return "";
   // gamma c with theta and the levels unchanged scales the start model's

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "estimator/quantile.hpp"
 #include "estimator/simulate.hpp"
 #include "number_text.hpp"
 
@@ -185,11 +186,7 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
     load.push_back(m.load);
   }
   const double span = std::max(xmax - xmin, 1e-3);
-  const auto q = [](std::vector<double> v, double f) {
-    const auto k = static_cast<std::ptrdiff_t>(f * static_cast<double>(v.size() - 1));
-    std::nth_element(v.begin(), v.begin() + k, v.end());
-    return v[static_cast<std::size_t>(k)];
-  };
+  const auto q = [](const std::vector<double>& v, double f) { return quantile(v, f); };
   switch (kind) {
     case TermKind::kTimeVarying: {
       // Step time over the record (5 %..95 %), each searched within +-5 %.
