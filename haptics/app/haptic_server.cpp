@@ -41,6 +41,7 @@
 #include "haptics/server_config.hpp"
 #include "lcm_device_auth.hpp"
 #include "master_devices/builtin_drivers.hpp"
+#include "master_devices/device.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
 #include "realtime/clock.hpp"
@@ -76,10 +77,9 @@ constexpr int kExitDevice = 3;   // the master device could not be opened
 constexpr int kExitFault = 4;    // the session went into FAULT (at any time)
 constexpr int kExitNoSlave = 5;  // no SLAVE_STATE was ever used: nothing was rendered
 
-/// The master device could not be created or opened.
-struct DeviceError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+// The master device could not be created or opened: the drivers' own error
+// type, so a driver's DeviceError and the wrappers below exit alike (3).
+using master_devices::DeviceError;
 
 std::string seconds_text(double s) {
   char b[32];
