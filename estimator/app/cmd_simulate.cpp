@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "estimator/distal_estimator.hpp"
+#include "estimator/estimator_settings.hpp"
 #include "estimator/fit_metrics.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/simulate.hpp"
@@ -24,12 +25,7 @@ struct SimulateOptions {
   std::string output;
   std::optional<double> radius;
   estimator::DerivativeSource derivatives = estimator::DerivativeSource::kAutomatic;
-  estimator::SignMode sign = estimator::SignMode::kSmooth;
-  double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
-  double fine_psd = estimator::DifferentiatorConfig{}.fine_psd;
-  double hindsight_lag = estimator::DifferentiatorConfig{}.hindsight_lag;
-  double encoder_quantum = estimator::DifferentiatorConfig{}.quantum;
-  estimator::StartState start = estimator::StartState::kFreeTip;
+  estimator::EstimatorSettings estimator;  ///< as haptic-server's joints: entries
 };
 
 // Without exact derivatives the friction is what haptic-server would have
@@ -38,12 +34,8 @@ struct SimulateOptions {
 std::vector<double> causal_friction(const estimator::FrictionModel& model,
                                     const estimator::Recording& rec, const SimulateOptions& o) {
   const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m);
-  estimator::DifferentiatorConfig diff{.sign_mode = o.sign};
-  diff.cruise_window = o.cruise_window;
-  diff.fine_psd = o.fine_psd;
-  diff.hindsight_lag = o.hindsight_lag;
-  diff.quantum = o.encoder_quantum;
-  estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0, diff, o.start);
+  estimator::DistalTorqueEstimator est(model.clone(), has_load ? rec.radius_m : 1.0,
+                                       o.estimator.differentiator(), o.estimator.start_state);
   const bool has_tensions = rec.T1.size() == rec.size() && rec.T3.size() == rec.size();
   std::vector<double> f(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
@@ -144,36 +136,27 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
   std::map<std::string, estimator::SignMode> signs;
   for (const char* name : {"smooth", "smooth-fast", "hard"})
     signs[name] = *estimator::sign_mode_from_name(name);
-  cmd->add_option("--sign", opts->sign,
+  cmd->add_option("--sign", opts->estimator.sign,
                   "sgn(xdd) of the causal estimator: smooth (haptic-server's default), "
                   "smooth-fast (without the slow acceleration channel) or hard (the paper's "
                   "-1/0/+1 switch)")
       ->transform(CLI::CheckedTransformer(signs, CLI::ignore_case));
-  cmd->add_option("--cruise-window", opts->cruise_window,
-                  "smooth sign: window of the cruise hypothesis, s (haptic-server's default; 0: "
-                  "off)")
-      ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kCruiseWindow));
-  cmd->add_option("--fine-psd", opts->fine_psd,
-                  "smooth sign: crackle spectral density of the fine acceleration channel, "
-                  "(rad/s^5)^2/Hz (haptic-server's default; 0: off, the estimator before it)")
-      ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kFinePsd));
-  cmd->add_option("--hindsight-lag", opts->hindsight_lag,
-                  "smooth sign with the fine channel: lag of the hindsight correction, s "
-                  "(haptic-server's default; 0: off)")
-      ->check(CLI::Range(0.0, estimator::DifferentiatorLimits::kHindsightLag));
-  cmd->add_option("--encoder-quantum", opts->encoder_quantum,
-                  "resolution of x_in, rad: the differentiator's measurement noise and rest time "
-                  "(haptic-server's encoder_quantum_rad; default 2 pi / 40960)")
-      ->check(CLI::Validator(
-          [](std::string& value) -> std::string {
-            const char* problem = estimator::DifferentiatorLimits::encoder_quantum_problem(
-                std::strtod(value.c_str(), nullptr));
-            return problem == nullptr ? "" : std::string(problem) + ", got " + value;
-          },
-          "(0, 0.1]"));
-  const std::map<std::string, estimator::StartState> starts{
-      {"free_tip", estimator::StartState::kFreeTip}, {"zero", estimator::StartState::kZero}};
-  cmd->add_option("--start-state", opts->start,
+  // The numeric estimator settings, named, ranged and explained as in
+  // haptic-server's joints: entries (the YAML key in brackets).
+  for (const auto& s : estimator::numeric_settings()) {
+    cmd->add_option(std::string(s.flag), opts->estimator.*s.field,
+                    std::string(s.help) + " (haptic-server's " + std::string(s.key) + ")")
+        ->check(CLI::Validator(
+            [&s](std::string& value) -> std::string {
+              const std::string problem = s.problem(std::strtod(value.c_str(), nullptr));
+              return problem.empty() ? "" : problem + ", got " + value;
+            },
+            ""));
+  }
+  std::map<std::string, estimator::StartState> starts;
+  for (const char* name : {"free_tip", "zero"})
+    starts[name] = *estimator::start_state_from_name(name);
+  cmd->add_option("--start-state", opts->estimator.start_state,
                   "friction state at the first sample: free_tip (tared from tau_in, the "
                   "default) or zero")
       ->transform(CLI::CheckedTransformer(starts, CLI::ignore_case));

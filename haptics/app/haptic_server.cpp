@@ -412,12 +412,7 @@ int session_exit_code(const haptics::HapticLoop& loop, const char** verdict) {
 void apply_command_line(haptics::ServerConfig& cfg, const Options& o) {
   if (o.duration) cfg.duration_s = *o.duration;
   if (o.feedback) cfg.loop.source = haptics::feedback_source_from_string(*o.feedback);
-  if (o.rate) {
-    if (!(*o.rate >= 1.0 && *o.rate <= 4000.0))
-      throw haptics::ConfigError("--rate: must be within 1..4000 Hz");
-    cfg.loop.rate_hz = *o.rate;
-    cfg.loop.status_every = std::max(1, static_cast<int>(std::lround(*o.rate / 100.0)));
-  }
+  if (o.rate) cfg.loop.set_rate(*o.rate);  // in range: the option's check
   if (o.prefix) cfg.lcm_prefix = *o.prefix;
   if (!o.trace.empty()) cfg.evaluation.trace = o.trace;
   if (!o.report.empty()) cfg.evaluation.report = o.report;
@@ -431,13 +426,8 @@ std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> make_estimators(
   for (const auto& j : cfg.joints) {
     try {
       estimators.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
-          estimator::load_model(j.params), j.radius_m,
-          estimator::DifferentiatorConfig{.fine_psd = j.fine_psd,
-                                          .cruise_window = j.cruise_window,
-                                          .quantum = j.encoder_quantum_rad,
-                                          .sign_mode = j.sign,
-                                          .hindsight_lag = j.hindsight_lag},
-          j.start_state));
+          estimator::load_model(j.params), j.radius_m, j.estimator.differentiator(),
+          j.estimator.start_state));
     } catch (const std::exception& e) {
       throw haptics::ConfigError(cfg.source + ": joint '" + j.name + "': " + e.what());
     }
@@ -708,7 +698,8 @@ int main(int argc, char** argv) {
   app.add_option("--feedback", o.feedback, "What to render: estimated (default), naive, none")
       ->check(CLI::IsMember({"estimated", "naive", "none"}));
   app.add_option("--rate", o.rate, "Loop rate in Hz (1..4000)")
-      ->check(files::finite_range(1.0, 4000.0, "Hz"));
+      ->check(files::finite_range(haptics::LoopConfig::kMinRateHz, haptics::LoopConfig::kMaxRateHz,
+                                  "Hz"));
   app.add_option("--trace", o.trace, "Write a per-tick CSV trace here at exit");
   app.add_option("--report", o.report, "Write the JSON evaluation report here at exit");
   app.add_flag("--list-devices", o.list_devices,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -53,8 +54,12 @@ HapticLoop::HapticLoop(const LoopConfig& config, master_devices::Device& device,
     throw std::invalid_argument("haptic loop: one estimator per joint is needed");
   for (const auto& e : estimators_)
     if (!e) throw std::invalid_argument("haptic loop: missing estimator");
-  if (!(config_.rate_hz >= 1.0 && config_.rate_hz <= 4000.0))
-    throw std::invalid_argument("rate_hz: must be within 1..4000");
+  if (!(config_.rate_hz >= LoopConfig::kMinRateHz && config_.rate_hz <= LoopConfig::kMaxRateHz)) {
+    char what[64];
+    std::snprintf(what, sizeof what, "rate_hz: must be within %g..%g", LoopConfig::kMinRateHz,
+                  LoopConfig::kMaxRateHz);
+    throw std::invalid_argument(what);
+  }
   if (config_.status_every < 1) throw std::invalid_argument("status_every: must be >= 1");
   if (trace_ && trace_->joints() != config_.joints)
     throw std::invalid_argument("haptic loop: trace joint count differs");

@@ -151,7 +151,7 @@ void parse_calibration(FieldReader& drift, FieldReader& recal, LoopConfig& loop)
     recal.fail("scale", "must be levels or output, got '" + scale + "'");
   rc.per_direction = recal.get_bool("per_direction", rc.per_direction);
   // Two slave samples per loop tick at most, for the whole collection.
-  rc.capacity = static_cast<std::size_t>(rc.collect_s * 2.0 * 4000.0) + 100;
+  rc.capacity = static_cast<std::size_t>(rc.collect_s * 2.0 * LoopConfig::kMaxRateHz) + 100;
   recal.reject_unknown();
 }
 
@@ -174,18 +174,19 @@ void parse_joint(FieldReader& j, std::size_t i, const std::filesystem::path& bas
       jc.params.ends_with(".yml"))
     jc.params = resolve(base_dir, jc.params);
   jc.radius_m = in_range(j, "radius_m", 0.01, 0.0, 1.0, true);
+  auto& est = jc.estimator;
   const auto sign = estimator::sign_mode_from_name(j.get_string("sign", "smooth"));
-  if (!sign) j.fail("sign", "must be smooth, smooth-fast or hard");
-  jc.sign = *sign;
-  using Limits = estimator::DifferentiatorLimits;
-  jc.cruise_window = in_range(j, "cruise_window", jc.cruise_window, 0.0, Limits::kCruiseWindow);
-  jc.fine_psd = in_range(j, "fine_psd", jc.fine_psd, 0.0, Limits::kFinePsd);
-  jc.hindsight_lag = in_range(j, "hindsight_lag", jc.hindsight_lag, 0.0, Limits::kHindsightLag);
-  jc.encoder_quantum_rad = in_range(j, "encoder_quantum_rad", jc.encoder_quantum_rad, 0.0,
-                                    Limits::kEncoderQuantum, /*lo_open=*/true);
-  const std::string start = j.get_string("start_state", "free_tip");
-  if (start != "free_tip" && start != "zero") j.fail("start_state", "must be free_tip or zero");
-  jc.start_state = start == "zero" ? estimator::StartState::kZero : estimator::StartState::kFreeTip;
+  if (!sign) j.fail("sign", "must be " + std::string(estimator::kSignModeNames));
+  est.sign = *sign;
+  for (const auto& s : estimator::numeric_settings()) {
+    const double v = j.get_double(s.key, est.*s.field);
+    const std::string problem = s.problem(v);
+    if (!problem.empty()) j.fail(s.key, problem);
+    est.*s.field = v;
+  }
+  const auto start = estimator::start_state_from_name(j.get_string("start_state", "free_tip"));
+  if (!start) j.fail("start_state", "must be " + std::string(estimator::kStartStateNames));
+  est.start_state = *start;
   c.joints.push_back(jc);
   c.loop.force[i] = {in_range(j, "force_scale", 1.0, 0.0, 1e3), unit_sign(j, "force_sign"),
                      in_range(j, "deadband_nm", 0.0, 0.0, 1e3)};
@@ -218,8 +219,7 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   FieldReader r(root, origin, "");
   ServerConfig c;
   c.source = origin;
-  c.loop.rate_hz = in_range(r, "rate_hz", 1000.0, 1.0, 4000.0);
-  c.loop.status_every = std::max(1, static_cast<int>(std::lround(c.loop.rate_hz / 100.0)));
+  c.loop.set_rate(in_range(r, "rate_hz", 1000.0, LoopConfig::kMinRateHz, LoopConfig::kMaxRateHz));
   const std::string feedback = r.get_string("feedback", "estimated");
   if (feedback != "estimated" && feedback != "naive" && feedback != "none")
     r.fail("feedback", "'" + feedback + "' is not one of estimated, naive, none");

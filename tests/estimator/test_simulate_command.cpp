@@ -7,9 +7,12 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "estimator/distal_estimator.hpp"
+#include "estimator/estimator_settings.hpp"
 #include "estimator/recording.hpp"
 #include "estimator/synthetic.hpp"
 #include "estimator/table.hpp"
@@ -58,6 +61,47 @@ TEST(SimulateCommand, WithoutDerivativesRunsTheServersEstimatorSampleBySample) {
   const int rc2 = std::system(positional.c_str());
   ASSERT_TRUE(WIFEXITED(rc2) && WEXITSTATUS(rc2) == 0);
   EXPECT_EQ(read_csv_table(dir / "out2.csv").column("F"), f);
+  fs::remove_all(dir);
+}
+
+// The estimator's numeric settings are read by one table (estimator_settings):
+// `tsm simulate` refuses a value out of range, or not a number, with the same
+// words haptic-server's configuration uses for the same setting, and a value
+// at a boundary the server accepts is accepted here too.
+TEST(SimulateCommand, EstimatorFlagsShareTheServersLimitsAndWords) {
+  const fs::path dir = fs::temp_directory_path() / ("tsmh_sim_flags_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  SyntheticConfig c;
+  c.duration_s = 0.5;
+  write_recording_csv(make_synthetic(TsmFrictionModel(paper_spec()), c).recording, dir / "in.csv");
+  const auto run = [&](const std::string& flag, const std::string& value) {
+    const std::string cmd = std::string(TSMH_TSM_BIN) + " simulate --params paper " +
+                            (dir / "in.csv").string() + " --output " + (dir / "out.csv").string() +
+                            " --derivatives differentiator " + flag + " " + value + " >" +
+                            (dir / "log").string() + " 2>&1";
+    const int rc = std::system(cmd.c_str());
+    std::ifstream in(dir / "log");
+    std::stringstream text;
+    text << in.rdbuf();
+    return std::make_pair(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, text.str());
+  };
+  for (const auto& s : numeric_settings()) {
+    const std::string flag(s.flag);
+    for (const double bad : {s.hi * 2.0, -1.0}) {
+      std::ostringstream value;
+      value << bad;
+      const auto [rc, log] = run(flag, value.str());
+      EXPECT_NE(rc, 0) << flag << ' ' << bad;
+      EXPECT_NE(log.find(s.problem(bad)), std::string::npos) << flag << ' ' << bad << ": " << log;
+    }
+    const auto [rc_nan, log_nan] = run(flag, "nan");
+    EXPECT_NE(rc_nan, 0) << flag << " nan: " << log_nan;
+    std::ostringstream hi;
+    hi << s.hi;
+    const auto [rc_hi, log_hi] = run(flag, hi.str());
+    EXPECT_EQ(rc_hi, 0) << flag << ' ' << s.hi << ": " << log_hi;
+  }
   fs::remove_all(dir);
 }
 

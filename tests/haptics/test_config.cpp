@@ -86,15 +86,15 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
       "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3}\n  - {max_torque_nm: 0.3, sign: "
       "hard, start_state: zero}\n",
       "server.yaml", "/cfg");
-  EXPECT_EQ(c.joints[0].sign, estimator::SignMode::kSmooth);
-  EXPECT_EQ(c.joints[0].start_state, estimator::StartState::kFreeTip);
-  EXPECT_EQ(c.joints[1].sign, estimator::SignMode::kHard);
-  EXPECT_EQ(c.joints[1].start_state, estimator::StartState::kZero);
+  EXPECT_EQ(c.joints[0].estimator.sign, estimator::SignMode::kSmooth);
+  EXPECT_EQ(c.joints[0].estimator.start_state, estimator::StartState::kFreeTip);
+  EXPECT_EQ(c.joints[1].estimator.sign, estimator::SignMode::kHard);
+  EXPECT_EQ(c.joints[1].estimator.start_state, estimator::StartState::kZero);
   EXPECT_EQ(parse_server_config("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: "
                                 "smooth-fast}\n",
                                 "server.yaml", "/cfg")
                 .joints[0]
-                .sign,
+                .estimator.sign,
             estimator::SignMode::kSmoothFast);
   EXPECT_NE(error_of("device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, sign: soft}\n")
                 .find("joints[0].sign"),
@@ -107,7 +107,7 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   // of 0, which would mean no measurement noise at all, or out of (0, 0.1]).
   struct DifferentiatorKey {
     const char* name;
-    double JointConfig::*member;
+    double estimator::EstimatorSettings::*member;
     double default_value;
     const char* valid_value;
     double parsed_value;
@@ -116,20 +116,25 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
   const estimator::DifferentiatorConfig defaults{};
   for (const DifferentiatorKey& key :
        {DifferentiatorKey{"cruise_window",
-                          &JointConfig::cruise_window,
+                          &estimator::EstimatorSettings::cruise_window,
                           defaults.cruise_window,
                           "0",
                           0.0,
                           {"0.5"}},
-        DifferentiatorKey{"fine_psd", &JointConfig::fine_psd, defaults.fine_psd, "0", 0.0, {"-1"}},
+        DifferentiatorKey{"fine_psd",
+                          &estimator::EstimatorSettings::fine_psd,
+                          defaults.fine_psd,
+                          "0",
+                          0.0,
+                          {"-1"}},
         DifferentiatorKey{"hindsight_lag",
-                          &JointConfig::hindsight_lag,
+                          &estimator::EstimatorSettings::hindsight_lag,
                           defaults.hindsight_lag,
                           "0",
                           0.0,
                           {"0.5"}},
         DifferentiatorKey{"encoder_quantum_rad",
-                          &JointConfig::encoder_quantum_rad,
+                          &estimator::EstimatorSettings::encoder_quantum_rad,
                           defaults.quantum,
                           "3.8e-4",
                           3.8e-4,
@@ -138,9 +143,10 @@ TEST(ServerConfig, EstimatorSignAndStartStatePerJoint) {
       return "device: {driver: sim}\njoints:\n  - {max_torque_nm: 0.3, " + std::string(key.name) +
              ": " + value + "}\n";
     };
-    EXPECT_DOUBLE_EQ(c.joints[0].*key.member, key.default_value) << key.name;
+    EXPECT_DOUBLE_EQ(c.joints[0].estimator.*key.member, key.default_value) << key.name;
     EXPECT_DOUBLE_EQ(
-        parse_server_config(yaml(key.valid_value), "server.yaml", "/cfg").joints[0].*key.member,
+        parse_server_config(yaml(key.valid_value), "server.yaml", "/cfg").joints[0].estimator.*
+            key.member,
         key.parsed_value)
         << key.name;
     for (const char* bad : key.bad_values)

@@ -7,8 +7,10 @@
 // real-time runner (CLOCK_MONOTONIC) and in deterministic simulated time.
 // Nothing in tick() allocates, locks, blocks or prints.
 
+#include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string_view>
@@ -37,6 +39,11 @@ enum class FeedbackSource : std::int32_t { kEstimated = 0, kNaive = 1, kNone = 2
 std::string_view to_string(FeedbackSource s) noexcept;
 
 struct LoopConfig {
+  /// The loop rates haptic-server accepts, Hz: from its configuration, from
+  /// --rate, and in the loop's own check (one range, checked against these).
+  static constexpr double kMinRateHz = 1.0;
+  static constexpr double kMaxRateHz = 4000.0;
+
   int joints = 2;
   double rate_hz = 1000.0;
   FeedbackSource source = FeedbackSource::kEstimated;
@@ -53,7 +60,12 @@ struct LoopConfig {
   /// FAULT. Before that the last valid estimate is held and faded like a
   /// stale slave (SafetyTiming), so losing the estimate is never a step.
   double estimate_fault_s = 0.5;
-  int status_every = 10;            ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
+  int status_every = 10;  ///< HAPTIC_STATUS every this many ticks (100 Hz at 1 kHz)
+  /// Sets rate_hz and keeps HAPTIC_STATUS at about 100 Hz (status_every).
+  void set_rate(double hz) noexcept {
+    rate_hz = hz;
+    status_every = std::max(1, static_cast<int>(std::lround(hz / 100.0)));
+  }
   OscillationConfig oscillation{};  ///< safety.oscillation
   PassivityConfig passivity{};      ///< passivity, off by default
 

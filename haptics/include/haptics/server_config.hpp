@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "bridge/limits.hpp"
-#include "estimator/distal_estimator.hpp"
+#include "estimator/estimator_settings.hpp"
 #include "haptics/haptic_loop.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/settings.hpp"
@@ -26,25 +26,9 @@ struct JointConfig {
   std::string name;
   std::string params = "paper";  ///< friction model: preset or params YAML (resolved path)
   double radius_m = 0.01;
-  /// sgn(xdd) as the model sees it: the smoothed expected sign (default) or
-  /// the paper's -1/0/+1 switch (docs/friction-model.md).
-  estimator::SignMode sign = estimator::SignMode::kSmooth;
-  /// Smooth sign: the window of the differentiator's cruise hypothesis, s
-  /// (0: off), as `tsm simulate --cruise-window`.
-  double cruise_window = estimator::DifferentiatorConfig{}.cruise_window;
-  /// Smooth sign: the differentiator's fine acceleration channel, its
-  /// crackle spectral density (0: off), as `tsm simulate --fine-psd`.
-  double fine_psd = estimator::DifferentiatorConfig{}.fine_psd;
-  /// Smooth sign with the fine channel: the estimator's hindsight
-  /// correction, its lag in s (0: off), as `tsm simulate --hindsight-lag`.
-  double hindsight_lag = estimator::DifferentiatorConfig{}.hindsight_lag;
-  /// Resolution of the motor angle x_in as the slave reports it, rad (the
-  /// encoder's count through any gearing): the differentiator's measurement
-  /// noise, quantum^2/12, and its rest time (DifferentiatorConfig::
-  /// still_time, automatic). As `tsm simulate --encoder-quantum`.
-  double encoder_quantum_rad = estimator::DifferentiatorConfig{}.quantum;
-  /// The estimator's friction state at start: tip assumed free (default) or zero.
-  estimator::StartState start_state = estimator::StartState::kFreeTip;
+  /// The online estimator's settings (sign mode, differentiator knobs,
+  /// start state): the same settings and limits as `tsm simulate`'s flags.
+  estimator::EstimatorSettings estimator;
 };
 
 struct RealtimeConfig {
