@@ -33,6 +33,7 @@
 #include "estimator/model_gap.hpp"
 #include "estimator/model_io.hpp"
 #include "estimator/tsm_model.hpp"
+#include "realtime/quantile.hpp"
 #include "scoring.hpp"
 #include "sources.hpp"
 
@@ -50,12 +51,7 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using realtime::median;
 
 struct FitRecord {
   std::string source, model;

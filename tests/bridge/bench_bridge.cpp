@@ -30,25 +30,14 @@
 #include "bridge/sender.hpp"
 #include "lcmtypes/message_decoder.hpp"
 #include "realtime/clock.hpp"
+#include "realtime/quantile.hpp"
 
 namespace {
 
 using namespace tsmh::bridge;
 
-struct Percentiles {
-  double p50, p90, p99, p999, max, mean;
-};
-
-Percentiles percentiles(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  auto at = [&](double p) {
-    return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
-  };
-  double sum = 0;
-  for (double x : v)
-    sum += x;
-  return {at(0.5), at(0.9), at(0.99), at(0.999), v.back(), sum / static_cast<double>(v.size())};
-}
+using tsmh::realtime::Percentiles;
+using tsmh::realtime::percentiles;
 
 void print_row(const char* name, const char* unit, const std::vector<double>& v) {
   const Percentiles p = percentiles(v);

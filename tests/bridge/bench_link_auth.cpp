@@ -21,26 +21,17 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/link_session.hpp"
 #include "realtime/clock.hpp"
+#include "realtime/quantile.hpp"
 #include "test_samples.hpp"
 
 namespace {
 
 using namespace tsmh::bridge;
 
-struct Row {
-  double p50, p99, p999, max;
-};
-
-Row percentiles(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  auto at = [&](double p) {
-    return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
-  };
-  return {at(0.5), at(0.99), at(0.999), v.back()};
-}
+using tsmh::realtime::percentiles;
 
 void print(const char* what, const std::vector<double>& ns, double mean_ns) {
-  const Row r = percentiles(ns);
+  const auto r = percentiles(ns);
   std::printf("  %-40s p50 %7.0f  p99 %7.0f  p99.9 %7.0f  max %8.0f  mean(back-to-back) %6.0f ns\n",
               what, r.p50, r.p99, r.p999, r.max, mean_ns);
 }

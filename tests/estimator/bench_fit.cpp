@@ -17,6 +17,7 @@
 #include "estimator/plotting.hpp"
 #include "estimator/synthetic.hpp"
 #include "estimator/tsm_model.hpp"
+#include "realtime/quantile.hpp"
 
 int main(int argc, char** argv) {
   using namespace tsmh::estimator;
@@ -48,9 +49,8 @@ int main(int argc, char** argv) {
         r + 1, wall, cpu, run.fit.seconds, run.fit.evaluations, run.validation.rmse,
         run.validation.fit_percent);
   }
-  std::sort(walls.begin(), walls.end());
   std::printf("bench_fit: wall median %.2f s, max %.2f s (target <= 3 s)\n",
-              walls[walls.size() / 2], walls.back());
+              tsmh::realtime::median(walls), *std::max_element(walls.begin(), walls.end()));
   std::filesystem::remove_all(dir);
   return 0;
 }

@@ -38,6 +38,7 @@
 #include "haptics/evaluation.hpp"
 #include "haptics/haptic_loop.hpp"
 #include "master_devices/sim_device.hpp"
+#include "realtime/quantile.hpp"
 #include "virtual_tissue_slave/command_gate.hpp"
 #include "virtual_tissue_slave/slave.hpp"
 #include "virtual_tissue_slave/tissue.hpp"
@@ -186,11 +187,7 @@ class Rows final : public haptics::TraceSink {
   haptics::JointArray last{};  ///< torque rendered at the last tick, per joint
 };
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
-}
+using realtime::quantile;
 
 Result run(const Options& o, double rtt_ms, bool pc) {
   master_devices::SimSettings sim;
@@ -399,9 +396,9 @@ int main(int argc, char** argv) {
   std::snprintf(line, sizeof line,
                 "\nloop compute per tick (simulated time, this process; %zu ticks each): "
                 "passivity off p50 %.2f us p99 %.2f us; on p50 %.2f us p99 %.2f us\n",
-                compute_off.size(), percentile(compute_off, 0.5) * 1e-3,
-                percentile(compute_off, 0.99) * 1e-3, percentile(compute_on, 0.5) * 1e-3,
-                percentile(compute_on, 0.99) * 1e-3);
+                compute_off.size(), quantile(compute_off, 0.5) * 1e-3,
+                quantile(compute_off, 0.99) * 1e-3, quantile(compute_on, 0.5) * 1e-3,
+                quantile(compute_on, 0.99) * 1e-3);
   table << line;
   std::snprintf(
       line, sizeof line,

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "realtime/quantile.hpp"
 #include "server_bus.hpp"
 
 namespace {
@@ -80,12 +81,9 @@ struct Series {
       std::printf("  %-44s never seen (%d runs)\n", name.c_str(), runs);
       return;
     }
-    std::vector<double> v = ms;
-    std::sort(v.begin(), v.end());
-    const double median =
-        v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
     std::printf("  %-44s min %6.1f  median %6.1f  max %6.1f ms  (%zu of %d runs)\n", name.c_str(),
-                v.front(), median, v.back(), v.size(), runs);
+                *std::min_element(ms.begin(), ms.end()), tsmh::realtime::median(ms),
+                *std::max_element(ms.begin(), ms.end()), ms.size(), runs);
   }
 };
 

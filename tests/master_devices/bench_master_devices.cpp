@@ -24,24 +24,15 @@
 #include "master_devices/sim_device.hpp"
 #include "realtime/clock.hpp"
 #include "realtime/latest_value.hpp"
+#include "realtime/quantile.hpp"
 
 namespace md = tsmh::master_devices;
 namespace p = tsmh::master_devices::protocol;
 
 namespace {
 
-struct Percentiles {
-  double p50, p99, p999, max;
-};
-
-Percentiles percentiles(std::vector<double> v) {
-  if (v.empty()) return {0, 0, 0, 0};
-  std::sort(v.begin(), v.end());
-  auto at = [&](double q) {
-    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * v.size()))];
-  };
-  return {at(0.5), at(0.99), at(0.999), v.back()};
-}
+using tsmh::realtime::Percentiles;
+using tsmh::realtime::percentiles;
 
 void print(const char* what, const char* unit, const Percentiles& p) {
   std::printf("  %-34s p50 %8.2f  p99 %8.2f  p99.9 %8.2f  max %8.2f %s\n", what, p.p50, p.p99,

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "estimator/quantile.hpp"
+#include "realtime/quantile.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -37,7 +37,7 @@ ContactCheck check_contact(const std::vector<double>& t, const std::vector<doubl
   std::vector<double> speed(n);
   for (std::size_t i = 0; i < n; ++i)
     speed[i] = std::fabs(xd[i]);
-  const double v_slide = std::max(0.05, 0.2 * quantile(speed, 0.95));
+  const double v_slide = std::max(0.05, 0.2 * realtime::quantile(speed, 0.95));
 
   // Settled sliding samples: fast enough and far enough past the last
   // reversal. Reversals are found on the angle (it retreats from its running
@@ -61,7 +61,7 @@ ContactCheck check_contact(const std::vector<double>& t, const std::vector<doubl
   for (std::size_t i = 0; i < n; ++i)
     if (dir[i] != 0) xs.push_back(x[i]);
   if (xs.size() < 2 * kMinPerSide) return c;
-  const double lo = quantile(xs, 0.02), hi = quantile(xs, 0.98);
+  const double lo = realtime::quantile(xs, 0.02), hi = realtime::quantile(xs, 0.98);
   if (!(hi > lo)) return c;
 
   std::vector<double> up[kBins], down[kBins];
@@ -74,7 +74,7 @@ ContactCheck check_contact(const std::vector<double>& t, const std::vector<doubl
   double mid_min = INFINITY, mid_max = -INFINITY, at_min = 0.0, at_max = 0.0;
   for (int b = 0; b < kBins; ++b) {
     if (up[b].size() < kMinPerSide || down[b].size() < kMinPerSide) continue;
-    const double u = median(up[b]), d = median(down[b]);
+    const double u = realtime::median(up[b]), d = realtime::median(down[b]);
     ups.push_back(u);
     downs.push_back(d);
     halves.push_back(0.5 * (u - d));
@@ -85,12 +85,12 @@ ContactCheck check_contact(const std::vector<double>& t, const std::vector<doubl
   }
   c.bins_used = static_cast<int>(halves.size());
   if (c.bins_used < 2) return c;
-  c.band_half_width_nm = std::max(0.0, median(halves));
+  c.band_half_width_nm = std::max(0.0, realtime::median(halves));
   c.midline_shift_nm = mid_max - mid_min;
   // Contact pushes one way: name the end where the midline is furthest out.
   c.midline_shift_at_rad = std::fabs(at_max) > std::fabs(at_min) ? at_max : at_min;
 
-  const double level_up = median(ups), level_down = median(downs);
+  const double level_up = realtime::median(ups), level_down = realtime::median(downs);
   const double margin = config.max_band_excess * c.band_half_width_nm;
   double run_start = 0.0;
   bool in_run = false;

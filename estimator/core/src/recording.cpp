@@ -5,8 +5,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "estimator/quantile.hpp"
 #include "estimator/recording_checks.hpp"
+#include "realtime/quantile.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -54,7 +54,7 @@ void check_time_column(const Table& table, const std::vector<double>& t) {
   std::vector<double> steps(t.size() - 1);
   for (std::size_t i = 1; i < t.size(); ++i)
     steps[i - 1] = t[i] - t[i - 1];
-  const double median = estimator::median(steps);
+  const double median = realtime::median(steps);
   const double limit = std::max(60.0, 1e4 * median);
   for (std::size_t i = 0; i < steps.size(); ++i) {
     if (steps[i] > limit) {

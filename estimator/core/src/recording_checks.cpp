@@ -5,7 +5,7 @@
 #include <cctype>
 #include <cstdio>
 
-#include "estimator/quantile.hpp"
+#include "realtime/quantile.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -90,7 +90,7 @@ std::string time_unit_warning(const std::vector<double>& t) {
   std::vector<double> steps(t.size() - 1);
   for (std::size_t i = 1; i < t.size(); ++i)
     steps[i - 1] = t[i] - t[i - 1];
-  const double median = estimator::median(std::move(steps));
+  const double median = realtime::median(std::move(steps));
   if (!(median >= 0.5)) return {};
   char b[400];
   std::snprintf(b, sizeof b,

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "estimator/quantile.hpp"
+#include "realtime/quantile.hpp"
 
 namespace tsmh::estimator {
 ErrorMetrics error_metrics(std::span<const double> y, std::span<const double> f,
@@ -54,13 +54,13 @@ RegimeThresholds regime_thresholds(const FitData& data) {
   }
   // "Near reversal": slower than a tenth of the typical fast speed, and at
   // least 0.05 rad/s so encoder noise at rest does not define the regime.
-  th.reversal_speed = std::max(0.05, 0.1 * quantile(speed, 0.95));
+  th.reversal_speed = std::max(0.05, 0.1 * realtime::quantile(speed, 0.95));
   std::vector<double> moving;
   for (double s : speed)
     if (s > th.reversal_speed) moving.push_back(s);
-  th.speed_split = median(moving);
-  th.load_split = median(load);
-  th.position_split = median(pos);
+  th.speed_split = realtime::median(moving);
+  th.load_split = realtime::median(load);
+  th.position_split = realtime::median(pos);
   th.time_split = data.motion.empty() ? 0.0 : 0.5 * (data.motion.front().t + data.motion.back().t);
   return th;
 }
@@ -185,7 +185,7 @@ double noise_floor(std::span<const double> y) {
   std::vector<double> d2(y.size() - 2);
   for (std::size_t i = 2; i < y.size(); ++i)
     d2[i - 2] = std::fabs(y[i] - 2.0 * y[i - 1] + y[i - 2]);
-  return median(std::move(d2)) / (0.6745 * std::sqrt(6.0));
+  return realtime::median(std::move(d2)) / (0.6745 * std::sqrt(6.0));
 }
 
 }  // namespace tsmh::estimator

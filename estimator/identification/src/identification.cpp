@@ -17,10 +17,10 @@
 
 #include "estimator/fit_metrics.hpp"
 #include "estimator/parameter_map.hpp"
-#include "estimator/quantile.hpp"
 #include "estimator/separable_fit.hpp"
 #include "estimator/simulate.hpp"
 #include "estimator/tsm_model.hpp"
+#include "realtime/quantile.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -408,7 +408,7 @@ std::optional<Plateaus> sliding_plateaus(const FitData& d, double gamma) {
     if (d.role[i] != SampleRole::kIgnored) speed.push_back(std::fabs(d.motion[i].xd));
   }
   Plateaus p;
-  p.v_fast = 0.5 * quantile(speed, 0.95);
+  p.v_fast = 0.5 * realtime::quantile(speed, 0.95);
   std::vector<double> fpos, fneg, vfast;
   for (std::size_t i = 0; i < d.size(); ++i) {
     if (d.role[i] == SampleRole::kIgnored) continue;
@@ -417,9 +417,9 @@ std::optional<Plateaus> sliding_plateaus(const FitData& d, double gamma) {
     if (std::fabs(d.motion[i].xd) > p.v_fast) vfast.push_back(std::fabs(d.motion[i].xd));
   }
   if (fpos.size() < 20 || fneg.size() < 20) return std::nullopt;
-  p.level_pos = std::max(0.02, quantile(fpos, 0.5) / gamma);
-  p.level_neg = std::max(0.02, quantile(fneg, 0.5) / gamma);
-  p.v_mid = quantile(vfast, 0.5);
+  p.level_pos = std::max(0.02, realtime::quantile(fpos, 0.5) / gamma);
+  p.level_neg = std::max(0.02, realtime::quantile(fneg, 0.5) / gamma);
+  p.v_mid = realtime::quantile(vfast, 0.5);
   return p;
 }
 
@@ -455,7 +455,7 @@ std::optional<double> reversal_slope(const FitData& d, double f_band) {
   }
   flush();
   if (slopes.empty()) return std::nullopt;
-  return quantile(slopes, 0.5);
+  return realtime::quantile(slopes, 0.5);
 }
 
 // One start of the grid: the spec with the read levels and slope, the grid's
@@ -944,7 +944,7 @@ std::string adapt_scale_to_data(FrictionModel& model, const FitData& data) {
     if (data.role[i] != SampleRole::kIgnored) mag.push_back(std::fabs(data.measured[i]));
   }
   if (mag.empty()) return "";
-  const double scale = quantile(std::move(mag), 0.9);
+  const double scale = realtime::quantile(std::move(mag), 0.9);
   const double level = scale / tsm->spec().gamma;  // the level the fit would need
   if (!(scale > 0.0) || (level >= 0.1 && level <= 5.0)) return "";
   // gamma c with theta and the levels unchanged scales the start model's

@@ -14,9 +14,9 @@
 #include <stdexcept>
 #include <thread>
 
-#include "estimator/quantile.hpp"
 #include "estimator/simulate.hpp"
 #include "number_text.hpp"
+#include "realtime/quantile.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -186,7 +186,7 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
     load.push_back(m.load);
   }
   const double span = std::max(xmax - xmin, 1e-3);
-  const auto q = [](const std::vector<double>& v, double f) { return quantile(v, f); };
+  const auto q = [](const std::vector<double>& v, double f) { return realtime::quantile(v, f); };
   switch (kind) {
     case TermKind::kTimeVarying: {
       // Step time over the record (5 %..95 %), each searched within +-5 %.

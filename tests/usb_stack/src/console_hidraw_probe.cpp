@@ -30,7 +30,7 @@
 #include "guest_report.hpp"
 #include "master_devices/protocol.hpp"
 #include "realtime/clock.hpp"
-#include "stats.hpp"
+#include "realtime/quantile.hpp"
 
 namespace protocol = tsmh::master_devices::protocol;
 using tsmh::usb_stack::metric;
@@ -236,8 +236,8 @@ int main(int argc, char** argv) {
       }
     }
   }
-  const auto rtt = tsmh::usb_stack::percentiles(rtt_us);
-  const auto gap = tsmh::usb_stack::percentiles(interval_us);
+  const auto rtt = tsmh::realtime::percentiles(rtt_us);
+  const auto gap = tsmh::realtime::percentiles(interval_us);
   char d[300];
   std::snprintf(d, sizeof d,
                 "%d input reports, %d malformed, %d sequence gaps, %d timeouts; %zu output reports "

@@ -54,7 +54,7 @@
 #include "master_devices/profile.hpp"
 #include "master_devices/registry.hpp"
 #include "realtime/clock.hpp"
-#include "stats.hpp"
+#include "realtime/quantile.hpp"
 #include "unplug.hpp"
 
 namespace md = tsmh::master_devices;
@@ -177,8 +177,8 @@ class Host {
     }
     const md::ConsoleStats s = console_->stats();
     const double seconds = static_cast<double>(now - t_start) * 1e-9;
-    const auto late = tsmh::usb_stack::percentiles(lateness_us);
-    const auto age = tsmh::usb_stack::percentiles(age_us);
+    const auto late = tsmh::realtime::percentiles(lateness_us);
+    const auto age = tsmh::realtime::percentiles(age_us);
     const auto d = [](std::uint64_t a, std::uint64_t b) {
       return static_cast<unsigned long long>(a - b);
     };
