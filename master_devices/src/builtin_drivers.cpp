@@ -5,6 +5,7 @@
 
 #include "master_devices/console_device.hpp"
 #include "master_devices/emulator_bus.hpp"
+#include "master_devices/haply_device.hpp"
 #include "master_devices/hidapi_transport.hpp"
 #include "master_devices/libusb_transport.hpp"
 #include "master_devices/sim_device.hpp"
@@ -194,6 +195,7 @@ void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions opt
                  r.reject_unknown();
                  return std::unique_ptr<Device>(std::make_unique<SimDevice>(std::move(s), clock));
                });
+  register_haply_driver(registry, clock);
 }
 
 }  // namespace tsmh::master_devices

@@ -30,6 +30,8 @@ std::string_view to_string(FaultCode f) {
       return "host requested";
     case FaultCode::kHandshake:
       return "handshake";
+    case FaultCode::kLinkLost:
+      return "link lost";
   }
   return "?";
 }

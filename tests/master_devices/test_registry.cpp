@@ -31,10 +31,10 @@ std::string error_of(const std::function<void()>& f) {
 
 TEST(Registry, HasTheBuiltinDrivers) {
   const DriverRegistry r = builtin();
-  for (const char* name : {"hid", "usb", "emulator", "sim"})
+  for (const char* name : {"hid", "usb", "emulator", "sim", "haply"})
     EXPECT_TRUE(r.has(name)) << name;
   EXPECT_FALSE(r.has("lcm")) << "lcm lives in its own target";
-  EXPECT_EQ(r.drivers().size(), 4u);
+  EXPECT_EQ(r.drivers().size(), 5u);
 }
 
 TEST(Registry, RejectsDuplicateAndUnknownDrivers) {
@@ -47,7 +47,7 @@ TEST(Registry, RejectsDuplicateAndUnknownDrivers) {
   ctx.source = "server.yaml";
   const std::string e = error_of([&] { r.create("phantom", YAML::Node(), ctx); });
   EXPECT_NE(
-      e.find("server.yaml: unknown device driver 'phantom' (registered: emulator, hid, sim, usb)"),
+      e.find("server.yaml: unknown device driver 'phantom' (registered: emulator, haply, hid, sim, usb)"),
       std::string::npos)
       << e;
 }

@@ -6,6 +6,7 @@
 //   emulator  our console's firmware emulated in-process, driven by the same
 //             driver code as hid/usb; optionally with a simulated operator
 //   sim       a simulated master with an operator hand model (the demo's)
+//   haply     Haply's 2DIY over its USB serial board (haply_device.hpp)
 //
 // The lcm driver lives in the master_devices_lcm target (lcm_device.hpp).
 

@@ -43,6 +43,7 @@ enum class FaultCode : std::uint8_t {
   kBadReports,      ///< too many consecutive malformed reports from the device
   kHostRequested,   ///< the host called raise_fault()
   kHandshake,       ///< the device did not accept the calibration we sent
+  kLinkLost,        ///< the link went away (unplugged) on a device that cannot resume by itself
 };
 
 std::string_view to_string(DeviceStatus s);
