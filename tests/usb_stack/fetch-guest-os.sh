@@ -13,7 +13,7 @@ set -euo pipefail
 
 cache=${1:?usage: fetch-guest-os.sh CACHE_DIR}
 # The modules the guest loads; their dependencies are added from modules.dep.
-modules=(dummy_hcd libcomposite usb_f_hid usb_f_fs usbhid hid-generic)
+modules=(dummy_hcd libcomposite usb_f_hid usb_f_fs usbhid hid-generic usb_f_acm cdc-acm)
 meta_pkg=${TSMH_USB_STACK_KERNEL_PKG:-linux-image-amd64}
 
 die_unavailable() { echo "fetch-guest-os: $*" >&2; exit 2; }
