@@ -7,9 +7,10 @@
 //                  gone) or enable false -> zero torque. The server answers
 //                  every MASTER_STATE, so forces stop exactly when it dies.
 //
-// FakeVendorMaster stands in for the vendor SDK; replace its four calls
-// (read angles, read buttons, write torques, zero from a signal handler)
-// with the real ones. Its joint count and kinematics come from the master
+// The vendor's calls sit behind master_devices/vendor_master.hpp (--vendor
+// NAME): `simulated` (the default) stands in for the SDK; novint-falcon,
+// force-dimension and openhaptics are stubs that refuse to run until built
+// with the vendor's SDK. The device's joint count and kinematics come from the master
 // profile (--profile, master_devices/profiles/masters/); the mapping layer
 // (master_devices/axis_mapping.hpp, --mapping) turns the device's own
 // coordinates into the slave's joints for MASTER_STATE and the server's
@@ -52,50 +53,10 @@
 #include "files/cli_numbers.hpp"
 #include "lcmtypes/message_decoder.hpp"
 #include "master_devices/axis_mapping.hpp"
+#include "master_devices/vendor_master.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
-
-/// Stand-in for a vendor SDK: a handle of `joints` joints (inertia,
-/// damping) moved by a hand that sweeps each joint slowly around `home`,
-/// plus whatever torque we command. Holds the dead-man button (bit 0).
-class FakeVendorMaster {
- public:
-  FakeVendorMaster(std::size_t joints, const tsmh::master_devices::JointArray& home,
-                   double amplitude)
-      : n_(joints), amplitude_(amplitude), home_(home), q_(home) {}
-
-  void step(double dt) {
-    t_ += dt;
-    for (std::size_t j = 0; j < n_; ++j) {
-      const double f = 0.2 + 0.1 * static_cast<double>(j);
-      const double target = home_[j] + amplitude_ * std::sin(2.0 * 3.14159265358979 * f * t_);
-      const double hand = 3.0 * (target - q_[j]) - 0.2 * qd_[j];
-      qd_[j] += dt * (hand + torque_[j] - 0.005 * qd_[j]) / 0.007;
-      q_[j] += dt * qd_[j];
-    }
-  }
-  // The calls a real SDK provides (joint angles in rad, or the handle's
-  // Cartesian position for an SDK that solves its own kinematics).
-  const tsmh::master_devices::JointArray& joint_angles() const { return q_; }
-  std::uint32_t buttons() const { return 1U; }  // bit 0 (the profile's first button) held
-  void set_joint_torques(const tsmh::master_devices::JointArray& tau) { torque_ = tau; }
-  /// Zero torque from a signal handler: async-signal-safe (plain stores).
-  /// A real SDK's torque call rarely is (it locks, allocates, talks to
-  /// libusb): there, write() a zero command prepared at start-up to a
-  /// descriptor of the device's own (as haptic-server does for its hidraw
-  /// console, bridge/crash_stop.hpp), or leave it to the device's watchdog.
-  void zero_torque_from_signal_handler() noexcept {
-    for (double& t : torque_)
-      t = 0.0;
-  }
-
- private:
-  std::size_t n_;
-  double amplitude_;  ///< of the hand's sweep, in the device's units
-  double t_ = 0.0;
-  tsmh::master_devices::JointArray home_{}, q_{}, qd_{}, torque_{};
-};
 
 // Without --profile: the two-joint console this adapter always modelled,
 // each slave joint following the master joint of the same index.
@@ -115,21 +76,6 @@ constexpr const char* kDefaultMapping = R"(
 joints: [{axis: joint0}, {axis: joint1}]
 buttons: {dead_man: dead_man}
 )";
-
-// Where the fake hand sweeps: the workspace's centre for a master whose
-// coordinates are its joints; for a pantograph, joint angles that put the
-// handle in the middle of its workspace (elbows out, handle up).
-tsmh::master_devices::JointArray home_pose(const tsmh::master_devices::MasterProfile& p) {
-  tsmh::master_devices::JointArray q{};
-  if (p.kinematics.type == tsmh::master_devices::KinematicsType::kPantograph) {
-    q[0] = 2.0;
-    q[1] = 1.1;
-    return q;
-  }
-  for (std::size_t k = 0; k < p.kinematics.joints; ++k)
-    q[k] = 0.5 * (p.workspace_min[k] + p.workspace_max[k]);
-  return q;
-}
 
 struct ForceInbox {
   explicit ForceInbox(std::size_t slave_joints)
@@ -205,14 +151,15 @@ bool stop_requested(const sigset_t& set) {
 // end the process as it would have (default action restored, raised again).
 // A handler has no context argument: the device is reached through this one
 // static pointer.
-std::atomic<FakeVendorMaster*> g_crash_device{nullptr};
+std::atomic<tsmh::master_devices::VendorMaster*> g_crash_device{nullptr};
 
 void on_crash_signal(int sig) {
-  if (FakeVendorMaster* device = g_crash_device.load()) device->zero_torque_from_signal_handler();
+  if (tsmh::master_devices::VendorMaster* device = g_crash_device.load())
+    device->zero_from_signal_handler();
   raise(sig);  // SA_RESETHAND restored the default; delivered when we return
 }
 
-void zero_torque_on_crash(FakeVendorMaster& device) {
+void zero_torque_on_crash(tsmh::master_devices::VendorMaster& device) {
   g_crash_device.store(&device);
   struct sigaction sa {};
   sa.sa_handler = on_crash_signal;
@@ -260,7 +207,11 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)")
       ->check(tsmh::files::finite_range(0.0, 1e7, "s"));
-  std::string profile_file, mapping_file;
+  std::string profile_file, mapping_file, vendor = "simulated";
+  app.add_option("--vendor", vendor,
+                 "the device's calls (master_devices/vendor_master.hpp): simulated (default), or "
+                 "novint-falcon, force-dimension, openhaptics: stubs until built with the "
+                 "vendor's SDK");
   app.add_option("--profile", profile_file,
                  "master profile: kinematics, workspace, limits, buttons "
                  "(master_devices/profiles/masters/*.yaml; default: a 2-joint console)");
@@ -348,8 +299,15 @@ int main(int argc, char** argv) {
               !profile_file.empty()
           ? 0.4 * 0.5 * (profile.workspace_max[0] - profile.workspace_min[0])
           : 0.2;
-  FakeVendorMaster device(profile.kinematics.joints, home_pose(profile), amplitude);
-  zero_torque_on_crash(device);
+  std::unique_ptr<tsmh::master_devices::VendorMaster> device;
+  try {
+    device = tsmh::master_devices::make_vendor_master(vendor, profile, rate_hz, amplitude);
+    device->open();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "external-master-adapter: error: %s\n", e.what());
+    return 3;
+  }
+  zero_torque_on_crash(*device);
   tsmh::master_state_t state;
   state.num_joints = static_cast<int>(slave_joints);
   state.q.resize(slave_joints);
@@ -383,11 +341,12 @@ int main(int argc, char** argv) {
     was_fresh = fresh;
     // Slave-joint torques -> the handle -> the device's joints (J^T), within
     // the profile's limits; the pose is the one of the previous update.
-    device.set_joint_torques(fresh && inbox.enable ? mapping.joint_torques(inbox.torque)
-                                                   : tsmh::master_devices::JointArray{});
+    device->write(fresh && inbox.enable ? mapping.joint_torques(inbox.torque)
+                                        : tsmh::master_devices::JointArray{});
     const double dt = static_cast<double>(period_ns) * 1e-9;
-    device.step(dt);
-    const bool pose_ok = mapping.update(device.joint_angles(), device.buttons());
+    tsmh::master_devices::JointArray coordinates{};
+    std::uint32_t buttons = 0;
+    const bool pose_ok = device->read(coordinates, buttons) && mapping.update(coordinates, buttons);
 
     state.utime = now / 1000;
     state.seq = seq++;
@@ -411,7 +370,8 @@ int main(int argc, char** argv) {
                    bytes.data() + size);
     lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   }
-  device.set_joint_torques({});
+  device->write({});
+  device->close();
   std::printf(
       "external-master-adapter: sent %lld MASTER_STATE, watchdog trips %lld, rejected forces "
       "%lld%s%s%s, unauthenticated forces %lld\n",
