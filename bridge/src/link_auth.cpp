@@ -10,6 +10,7 @@
 #include <ctime>
 
 #include "files/input_file.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::bridge {
 namespace {
@@ -234,7 +235,7 @@ MessageSigner::MessageSigner(std::shared_ptr<const LinkKey> key) : key_(std::mov
 void MessageSigner::sign(std::string_view channel, const std::uint8_t* payload, std::size_t size,
                          std::uint8_t* trailer) noexcept {
   sign_at(channel, payload, size, next_seq_.fetch_add(1, std::memory_order_relaxed),
-          realtime_now_us(), trailer);
+          realtime::wall_clock_utime(), trailer);
 }
 
 void MessageSigner::sign_at(std::string_view channel, const std::uint8_t* payload, std::size_t size,
@@ -329,12 +330,6 @@ AuthResult MessageVerifier::verify(std::string_view channel, const std::uint8_t*
   w->last_used = ++uses_;
   r.verdict = AuthVerdict::kOk;
   return r;
-}
-
-std::int64_t realtime_now_us() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
 }
 
 AuthVerdict verify_stored(const LinkKey& key, std::string_view channel, const std::uint8_t* data,

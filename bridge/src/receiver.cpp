@@ -31,7 +31,8 @@ void Receiver::on_raw_message(const lcm::ReceiveBuffer* rbuf, const std::string&
   const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
   std::size_t size = rbuf->data_size;
   if (route->verifier != nullptr) {
-    const AuthResult auth = route->verifier->verify(channel, data, size, realtime_now_us());
+    const AuthResult auth =
+        route->verifier->verify(channel, data, size, realtime::wall_clock_utime());
     if (auth.verdict != AuthVerdict::kOk) return inbox->reject_unauthentic(auth, receive_ns);
     // One master, one slave: on a session channel only the bound peer's
     // messages go on (bridge/link_session.hpp); another keyed sender ends it.

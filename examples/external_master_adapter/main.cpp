@@ -80,7 +80,8 @@ buttons: {dead_man: dead_man}
 struct ForceInbox {
   explicit ForceInbox(std::size_t slave_joints)
       : joints(slave_joints),
-        decoder({static_cast<std::int32_t>(slave_joints), static_cast<std::int32_t>(slave_joints)}) {}
+        decoder(
+            {static_cast<std::int32_t>(slave_joints), static_cast<std::int32_t>(slave_joints)}) {}
   std::size_t joints;  ///< the slave joints MASTER_STATE carries
   tsmh::master_devices::JointArray torque{};
   bool enable = false;
@@ -108,7 +109,7 @@ struct ForceInbox {
     std::size_t size = rbuf->data_size;
     if (verifier != nullptr) {
       // Before decoding: only the holder of the link key drives the motors.
-      const auto auth = verifier->verify(channel, data, size, tsmh::bridge::realtime_now_us());
+      const auto auth = verifier->verify(channel, data, size, tsmh::realtime::wall_clock_utime());
       if (auth.verdict != tsmh::bridge::AuthVerdict::kOk) {
         ++unauthentic;  // no MAC, wrong key, stale or replayed
         return;

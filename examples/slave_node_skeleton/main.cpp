@@ -124,7 +124,7 @@ struct CommandInbox {
     std::size_t size = rbuf->data_size;
     if (verifier != nullptr) {
       // Before decoding: only the holder of the link key moves the robot.
-      const auto auth = verifier->verify(channel, data, size, tsmh::bridge::realtime_now_us());
+      const auto auth = verifier->verify(channel, data, size, tsmh::realtime::wall_clock_utime());
       if (auth.verdict != tsmh::bridge::AuthVerdict::kOk) {
         ++unauthentic;  // no MAC, wrong key, stale or replayed
         return;

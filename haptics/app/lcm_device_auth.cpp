@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "realtime/clock.hpp"
+
 namespace tsmh::haptics {
 namespace {
 
@@ -12,7 +14,8 @@ class BridgeLcmAuth final : public master_devices::LcmMessageAuth {
 
   std::optional<std::size_t> verify(const std::string& channel, const std::uint8_t* data,
                                     std::size_t size, std::string& why) noexcept override {
-    const bridge::AuthResult r = verifier_.verify(channel, data, size, bridge::realtime_now_us());
+    const bridge::AuthResult r =
+        verifier_.verify(channel, data, size, realtime::wall_clock_utime());
     switch (r.verdict) {
       case bridge::AuthVerdict::kOk:
         return r.payload_size;

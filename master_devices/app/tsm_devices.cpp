@@ -121,9 +121,10 @@ int main(int argc, char** argv) {
       const md::DeviceSpec& spec = device->spec();
       std::printf("%s (%s): %u DOF, %.0f Hz\n", spec.model.c_str(), spec.driver.c_str(), spec.dof,
                   spec.nominal_rate_hz);
-      const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+      const std::int64_t end =
+          tsmh::realtime::monotonic_now_ns() + static_cast<std::int64_t>(seconds * 1e9);
       std::int64_t t = tsmh::realtime::monotonic_now_ns();
-      while (std::chrono::steady_clock::now() < end) {
+      while (tsmh::realtime::monotonic_now_ns() < end) {
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
         t = device->simulated_time() ? t + 100'000'000 : tsmh::realtime::monotonic_now_ns();
         const md::DeviceReading r = device->read(t);

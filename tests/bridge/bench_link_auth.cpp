@@ -59,7 +59,7 @@ void bench(int joints, int count) {
     sign_ns.push_back(static_cast<double>(t1 - t0));
     timer_ns.push_back(static_cast<double>(tsmh::realtime::monotonic_now_ns() - t1));
   }
-  const std::int64_t now_us = realtime_now_us();
+  const std::int64_t now_us = tsmh::realtime::wall_clock_utime();
   std::size_t ok = 0;
   for (const auto& m : messages) {
     const std::int64_t t0 = tsmh::realtime::monotonic_now_ns();

@@ -277,7 +277,7 @@ TEST(LinkAuth, SignerNumbersMessagesFromOne) {
   std::vector<std::uint8_t> m(10 + kAuthTrailerBytes, 0);
   for (std::uint64_t expect = 1; expect <= 3; ++expect) {
     signer.sign("C", m.data(), 10, m.data() + 10);
-    const AuthResult r = v.verify("C", m.data(), m.size(), realtime_now_us());
+    const AuthResult r = v.verify("C", m.data(), m.size(), realtime::wall_clock_utime());
     EXPECT_EQ(r.verdict, AuthVerdict::kOk);
     EXPECT_EQ(r.trailer.seq, expect);
   }
@@ -552,7 +552,8 @@ TEST(LinkAuthUdpm, RoguePublishersMoveNothingAuthenticatedPeerDoes) {
   const MessageSigner old_run(key);
   std::vector<std::uint8_t> payload;
   encode_sample(command(5000, 1.5), payload);
-  const auto stale = signed_message(old_run, channel, payload, 1, realtime_now_us() - 60'000'000);
+  const auto stale =
+      signed_message(old_run, channel, payload, 1, realtime::wall_clock_utime() - 60'000'000);
   raw.publish(channel, stale.data(), static_cast<unsigned>(stale.size()));
 
   const std::uint64_t expected_rejected = 2 * kEach + 2 * kGood + 1;

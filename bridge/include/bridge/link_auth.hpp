@@ -196,9 +196,6 @@ class MessageVerifier {
   std::uint64_t uses_ = 0;
 };
 
-/// CLOCK_REALTIME in microseconds (the trailer's send time).
-std::int64_t realtime_now_us() noexcept;
-
 /// Verifies one stored message (a log) with `key`, without freshness or
 /// replay checks: Ok, Missing or BadMac. Version 1 and 2 trailers.
 AuthVerdict verify_stored(const LinkKey& key, std::string_view channel, const std::uint8_t* data,
