@@ -1,10 +1,12 @@
 #include "bridge/sender.hpp"
 
+#include <algorithm>
 #include <ctime>
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
 #include "realtime/clock.hpp"
+#include "realtime/pacing.hpp"
 
 namespace tsmh::bridge {
 
@@ -40,7 +42,8 @@ void Sender::stop() noexcept {
 
 void Sender::run() noexcept {
   const std::int64_t period_ns = options_.poll_period.count() * 1000;
-  std::int64_t next_ns = realtime::monotonic_now_ns();
+  realtime::Pacer pace(std::max<std::int64_t>(period_ns, 1),
+                       realtime::monotonic_now_ns() + period_ns);
   for (;;) {
     const std::uint32_t seen = signal_.current();
     for (auto& box : outboxes_)
@@ -55,10 +58,8 @@ void Sender::run() noexcept {
       continue;
     }
     // Polling: absolute deadlines; after a stall, re-base instead of catching up.
-    next_ns += period_ns;
-    const std::int64_t now = realtime::monotonic_now_ns();
-    if (next_ns < now) next_ns = now + period_ns;
-    realtime::sleep_until_ns(next_ns);
+    pace.wait();  // a signal's early wake-up only flushes early
+    pace.advance(realtime::monotonic_now_ns());
   }
 }
 

@@ -10,20 +10,11 @@
 #include <cerrno>
 #include <cstring>
 
-#include "haptics/tick_schedule.hpp"
 #include "realtime/clock.hpp"
+#include "realtime/pacing.hpp"
 
 namespace tsmh::haptics {
-namespace {
-
-// The loop's stop flag is checked once per tick, so a signal only ends the
-// sleep early for nothing: sleep on to the deadline.
-void sleep_until(std::int64_t deadline_ns) noexcept {
-  while (!realtime::sleep_until_ns(deadline_ns)) {
-  }
-}
-
-}  // namespace
+namespace {}  // namespace
 
 std::string lock_memory() noexcept {
   if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) return "";
@@ -94,22 +85,19 @@ void LoopRunner::run() noexcept {
   const std::int64_t end = options_.duration_s > 0
                                ? start + static_cast<std::int64_t>(options_.duration_s * 1e9)
                                : INT64_MAX;
-  std::int64_t deadline = start;
-  // Lateness is measured against the absolute schedule: `due` is the first
-  // deadline that has not run. After an overrun the schedule re-bases on the
-  // next deadline ahead, but the tick that then runs reports how late it is
-  // against `due` -- a 100 ms stall reads as 100 ms, not as the few
-  // microseconds by which the re-based deadline was missed.
-  std::int64_t due = start;
-  while (!stop_.load(std::memory_order_relaxed) && deadline < end) {
-    sleep_until(deadline);
+  // Lateness is measured against the absolute schedule (Pacer::due_ns, the
+  // first deadline that has not run): after an overrun the schedule re-bases
+  // on the next deadline ahead, but the tick that then runs reports how late
+  // it is against `due` -- a 100 ms stall reads as 100 ms, not as the few
+  // microseconds by which the re-based deadline was missed. The stop flag is
+  // checked once per tick, so a signal only ends the sleep early for nothing.
+  realtime::Pacer pace(period, start);
+  while (!stop_.load(std::memory_order_relaxed) && pace.deadline_ns() < end) {
+    pace.wait_through_signals();
     const std::int64_t woke = realtime::monotonic_now_ns();
-    loop_.tick(woke, woke - due);
+    loop_.tick(woke, woke - pace.due_ns());
     const std::int64_t done = realtime::monotonic_now_ns();
-    const NextTick next = next_tick(deadline, done, period);
-    loop_.record_compute(done - woke, next.skipped);
-    due = next.due_ns;
-    deadline = next.deadline_ns;
+    loop_.record_compute(done - woke, pace.advance(done));
   }
   loop_.shutdown();
   finished_.store(true, std::memory_order_release);

@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -22,6 +21,7 @@
 #include "master_devices/registry.hpp"
 #include "master_devices/settings.hpp"
 #include "realtime/latest_value.hpp"
+#include "realtime/pacing.hpp"
 
 namespace tsmh::master_devices::skeleton {
 
@@ -197,13 +197,13 @@ class SkeletonDevice final : public Device {
   // is not OK.
   void io_loop() {
     realtime::LatestValueReader<Command> commands(commands_);
-    const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / s_.rate_hz));
-    auto next = std::chrono::steady_clock::now();
+    const auto period_ns = static_cast<std::int64_t>(1e9 / s_.rate_hz);
+    realtime::Pacer pace(period_ns, realtime::monotonic_now_ns() + period_ns);
     Sample s;
     JointArray q_prev{};
     while (running_.load()) {
-      next += period;
-      std::this_thread::sleep_until(next);
+      pace.wait_through_signals();
+      pace.advance(realtime::monotonic_now_ns());
       JointArray q{};
       Buttons b;
       const bool ok = link_->read_sample(q, b);

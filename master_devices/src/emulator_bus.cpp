@@ -6,6 +6,7 @@
 
 #include "master_devices/clock.hpp"
 #include "realtime/clock.hpp"
+#include "realtime/pacing.hpp"
 
 namespace tsmh::master_devices {
 
@@ -204,12 +205,14 @@ void EmulatorBus::tick_once() {
 
 void EmulatorBus::run_real_time() {
   // Real-time pacing is real by definition: CLOCK_MONOTONIC, whatever
-  // Options::clock stamps the reports with.
-  std::int64_t next = realtime::monotonic_now_ns();
+  // Options::clock stamps the reports with. Every period runs, late ones
+  // back to back: a real console keeps its own clock and the kernel queues
+  // what the host did not read in time.
+  realtime::Pacer pace(period_ns_, realtime::monotonic_now_ns() + period_ns_);
   while (!stopping_) {
-    next += period_ns_;
-    realtime::sleep_until_ns(next);
+    pace.wait_through_signals();
     tick_once();
+    pace.advance_every();
   }
 }
 

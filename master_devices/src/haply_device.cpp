@@ -10,6 +10,7 @@
 
 #include "haply_profiles.hpp"
 #include "master_devices/mapped_device.hpp"
+#include "realtime/pacing.hpp"
 
 namespace tsmh::master_devices {
 
@@ -417,20 +418,18 @@ bool HaplyDevice::exchange(realtime::LatestValueReader<Command>& commands) {
 void HaplyDevice::io_loop() {
   realtime::LatestValueReader<Command> commands(commands_);
   const auto period_ns = static_cast<std::int64_t>(1e9 / s_.rate_hz);
-  auto next = std::chrono::steady_clock::now();
+  realtime::Pacer pace(period_ns, realtime::monotonic_now_ns());
   while (running_.load()) {
     if (!link_up_.load()) {
       sleep_ns(5'000'000);  // faulted until clear_fault() reopens the port
-      next = std::chrono::steady_clock::now();
+      pace = realtime::Pacer(period_ns, realtime::monotonic_now_ns());
       continue;
     }
     exchange(commands);
-    // Pacing in real time (absolute deadlines); a late round trip starts the
-    // next request at once rather than bunching requests to catch up.
-    next += std::chrono::nanoseconds(period_ns);
-    const auto now = std::chrono::steady_clock::now();
-    if (next < now) next = now;
-    std::this_thread::sleep_until(next);
+    // Pacing in real time (absolute deadlines); a late round trip skips the
+    // missed deadlines rather than bunching requests to catch up.
+    pace.advance(realtime::monotonic_now_ns());
+    pace.wait_through_signals();
   }
 }
 

@@ -8,6 +8,7 @@
 
 #include "master_devices/clock.hpp"
 #include "realtime/clock.hpp"
+#include "realtime/pacing.hpp"
 
 namespace tsmh::master_devices {
 SimSettings parse_sim_settings(FieldReader& r) {
@@ -172,12 +173,15 @@ void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
 
 void SimDevice::run_real_time() {
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / settings_.rate_hz);
-  // Paced on CLOCK_MONOTONIC (a thread sleeps in real time), stamped on clock_.
-  std::int64_t next = realtime::monotonic_now_ns();
+  // Paced on CLOCK_MONOTONIC (a thread sleeps in real time), stamped on
+  // clock_. After a stall the schedule skips the missed periods, and the
+  // next step covers them: the simulated operator stays on real time.
+  realtime::Pacer pace(period_ns, realtime::monotonic_now_ns() + period_ns);
+  std::int64_t periods = 1;
   while (!stopping_) {
-    next += period_ns;
-    realtime::sleep_until_ns(next);
-    advance(static_cast<double>(period_ns) * 1e-9, clock_->now_ns());
+    pace.wait_through_signals();
+    advance(static_cast<double>(periods * period_ns) * 1e-9, clock_->now_ns());
+    periods = 1 + pace.advance(realtime::monotonic_now_ns());
   }
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // Runs a HapticLoop on its own thread against absolute deadlines on
 // CLOCK_MONOTONIC (clock_nanosleep TIMER_ABSTIME): no drift, re-base and skip
-// on overrun (tick_schedule.hpp). Tries SCHED_FIFO and says clearly when it
+// on overrun (realtime/pacing.hpp). Tries SCHED_FIFO and says clearly when it
 // is not permitted; the loop then runs at normal priority.
 
 #include <atomic>
