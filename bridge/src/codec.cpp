@@ -10,7 +10,7 @@ namespace tsmh::bridge {
 namespace {
 
 std::size_t joints(std::int32_t n) noexcept {
-  return static_cast<std::size_t>(std::clamp(n, 0, kMaxJoints));
+  return static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(kMaxJoints)));
 }
 
 void put(const JointArray& a, std::int32_t n, std::vector<double>& v) {
@@ -95,7 +95,8 @@ void to_message(const CalibrationRequestSample& s, tsmh::calibration_request_t& 
   m.utime = s.utime;
   m.seq = s.seq;
   m.num_joints = s.num_joints;
-  const auto n = static_cast<std::size_t>(std::clamp(s.num_joints, 0, kMaxJoints));
+  const auto n =
+      static_cast<std::size_t>(std::clamp(s.num_joints, 0, static_cast<int>(kMaxJoints)));
   m.recalibrate.assign(s.recalibrate.begin(), s.recalibrate.begin() + static_cast<long>(n));
 }
 

@@ -49,7 +49,7 @@ bool is_lcm_log(const std::filesystem::path& path) {
 JointSeries read_joint_series(const std::filesystem::path& path, int joint, std::string_view prefix,
                               const LogReadOptions& options) {
   const std::string file = path.string();
-  if (joint < 0 || joint >= kMaxJoints)
+  if (joint < 0 || joint >= static_cast<int>(kMaxJoints))
     throw LogError(file, "joint " + std::to_string(joint) + " is outside 0.." +
                              std::to_string(kMaxJoints - 1));
   if (!std::filesystem::is_regular_file(path)) throw LogError(file, "no such file");
@@ -265,7 +265,7 @@ void assemble(const Collected& c, const std::string& file, const std::string& st
 
 JointSeries read_joint_series(std::span<const std::uint8_t> bytes, const std::string& file,
                               int joint, std::string_view prefix, const LogReadOptions& options) {
-  if (joint < 0 || joint >= kMaxJoints)
+  if (joint < 0 || joint >= static_cast<int>(kMaxJoints))
     throw LogError(file, "joint " + std::to_string(joint) + " is outside 0.." +
                              std::to_string(kMaxJoints - 1));
   if (bytes.size() < 4 || !std::equal(bytes.begin(), bytes.begin() + 4, std::begin(kSyncWord)))

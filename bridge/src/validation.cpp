@@ -45,9 +45,9 @@ std::optional<Rejection> check_step(const SlaveStateSample& prev, const SlaveSta
 }
 
 std::optional<Rejection> check_joint_count(int num_joints, int expected) noexcept {
-  if (num_joints < 1 || num_joints > kMaxJoints) {
+  if (num_joints < 1 || num_joints > static_cast<int>(kMaxJoints)) {
     char what[96];
-    std::snprintf(what, sizeof what, "num_joints must be 1..%d", kMaxJoints);
+    std::snprintf(what, sizeof what, "num_joints must be 1..%zu", kMaxJoints);
     return make_rejection(RejectReason::kJointCount, what, num_joints);
   }
   if (expected > 0 && num_joints != expected) {

@@ -59,7 +59,7 @@ Biquad Biquad::highpass(double fc_hz, double fs_hz) noexcept {
 
 OscillationDetector::OscillationDetector(int joints, const OscillationConfig& c, double rate_hz)
     : joints_(joints), c_(c) {
-  if (joints < 1 || joints > kMaxJoints)
+  if (joints < 1 || joints > static_cast<int>(kMaxJoints))
     throw std::invalid_argument("oscillation detector: joint count must be 1.." +
                                 std::to_string(kMaxJoints));
   validate(c_, rate_hz);

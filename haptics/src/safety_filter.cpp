@@ -10,7 +10,7 @@ namespace tsmh::haptics {
 SafetyFilter::SafetyFilter(int joints, const std::array<JointSafetyLimits, kMaxJoints>& limits,
                            const SafetyTiming& timing)
     : joints_(joints), limits_(limits), timing_(timing) {
-  if (joints < 1 || joints > kMaxJoints)
+  if (joints < 1 || joints > static_cast<int>(kMaxJoints))
     throw std::invalid_argument("safety: joint count must be 1.." + std::to_string(kMaxJoints));
   for (int j = 0; j < joints; ++j) {
     const auto& l = limits_[static_cast<std::size_t>(j)];

@@ -263,7 +263,7 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
   const YAML::Node joints = r.node("joints");
   if (!joints.IsSequence() || joints.size() == 0)
     r.fail("joints", "missing (a list with one entry per joint)");
-  if (joints.size() > static_cast<std::size_t>(kMaxJoints))
+  if (joints.size() > kMaxJoints)
     r.fail("joints", "at most " + std::to_string(kMaxJoints) + " joints");
   c.loop.joints = static_cast<int>(joints.size());
   for (std::size_t i = 0; i < joints.size(); ++i) {

@@ -9,12 +9,15 @@
 #include <array>
 #include <cstdint>
 
+#include "realtime/joints.hpp"
+
 namespace tsmh::bridge {
 
-/// Joints per message this build handles; a message with more is rejected
-/// (joint count). A NOTES arm has 2-4 actuated joints per instrument.
-inline constexpr int kMaxJoints = 8;
-using JointArray = std::array<double, kMaxJoints>;
+/// Joints per message this build handles (a message with more is rejected:
+/// joint count) and the per-joint array: the project's one joint count
+/// (realtime/joints.hpp).
+using realtime::JointArray;
+using realtime::kMaxJoints;
 
 // Common header of every sample:
 //   utime      sender's CLOCK_MONOTONIC, microseconds (from the message)

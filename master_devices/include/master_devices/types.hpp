@@ -9,13 +9,15 @@
 #include <string>
 #include <string_view>
 
+#include "realtime/joints.hpp"
+
 namespace tsmh::master_devices {
 
-/// Upper bound on the joints of any master we drive (a 7-DOF arm plus a grip).
-inline constexpr std::size_t kMaxDof = 8;
-
-/// One value per joint; entries at and beyond the device's dof are zero.
-using JointArray = std::array<double, kMaxDof>;
+/// Upper bound on the joints of any master we drive, and one value per
+/// joint (entries at and beyond the device's dof are zero): the project's
+/// one joint count and joint array (realtime/joints.hpp), named for devices.
+inline constexpr std::size_t kMaxDof = realtime::kMaxJoints;
+using realtime::JointArray;
 
 struct Buttons {
   bool dead_man = false;  ///< true while the operator holds the dead-man switch
