@@ -7,6 +7,8 @@
 #include "bridge/link_security.hpp"
 #include "bridge/log_reader.hpp"
 #include "estimator/table.hpp"
+#include "realtime/joint_names.hpp"
+#include "realtime/joints.hpp"
 
 namespace tsmh::tsm_cli {
 
@@ -84,8 +86,17 @@ DataSource lcm_log_source(const LcmLogSelection& sel) {
 }
 
 void add_lcm_log_options(CLI::App& cmd, LcmLogSelection& sel) {
-  cmd.add_option("--joint", sel.joint, "LCM log DATA: joint index to read (default 0)")
-      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--joint", sel.joint,
+                 "LCM log DATA: the joint to read: joint1 (default), joint2, ... (or its 0-based "
+                 "index)")
+      ->transform(CLI::Validator(
+          [](std::string& value) -> std::string {
+            const auto j = realtime::joint_from_text(value, realtime::kMaxJoints);
+            if (!j) return "no joint '" + value + "' (joint1, joint2, ...)";
+            value = std::to_string(*j);
+            return "";
+          },
+          "JOINT"));
   cmd.add_option("--prefix", sel.prefix,
                  "LCM log DATA: channel prefix of the arm, e.g. ARM1_ (default none)");
   cmd.add_flag("--accept-truncated", sel.accept_truncated,

@@ -21,7 +21,7 @@ t_last = STATS_max
 
 do for [j = 0:1] {
   set output sprintf("%s/torque-joint%d.png", outdir, j)
-  set title sprintf("Joint %d: distal torque fed back vs the truth", j)
+  set title sprintf("joint%d: distal torque fed back vs the truth", j + 1)
   set xlabel "time (s)"
   set ylabel "distal torque (N m)"
   set xrange [t_first:t_last]
@@ -37,7 +37,7 @@ set output sprintf("%s/stiffness.png", outdir)
 set autoscale x
 # The master renders the reaction, -fsign x fscale x tau: divided by that,
 # the rendered torque reads as the slave torque it stands for.
-set title sprintf("What the surgeon feels, in slave joint units (master torque / %g, master angle x %g), pressing joint 0", -fsign * fscale, pscale)
+set title sprintf("What the surgeon feels, in slave joint units (master torque / %g, master angle x %g), pressing joint1", -fsign * fscale, pscale)
 set xlabel "joint angle (rad): master angle x position scale, or the true joint angle"
 set ylabel "torque (N m, slave joint)"
 # The rendered torque in slave units, split three ways, each with its legend:

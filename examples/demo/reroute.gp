@@ -17,7 +17,7 @@ set datafile separator ","
 stats trace using 1 nooutput
 set xrange [STATS_min:STATS_max]
 set output sprintf("%s/reroute.png", outdir)
-set multiplot layout 2,1 title "Re-routing the sheaths (+50 % wrap), the drift alarm and the recalibration (joint 0)"
+set multiplot layout 2,1 title "Re-routing the sheaths (+50 % wrap), the drift alarm and the recalibration (joint1)"
 set arrow 1 from t_reroute, graph 0 to t_reroute, graph 1 nohead lc rgb "black" dt 2
 set label 1 "re-route" at t_reroute, graph 0.95 offset 0.5,0
 set arrow 2 from t_alarm, graph 0 to t_alarm, graph 1 nohead lc rgb "#ff7f0e" dt 2

@@ -4,7 +4,7 @@
   reroute_report.py TRACE.csv REPORT.json REROUTE_AT_S WRAP RAMP_PER_S [CONTROL.csv [REFIT.csv]]
 
 Adds a "reroute" object to REPORT.json (every existing field kept) with the
-distal-torque error of joint 0 before the re-route, after it (before the
+distal-torque error of joint1 before the re-route, after it (before the
 recalibration) and after the recalibration, the drift alarm's delay and the
 recalibration; writes the phases for the plot beside the trace
 (reroute-phases.dat) and prints a summary. The slave's clock is its seq
@@ -178,12 +178,12 @@ def fmt(p):
 # Every time printed is on the server's clock (s since haptic-server
 # started; the slave started about half a second before it).
 print(f"   times in s since haptic-server started; re-route at {t_reroute:.1f} s (the slave's "
-      f"{reroute_at:g} s; joint 0's sheath wrap now {wrap:g} rad); drift alarm "
+      f"{reroute_at:g} s; joint1's sheath wrap now {wrap:g} rad); drift alarm "
       + (f"at {alarms[0]['t_s']:.1f} s ({alarms[0]['t_s'] - t_reroute:.1f} s after)" if alarms else "never")
       + "; recalibration " + (f"applied at {t_applied:.1f} s, friction scale x{scale:.3f} "
                               f"(the identified friction times it)" if applied
                               else "not applied " + str([e['reason'] for e in refused])))
-print(f"   joint 0 distal-torque error: before {fmt(b)}")
+print(f"   joint1 distal-torque error: before {fmt(b)}")
 print(f"                                after  {fmt(a)}")
 print(f"                        recalibrated  {fmt(c)}")
 for p in report["reroute"]["presses"]:

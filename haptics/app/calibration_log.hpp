@@ -15,6 +15,7 @@
 
 #include "haptics/drift_advice.hpp"
 #include "haptics/recalibration.hpp"
+#include "realtime/joint_names.hpp"
 
 namespace tsmh::haptic_server {
 
@@ -68,7 +69,7 @@ class CalibrationLog {
             haptics::drift_advice(j, calib_.drift_scale(j), advice_).c_str());
         events_.push_back({t, "drift_alarm", j, calib_.drift_scale(j), ""});
       } else if (!now && was) {
-        say("t = %.1f s: friction drift on joint %d cleared", t, j);
+        say("t = %.1f s: friction drift on %s cleared", t, realtime::joint_name(j).c_str());
         events_.push_back({t, "drift_cleared", j, calib_.drift_scale(j), ""});
       }
     }
@@ -84,11 +85,12 @@ class CalibrationLog {
       for (int j = 0; j < calib_.joints(); ++j) {
         if (((mask >> j) & 1U) == 0) continue;
         const auto f = calib_.figures(j);
-        say("t = %.1f s: recalibration applied: joint %d friction scale -> %.3f (sliding + %.3f, "
+        say("t = %.1f s: recalibration applied: %s friction scale -> %.3f (sliding + %.3f, "
             "- %.3f; one common scale %.3f) (residual %.4f -> %.4f N m rms over %zu samples, one "
             "common scale %.4f; stroke %.2f rad); ramping in at %.2f/s",
-            t, j, f.scale, f.scale_positive, f.scale_negative, f.scale_common, f.rms_old, f.rms_new,
-            f.samples, f.rms_common, f.span_rad, calib_.config().ramp_per_s);
+            t, realtime::joint_name(j).c_str(), f.scale, f.scale_positive, f.scale_negative,
+            f.scale_common, f.rms_old, f.rms_new, f.samples, f.rms_common, f.span_rad,
+            calib_.config().ramp_per_s);
         events_.push_back({t, "applied", j, f.scale, "", f.scale_positive, f.scale_negative});
       }
       return;
@@ -97,9 +99,10 @@ class CalibrationLog {
     const auto f = calib_.figures(j < 0 ? 0 : j);
     char detail[256];
     std::snprintf(detail, sizeof detail,
-                  "%s (joint %d: stroke %.2f rad, sliding %.2f s each way, %d angle bins judged, "
+                  "%s (%s: stroke %.2f rad, sliding %.2f s each way, %d angle bins judged, "
                   "%zu samples, scale found %.3f, residual %.4f -> %.4f N m)",
-                  std::string(to_string(calib_.reason())).c_str(), j, f.span_rad, f.sliding_s,
+                  std::string(to_string(calib_.reason())).c_str(),
+                  realtime::joint_name(j < 0 ? 0 : j).c_str(), f.span_rad, f.sliding_s,
                   f.contact_bins, f.samples, f.scale, f.rms_old, f.rms_new);
     say("t = %.1f s: recalibration refused: %s; the model is unchanged", t, detail);
     events_.push_back({t, "refused", j, f.scale, std::string(to_string(calib_.reason()))});

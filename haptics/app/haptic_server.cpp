@@ -45,6 +45,7 @@
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/registry.hpp"
 #include "realtime/clock.hpp"
+#include "realtime/joint_names.hpp"
 #include "request_recalibration.hpp"
 #include "tsmh/cli_words.hpp"
 #include "tsmh/version.hpp"
@@ -457,8 +458,8 @@ void cap_torque_to_device(haptics::ServerConfig& cfg, const master_devices::Devi
     if (peak > 0.0 && lim.max_torque_nm > peak) {
       std::fprintf(
           stderr,
-          "haptic-server: joint %d: max_torque_nm %.3g above the device's peak %.3g; using %.3g\n",
-          j, lim.max_torque_nm, peak, peak);
+          "haptic-server: %s: max_torque_nm %.3g above the device's peak %.3g; using %.3g\n",
+          realtime::joint_name(j).c_str(), lim.max_torque_nm, peak, peak);
       lim.max_torque_nm = peak;
     }
   }

@@ -2,14 +2,16 @@
 
 #include <cstdio>
 
+#include "realtime/joint_names.hpp"
+
 namespace tsmh::haptics {
 
 std::string drift_advice(int joint, double scale, const DriftAdviceContext& ctx) {
   char head[200];
   std::snprintf(head, sizeof head,
-                "friction drift suspected on joint %d: in free motion the measured proximal torque "
+                "friction drift suspected on %s: in free motion the measured proximal torque "
                 "fits %.2fx the friction the model predicts",
-                joint, scale);
+                realtime::joint_name(static_cast<std::size_t>(joint)).c_str(), scale);
   std::string s = head;
   if (scale < 1.0) {
     s += ". Less friction than identified: ";

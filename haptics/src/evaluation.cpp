@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "estimator/atomic_file.hpp"
+#include "realtime/joint_names.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -314,10 +315,11 @@ std::string format_stiffness(const Discrimination& d, double rate_hz) {
   std::string s;
   char line[640];
   std::snprintf(line, sizeof line,
-                "stiffness felt pressing joint %d, in N m/rad of the slave joint (the master's "
+                "stiffness felt pressing %s, in N m/rad of the slave joint (the master's "
                 "torque / force scale %g, per master rad x position scale %g), against the "
                 "tissue's true stiffness:\n",
-                d.joint, d.force_scale, d.position_scale);
+                realtime::joint_name(static_cast<std::size_t>(d.joint)).c_str(), d.force_scale,
+                d.position_scale);
   s += line;
   const auto row = [&](const char* name, const Stiffness& st) {
     if (!st.reached) {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "files/input_file.hpp"
+#include "realtime/joint_names.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -168,7 +169,7 @@ void parse_evaluation(FieldReader& ev, const std::filesystem::path& base_dir, Ev
 void parse_joint(FieldReader& j, std::size_t i, const std::filesystem::path& base_dir,
                  ServerConfig& c) {
   JointConfig jc;
-  jc.name = j.get_string("name", "joint" + std::to_string(i + 1));
+  jc.name = j.get_string("name", realtime::joint_name(i));
   jc.params = j.get_string("params", "paper");
   if (jc.params.find('/') != std::string::npos || jc.params.ends_with(".yaml") ||
       jc.params.ends_with(".yml"))

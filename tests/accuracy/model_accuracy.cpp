@@ -158,7 +158,7 @@ std::string fmt(int decimals, double v) {
 const char* source_title(const std::string& s) {
   if (s == "world") return "Independent physics world (tests/physics_world)";
   if (s == "paper") return "The paper's own model (the estimator's synthetic generator)";
-  return "The virtual slave, offline (joint 0, the gripper)";
+  return "The virtual slave, offline (joint1, the gripper)";
 }
 
 // Markdown for one source: the fit table, then online per kind.

@@ -164,6 +164,14 @@ TEST(OfflineCli, WritesTheCsvDataContract) {
   for (std::size_t i = 0; i < rec.size(); ++i)
     max_gap = std::max(max_gap, std::abs(rec.tau_in[i] - rec.tau_out[i]));
   EXPECT_GT(max_gap, 0.05);
+  // The joint's name selects the same joint as its old 0-based index.
+  const auto named = temp_file("sine-named.csv");
+  ASSERT_EQ(run_cli("--offline --scenario sine --duration 2 --joint joint2 --exact-derivatives "
+                    "--output " +
+                    named.string()),
+            0);
+  EXPECT_EQ(tsmh::estimator::read_csv_table(named).column("x_in"), table.column("x_in"));
+  std::filesystem::remove(named);
   std::filesystem::remove(path);
 }
 
@@ -172,6 +180,8 @@ TEST(OfflineCli, BadOptionsFailWithoutWritingAnything) {
   EXPECT_NE(run_cli("--offline --scenario nope --output " + path.string()), 0);
   EXPECT_NE(run_cli("--offline --effect drag=1 --output " + path.string()), 0);
   EXPECT_NE(run_cli("--offline --joint 2 --output " + path.string()), 0);
+  EXPECT_NE(run_cli("--offline --joint joint3 --output " + path.string()), 0);
+  EXPECT_NE(run_cli("--offline --joint joint0 --output " + path.string()), 0);
   EXPECT_NE(run_cli("--offline --reroute-at 3 --output " + path.string()), 0);
   EXPECT_NE(run_cli("--offline"), 0);  // no --output
   EXPECT_FALSE(std::filesystem::exists(path));

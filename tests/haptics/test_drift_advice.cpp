@@ -15,7 +15,7 @@ TEST(DriftAdvice, LowScaleOnThePaperPresetNamesThePresetAndNoButtonTheMasterLack
   const auto s = drift_advice(
       0, 0.22,
       {.config_path = "robot.yaml", .master_has_calibrate_button = false, .paper_preset = true});
-  EXPECT_TRUE(has(s, "joint 0")) << s;
+  EXPECT_TRUE(has(s, "joint1")) << s;  // the name users see, 1-based
   EXPECT_TRUE(has(s, "0.22x")) << s;
   EXPECT_TRUE(has(s, "Less friction")) << s;
   EXPECT_TRUE(has(s, "`paper` preset")) << s;
@@ -27,7 +27,7 @@ TEST(DriftAdvice, LowScaleOnThePaperPresetNamesThePresetAndNoButtonTheMasterLack
 TEST(DriftAdvice, HighScaleNamesAReRouteAndTheButtonWhenTheMasterHasOne) {
   const auto s = drift_advice(
       1, 1.5, {.config_path = "", .master_has_calibrate_button = true, .paper_preset = false});
-  EXPECT_TRUE(has(s, "joint 1")) << s;
+  EXPECT_TRUE(has(s, "joint2")) << s;
   EXPECT_TRUE(has(s, "More friction")) << s;
   EXPECT_TRUE(has(s, "re-routed")) << s;
   EXPECT_FALSE(has(s, "preset")) << s;

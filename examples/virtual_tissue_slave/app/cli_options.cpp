@@ -7,9 +7,26 @@
 #include <stdexcept>
 
 #include "files/cli_numbers.hpp"
+#include "realtime/joint_names.hpp"
 #include "virtual_tissue_slave/effects.hpp"
 
 namespace tsmh::virtual_tissue_slave::app {
+
+namespace {
+
+// --joint: a joint's name (joint1, joint2) or its 0-based index, as an index.
+CLI::Validator joint_option(std::size_t count) {
+  return CLI::Validator(
+      [count](std::string& value) -> std::string {
+        const auto j = realtime::joint_from_text(value, count);
+        if (!j) return "no joint '" + value + "' (joint1..joint" + std::to_string(count) + ")";
+        value = std::to_string(*j);
+        return "";
+      },
+      "joint1..joint" + std::to_string(count));
+}
+
+}  // namespace
 
 void add_options(CLI::App& app, CliOptions& o) {
   app.add_flag("--offline", o.offline,
@@ -21,11 +38,11 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "offline scenario: sine, multisine, palpate, chirp, excite, identify");
   app.add_option("--output", o.output,
                  "offline: CSV file to write (data contract: docs/data-formats.md)");
-  app.add_option(
-         "--joint", o.joint,
-         "joint index written to --output, and whose sheaths --wrap/--pretension/--reroute-wrap "
-         "set: 0 (Joint1, the gripper) or 1 (Joint2); 0-based like `tsm convert --joint`")
-      ->check(CLI::Range(0, 1));
+  app.add_option("--joint", o.joint,
+                 "joint written to --output, and whose sheaths --wrap/--pretension/--reroute-wrap "
+                 "set: joint1 (the gripper, default) or joint2 (the 0-based index 0 or 1 is "
+                 "accepted too)")
+      ->transform(joint_option(2));
   app.add_flag(
       "--exact-derivatives", o.exact_derivatives,
       "offline: add xd_in, xdd_in columns (the simulator's true motor velocity, acceleration)");

@@ -21,7 +21,7 @@ struct CliOptions {
   double duration_s = 0.0;  ///< 0: scenario default (offline) / until SIGINT (real time)
   std::string scenario = "sine";
   std::string output;
-  int joint = 0;  ///< joint index: 0 = Joint1 (gripper), 1 = Joint2
+  int joint = 0;  ///< 0-based joint index: 0 = joint1 (the gripper), 1 = joint2
   bool exact_derivatives = false;
   bool truth_columns = false;
   std::uint64_t seed = 1;

@@ -60,7 +60,7 @@ Scenario make_scenario(std::string_view name) {
   if (name == "sine") {
     s.kind = ScenarioKind::kSine;
     s.description =
-        "0.8 rad sines (Joint1 0.5 Hz, Joint2 0.4 Hz) as in the paper's Fig. 2/8/9; "
+        "0.8 rad sines (joint1 0.5 Hz, joint2 0.4 Hz) as in the paper's Fig. 2/8/9; "
         "soft tissue at 0.6 rad, touched lightly at the top of each cycle";
     s.default_duration_s = 30.0;
     s.tissue = "soft";
