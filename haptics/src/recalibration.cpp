@@ -194,42 +194,34 @@ void Recalibration::identify_joint(int joint, CalibrationReason& why, Calibratio
   }
   if (level_mode_[j]) {
     fit_level_scale(joint, fig);
-    const auto plausible = [&](double k) {
-      return k >= config_.min_scale && k <= config_.max_scale;
-    };
-    if (!plausible(fig.scale_positive) || !plausible(fig.scale_negative)) {
-      why = CalibrationReason::kImplausible;
+  } else {
+    // tau_in = k R F over the sliding samples (free motion: the distal torque
+    // is the joint's small inertia/damping torque, taken as zero).
+    double sff = 0.0, stf = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (std::fabs(xd[i]) <= kSlidingSpeed) continue;
+      sff += b[i].f_raw * b[i].f_raw;
+      stf += b[i].tau_in * b[i].f_raw;
+    }
+    if (!(sff > 0.0)) {
+      why = CalibrationReason::kMotionTooSmall;
       return;
     }
-    if (!(fig.rms_new <= (1.0 - config_.min_improvement) * fig.rms_old)) {
-      why = CalibrationReason::kNotBetter;
-      return;
+    fig.scale = fig.scale_positive = fig.scale_negative = fig.scale_common = stf / sff;
+    double ss_old = 0.0, ss_new = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double e_old = b[i].tau_in - scale_at_collect_[j][0] * b[i].f_raw;
+      const double e_new = b[i].tau_in - fig.scale * b[i].f_raw;
+      ss_old += e_old * e_old, ss_new += e_new * e_new;
     }
-    why = CalibrationReason::kNone;
-    return;
+    fig.rms_old = std::sqrt(ss_old / static_cast<double>(n));
+    fig.rms_new = fig.rms_common = std::sqrt(ss_new / static_cast<double>(n));
   }
-  // tau_in = k R F over the sliding samples (free motion: the distal torque
-  // is the joint's small inertia/damping torque, taken as zero).
-  double sff = 0.0, stf = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (std::fabs(xd[i]) <= kSlidingSpeed) continue;
-    sff += b[i].f_raw * b[i].f_raw;
-    stf += b[i].tau_in * b[i].f_raw;
-  }
-  if (!(sff > 0.0)) {
-    why = CalibrationReason::kMotionTooSmall;
-    return;
-  }
-  fig.scale = fig.scale_positive = fig.scale_negative = fig.scale_common = stf / sff;
-  double ss_old = 0.0, ss_new = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double e_old = b[i].tau_in - scale_at_collect_[j][0] * b[i].f_raw;
-    const double e_new = b[i].tau_in - fig.scale * b[i].f_raw;
-    ss_old += e_old * e_old, ss_new += e_new * e_new;
-  }
-  fig.rms_old = std::sqrt(ss_old / static_cast<double>(n));
-  fig.rms_new = fig.rms_common = std::sqrt(ss_new / static_cast<double>(n));
-  if (!(fig.scale >= config_.min_scale && fig.scale <= config_.max_scale)) {
+  // One verdict for both fits: each direction's scale within the plausible
+  // range (the output fit has one scale for both), then a large enough
+  // improvement of the residual.
+  const auto plausible = [&](double k) { return k >= config_.min_scale && k <= config_.max_scale; };
+  if (!plausible(fig.scale_positive) || !plausible(fig.scale_negative)) {
     why = CalibrationReason::kImplausible;
     return;
   }
