@@ -118,6 +118,15 @@ void run_set(const Set& set, const std::vector<std::string>& models, bool gap,
     std::string named;
     for (const auto& e : g.effects) {
       named += (named.empty() ? "" : "; ") + e.name + " (" + e.form + ", " + e.variable + ")";
+      if (e.form == "distributed_slip") {
+        // The element spread the workflow found.
+        std::map<std::string, double> p(e.parameters.begin(), e.parameters.end());
+        char spread[120];
+        std::snprintf(spread, sizeof spread, " %d elements, widths %.3g .. %.3g rad",
+                      static_cast<int>(p["distributed_slip.elements"]),
+                      p["distributed_slip.width_min"], p["distributed_slip.width_max"]);
+        named += spread;
+      }
       for (const auto& c : e.confounded_with)
         named += " confounded with " + c;
     }

@@ -2,6 +2,7 @@
 // equations) in every branch, including the boundaries xd = 0 and xdd = 0.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "estimator/tsm_model.hpp"
@@ -104,7 +105,9 @@ TEST(SlidingTerms, CatalogNamesAreStableAndUnique) {
                             "position_ripple",
                             "position_bump",
                             "load_saturating",
-                            "hysteresis_elements"};
+                            "hysteresis_elements",
+                            "load_scaling",
+                            "tension_scaling"};
   ASSERT_EQ(term_catalog().size(), std::size(expected));
   for (std::size_t i = 0; i < std::size(expected); ++i) {
     EXPECT_EQ(term_catalog()[i].name, expected[i]);
@@ -149,6 +152,54 @@ TEST(SlidingTerms, DriveIncludesReversalOffset) {
   EXPECT_DOUBLE_EQ(model.drive(1.0, -1), 0.8);
   EXPECT_DOUBLE_EQ(model.drive(0.0, +1), 0.2);
   EXPECT_DOUBLE_EQ(model.drive(0.0, 0), 0.0);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
+
+namespace tsmh::estimator {
+namespace {
+
+// The multiplicative forms scale the sum of the other terms by a factor of
+// physical quantities without the friction in them.
+TEST(ScalingTerms, LoadScalingMultipliesByTheDistalLoad) {
+  TsmModelSpec s = paper_spec();
+  s.add(TermKind::kLoadScaling).p = {0.05, 0.02, 0.01};
+  TsmFrictionModel model(s);
+  const TsmFrictionModel plain(paper_spec());
+  Motion m{.xd = 0.5, .xdd = 2.0, .acc_sign = 1.0};
+  // At rest the friction is 0: D = drive = 4 N.
+  m.drive = 4.0;
+  const double g = 1.0 + 0.05 * 4.0 + 0.02 * 4.0 + 0.01 * 0.0 * 4.0;
+  EXPECT_NEAR(model.sliding_level(m), plain.sliding_level(m) * g, 1e-12);
+  // Unknown drive: factor 1.
+  m.drive = std::nan("");
+  EXPECT_NEAR(model.sliding_level(m), plain.sliding_level(m), 1e-12);
+  // After steps the distal load is drive less the model's own friction, and
+  // k_along takes the friction's sign.
+  m.drive = 4.0;
+  for (int i = 0; i < 200; ++i)
+    model.step(m, 1e-3);
+  const double f = model.friction();
+  ASSERT_GT(f, 1.0);
+  const double d = 4.0 - f;
+  const double g2 = 1.0 + 0.05 * std::fabs(d) + 0.02 * d + 0.01 * d;
+  EXPECT_NEAR(model.sliding_level(m), plain.sliding_level(m) * g2, 1e-12);
+}
+
+TEST(ScalingTerms, TensionScalingAndItsBounds) {
+  TsmModelSpec s = paper_spec();
+  s.add(TermKind::kTensionScaling).p = {0.1, 20.0};
+  const TsmFrictionModel model(s);
+  const TsmFrictionModel plain(paper_spec());
+  Motion m{.xd = -0.5, .xdd = 2.0, .acc_sign = 1.0};
+  m.tension = 23.0;
+  EXPECT_NEAR(model.sliding_level(m), plain.sliding_level(m) * 1.3, 1e-12);
+  m.tension = -1000.0;  // the factor stays >= kMinScaling
+  EXPECT_NEAR(model.sliding_level(m), plain.sliding_level(m) * kMinScaling, 1e-12);
+  EXPECT_TRUE(std::find(s.fixed.begin(), s.fixed.end(), "tension_scaling.t_ref") != s.fixed.end());
+  EXPECT_EQ(term_family(TermKind::kLoadScaling), "load_dependent");
+  EXPECT_EQ(term_family(TermKind::kTensionScaling), "tension_dependent");
 }
 
 }  // namespace

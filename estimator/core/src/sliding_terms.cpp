@@ -1,5 +1,6 @@
 #include "estimator/sliding_terms.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace tsmh::estimator {
@@ -28,12 +29,18 @@ constexpr ParamSpec kTime[] = {{"drift", 0.0, -1.0, 1.0, "level/s"},
 
 constexpr ParamSpec kRipple[] = {{"a_sin", 0.0, -10.0, 10.0, "level"},
                                  {"a_cos", 0.0, -10.0, 10.0, "level"},
-                                 {"wavenumber", 6.0, 0.3, 60.0, "1/rad"}};
+                                 {"wavenumber", 6.0, 0.3, 500.0, "1/rad"}};
 constexpr ParamSpec kBump[] = {{"amp", 0.0, -10.0, 10.0, "level"},
                                {"center", 0.0, -100.0, 100.0, "rad"},
                                {"width", 0.1, 0.005, 10.0, "rad"}};
 constexpr ParamSpec kLoadSat[] = {{"c_sat", 0.0, -1.0, 5.0, "level/N"},
                                   {"l_sat", 10.0, 0.1, 1000.0, "N"}};
+
+constexpr ParamSpec kLoadScale[] = {{"k_abs", 0.0, -0.5, 0.5, "1/N"},
+                                    {"k_signed", 0.0, -0.5, 0.5, "1/N"},
+                                    {"k_along", 0.0, -0.5, 0.5, "1/N"}};
+constexpr ParamSpec kTensionScale[] = {{"k_t", 0.0, -0.5, 0.5, "1/N"},
+                                       {"t_ref", 20.0, -1e6, 1e6, "N", false}};
 
 constexpr ParamSpec kElements[] = {{"w2", 0.2, 0.0, 0.9, ""}, {"r2", 10.0, 0.05, 200.0, ""}};
 
@@ -77,6 +84,16 @@ constexpr TermInfo kCatalog[] = {
      "hysteresis with memory: a second element of eq. (4)'s state, share w2 at rate r2 theta; "
      "after a small reversal the friction returns along a stiffer path than one state allows",
      "after small reversals, around each reversal's transition", kElements},
+    {TermKind::kLoadScaling, "load_scaling",
+     "capstan effect on the distal load: the whole friction scales with the load the tendons "
+     "carry to the tip, Ff x (1 + k_abs |D| + k_signed D + k_along sgn(F) D), D = tau_out / R "
+     "(k_signed: sheaths bent unequally; k_along: the load raises the tension of the tendon "
+     "that pulls against the friction)",
+     "in contact, growing with the tip load", kLoadScale, "load_dependent"},
+    {TermKind::kTensionScaling, "tension_scaling",
+     "the whole friction scales with the tension the tendons carry, Ff x (1 + k_t (T - t_ref)), "
+     "T = (T1 + T3) / 2",
+     "where the mean tendon tension differs from its mean", kTensionScale, "tension_dependent"},
 };
 
 }  // namespace
@@ -134,8 +151,31 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept {
       return p[0] * p[1] * std::tanh(m.load / p[1]);
     case TermKind::kHysteresisElements:
       return 0.0;  // acts on the state, not on Ff
+    case TermKind::kLoadScaling:
+    case TermKind::kTensionScaling:
+      return 0.0;  // scales the sum (term_scaling)
   }
   return 0.0;
+}
+
+double term_scaling(const Term& term, const Motion& m, double friction) noexcept {
+  double g = 1.0;
+  switch (term.kind) {
+    case TermKind::kLoadScaling: {
+      const double distal = std::isfinite(m.distal) ? m.distal : m.drive - friction;
+      if (!std::isfinite(distal)) return 1.0;
+      g = 1.0 + term.p[0] * std::fabs(distal) + term.p[1] * distal +
+          term.p[2] * sign_of(friction) * distal;
+      break;
+    }
+    case TermKind::kTensionScaling:
+      if (!std::isfinite(m.tension)) return 1.0;
+      g = 1.0 + term.p[0] * (m.tension - term.p[1]);
+      break;
+    default:
+      return 1.0;
+  }
+  return std::clamp(g, kMinScaling, kMaxScaling);
 }
 
 double sum_of_term_levels(std::span<const Term> terms, const Motion& m, bool asymmetric) noexcept {

@@ -125,6 +125,8 @@ void TsmFrictionModel::refresh_cache() {
     shape2_.theta = spec_.theta * t.p[1];
   }
   asymmetric_ = spec_.has(TermKind::kDirectionAsymmetry);
+  scaling_ = std::any_of(spec_.terms.begin(), spec_.terms.end(),
+                         [](const Term& t) { return is_multiplicative(t.kind); });
   lambda_ = 0.0;
   for (const auto& t : spec_.terms) {
     if (t.kind == TermKind::kReversalOffset) lambda_ = t.p[0];
@@ -316,10 +318,18 @@ bool TsmFrictionModel::set_level_scales(double k_positive, double k_negative) no
 double TsmFrictionModel::sliding_level(const Motion& m) const noexcept {
   // The level scales are 1 unless a recalibration set them: x 1.0 is exact,
   // so the identified model's output is unchanged bit for bit.
-  if (!flat_.enabled)
-    return std::max(
-        level_scale(negative_branch(m.xd)) * sum_of_term_levels(spec_.terms, m, asymmetric_),
-        kMinSlidingLevel);
+  if (!flat_.enabled) {
+    double level = sum_of_term_levels(spec_.terms, m, asymmetric_);
+    if (scaling_) {
+      // Multiplicative terms read the distal load as drive less the
+      // friction before this step (one sample old: at 1 kHz the friction
+      // moves little in a step, and the level stays explicit).
+      const double f_before = friction();
+      for (const auto& t : spec_.terms)
+        if (is_multiplicative(t.kind)) level *= term_scaling(t, m, f_before);
+    }
+    return std::max(level_scale(negative_branch(m.xd)) * level, kMinSlidingLevel);
+  }
   const bool negative = negative_branch(m.xd);
   const double speed = std::fabs(m.xd);
   double level = negative ? flat_.rho_negative : flat_.rho_positive;

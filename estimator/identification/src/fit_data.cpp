@@ -140,6 +140,12 @@ FitData prepare_fit_data(const Recording& rec, const SplitConfig& split,
                         "); identification needs the joint moved back and forth");
   }
   d.measured = rec.measured_friction();
+  // The distal load as measured (tau_in / R - F = tau_out / R): models that
+  // read it are fitted on it, not on drive less their own friction.
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    Motion& m = d.motion[i];
+    if (std::isfinite(m.drive) && std::isfinite(d.measured[i])) m.distal = m.drive - d.measured[i];
+  }
 
   // Blocks: at least 3 per set after the warm-up.
   const double t0 = rec.t.front() + split.warmup_s;

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "estimator/separable_fit.hpp"
 #include "estimator/simulate.hpp"
 #include "number_text.hpp"
 #include "realtime/quantile.hpp"
@@ -44,6 +45,8 @@ std::vector<std::size_t> amplitude_params(TermKind kind) {
       return {0, 1};  // sine and cosine amplitudes (at the scanned wavenumber)
     case TermKind::kAccelerationDependence:
       return {0, 2};  // mu2, mu3
+    case TermKind::kLoadScaling:
+      return {0, 1, 2};  // k_abs, k_signed, k_along
     default:
       return {0};
   }
@@ -59,7 +62,46 @@ double coulomb_level(const TsmModelSpec& s) {
 // Adds `kind` with no effect yet: amplitudes 0 (rho2 = rho1, so the negative
 // branch keeps its level), shapes at their defaults, the drift's time origin
 // at the start of the record and the step after its end.
-TsmModelSpec with_neutral_term(TsmModelSpec spec, TermKind kind, double t_start, double t_end) {
+double mean_tension(const FitData& d) {
+  double sum = 0.0, n = 0.0;
+  for (const auto& m : d.motion)
+    if (std::isfinite(m.tension)) sum += m.tension, n += 1.0;
+  return n > 0.0 ? sum / n : 0.0;
+}
+
+// Whether the data carries what a candidate reads: the multiplicative forms
+// need the drive (distal load) or the tendon tensions.
+bool data_has_variable(const FitData& d, TermKind kind) {
+  const auto any = [&](auto get) {
+    return std::any_of(d.motion.begin(), d.motion.end(),
+                       [&](const Motion& m) { return std::isfinite(get(m)); });
+  };
+  if (kind == TermKind::kLoadScaling) return any([](const Motion& m) { return m.drive; });
+  if (kind == TermKind::kTensionScaling) return any([](const Motion& m) { return m.tension; });
+  return true;
+}
+
+// Whether a candidate is tried on this data. The forms on |tau_in| / R
+// (load_dependent, load_saturating) only where the distal load is unknown,
+// or when asked for by name: |tau_in| / R contains the friction itself (in
+// free motion it is the friction), so they imitate any effect that makes
+// the friction larger, viscous drag first; load_scaling reads the distal
+// load instead.
+bool offered(const FitData& d, TermKind kind, const GapOptions& o) {
+  if (!data_has_variable(d, kind)) return false;
+  // A scaling whose quantity does not vary in the data cannot be told from
+  // a level (the same gate as the distributed slip's copies).
+  const CopiesInData varies = copies_in_data(d);
+  if (kind == TermKind::kLoadScaling && !varies.load) return false;
+  if (kind == TermKind::kTensionScaling && !varies.tension) return false;
+  const bool on_tau_in = kind == TermKind::kLoadDependent || kind == TermKind::kLoadSaturating;
+  if (!on_tau_in || data_has_variable(d, TermKind::kLoadScaling) == false) return true;
+  return std::any_of(o.candidates.begin(), o.candidates.end(),
+                     [&](const std::string& c) { return c == term_info(kind).name; });
+}
+
+TsmModelSpec with_neutral_term(TsmModelSpec spec, TermKind kind, const FitData& d) {
+  const double t_start = d.motion.front().t, t_end = d.motion.back().t;
   const double rho1 = coulomb_level(spec);
   Term& t = spec.add(kind);
   for (std::size_t k : amplitude_params(kind))
@@ -69,6 +111,7 @@ TsmModelSpec with_neutral_term(TsmModelSpec spec, TermKind kind, double t_start,
     t.p[2] = t_end + 1.0;  // t_step: no step inside the record
     t.p[3] = t_start;      // t0
   }
+  if (kind == TermKind::kTensionScaling) t.p[1] = mean_tension(d);  // t_ref
   return spec;
 }
 
@@ -199,9 +242,11 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
       break;
     }
     case TermKind::kPositionRipple: {
-      // 1 to 12 periods over the stroke, each searched within +-15 %.
+      // Periods over the stroke, each searched within +-15 %.
       min_separation = 1.5 * 2.0 * std::numbers::pi / span;
-      for (int j = 1; j <= 12; ++j) {
+      // 1 to 12 periods, then up to 40 by twos: a short-period ripple (a
+      // sheath's winding, a gear's teeth) is as plausible as a long one.
+      for (int j = 1; j <= 40; j += j < 12 ? 1 : 2) {
         const double k = 2.0 * std::numbers::pi * j / span;
         out.push_back({{{2, k}}, {{qualified(kind, 2), 0.85 * k, 1.15 * k}}, k});
       }
@@ -239,9 +284,8 @@ std::vector<Shape> shapes_to_scan(const FitData& d, TermKind kind, double& min_s
 Prepared prepare_candidate(const FitData& d, const TsmFrictionModel& current,
                            std::span<const double> f_cur, std::span<const double> residual,
                            TermKind kind) {
-  const double t0 = d.motion.front().t, t1 = d.motion.back().t;
   Prepared p{kind, 0.0, {}};
-  const TsmFrictionModel neutral(with_neutral_term(current.spec(), kind, t0, t1));
+  const TsmFrictionModel neutral(with_neutral_term(current.spec(), kind, d));
   const auto params = neutral.parameters();
   std::vector<std::size_t> amp;
   for (std::size_t k : amplitude_params(kind))
@@ -329,7 +373,8 @@ std::vector<TermKind> candidate_kinds(const GapOptions& o) {
   }
   for (const auto& name : o.candidates) {
     // A family name (position_dependent, load_dependent) brings all its forms.
-    bool found = false;
+    // The structural candidates are chosen in each round (structural_candidates).
+    bool found = name == "distributed_slip" || name == "load_copies" || name == "tension_copies";
     for (const auto& info : term_catalog()) {
       if (info.name == name || term_family(info.kind) == name) {
         if (std::find(out.begin(), out.end(), info.kind) == out.end()) out.push_back(info.kind);
@@ -339,11 +384,6 @@ std::vector<TermKind> candidate_kinds(const GapOptions& o) {
     if (!found) throw std::invalid_argument("unknown candidate effect '" + name + "'");
   }
   return out;
-}
-
-bool has_family(const TsmModelSpec& spec, TermKind kind) {
-  return std::any_of(spec.terms.begin(), spec.terms.end(),
-                     [&](const Term& t) { return term_family(t.kind) == term_family(kind); });
 }
 
 // The experiment that tells two effects apart: vary one's variable while
@@ -364,6 +404,10 @@ std::string separating_experiment(const std::string& a, const std::string& b) {
   if (pair("viscous", "position_dependent"))
     return "fast and slow motion over the same part of the stroke";
   if (pair("viscous", "time_varying")) return "the same speeds early and late in the recording";
+  if (pair("load_dependent", "tension_dependent"))
+    return "the same tip loads at two pretensions (retension the tendons between two runs)";
+  if (pair("distributed_slip", "hysteresis_elements"))
+    return "reversals of many sizes, from a few mrad to the whole stroke";
   return "a recording in which the variables of " + a + " and " + b + " vary independently";
 }
 
@@ -372,6 +416,7 @@ const char* variable_of(std::string_view family) {
   if (family == "position_dependent") return "x";
   if (family == "load_dependent") return "load";
   if (family == "time_varying") return "t";
+  if (family == "tension_dependent") return "tension";
   return "speed";
 }
 
@@ -389,6 +434,8 @@ std::string group_of(TermKind kind) {
     case TermKind::kStribeck:
       return "speed";
     case TermKind::kLoadDependent:
+    case TermKind::kLoadScaling:
+    case TermKind::kTensionScaling:
       return "load";
     case TermKind::kPositionDependent:
       return "position";
@@ -429,6 +476,10 @@ std::string where_it_fell(const std::vector<RegimeError>& before,
   return text;
 }
 
+CandidateTrial score_trial(const FitData& d, std::span<const double> f_cur,
+                           const ErrorMetrics& gap_cur, double noise, const FitResult& fit,
+                           const GapOptions& o);
+
 // Refits a prepared candidate locally: each variant (the current model with
 // the term added at one scanned shape); the best train fit counts. Scores the
 // validation gap against `gap_cur`: the relative gain, and the significance
@@ -454,15 +505,27 @@ CandidateTrial refit_candidate(const FitData& d, std::span<const double> f_cur,
     fo.bounds = var.bounds;
     fo.coarse_local_evaluations = o.refit_coarse_evaluations;
     fo.local_evaluations = o.refit_evaluations;
+    fo.slip_copies_from_data = false;
     FitResult r = identify(TsmFrictionModel(var.seeded), d, fo);
     evaluations += r.evaluations;
     if (!best || r.train_rmse < best->train_rmse) best = std::move(r);
   }
-  const FitResult& fit = *best;
-  CandidateTrial t;
+  CandidateTrial t = score_trial(d, f_cur, gap_cur, noise, *best, o);
   t.name = std::string(term_info(p.kind).name);
   t.family = std::string(term_family(p.kind));
   t.explained = p.explained;
+  t.evaluations = evaluations;
+  return t;
+}
+
+// The validation gain of a refitted candidate against `gap_cur`: the
+// relative gain, and the significance of the drop in squared error (z over
+// the correlation time; the share of the MSE above the noise floor it
+// removes). BIC is left to the caller.
+CandidateTrial score_trial(const FitData& d, std::span<const double> f_cur,
+                           const ErrorMetrics& gap_cur, double noise, const FitResult& fit,
+                           const GapOptions& o) {
+  CandidateTrial t;
   t.validation = error_metrics(d, fit.simulated, SampleRole::kValidation);
   t.train_mse = fit.train_rmse * fit.train_rmse;
   t.free_parameters = free_count(*fit.model);
@@ -487,7 +550,116 @@ CandidateTrial refit_candidate(const FitData& d, std::span<const double> f_cur,
   t.qualifies = t.gain > 0.0 &&
                 (t.gain >= o.margin || (t.z >= o.min_z && t.excess_share >= o.min_excess_share));
   t.values = fit.values;
-  t.evaluations = evaluations;
+  t.fitted = dynamic_cast<const TsmFrictionModel&>(*fit.model).spec();
+  return t;
+}
+
+// Structural candidates: effects that change the model's structure rather
+// than add a level term. distributed_slip adds a family of elasto-slide
+// elements (distributed_slip.hpp) beside the current hysteresis; on a model
+// with distributed slip, the load and tension dependences are its copies:
+// every basis function scaled by the distal load or the mean tension
+// (per element multiplicative, the capstan form), identified exactly.
+enum class Structural { kDistributedSlip, kLoadCopies, kTensionCopies };
+
+const char* structural_name(Structural s) {
+  switch (s) {
+    case Structural::kDistributedSlip:
+      return "distributed_slip";
+    case Structural::kLoadCopies:
+      return "load_copies";
+    case Structural::kTensionCopies:
+      return "tension_copies";
+  }
+  return "";
+}
+
+const char* structural_family(Structural s) {
+  switch (s) {
+    case Structural::kDistributedSlip:
+      return "distributed_slip";
+    case Structural::kLoadCopies:
+      return "load_dependent";
+    case Structural::kTensionCopies:
+      return "tension_dependent";
+  }
+  return "";
+}
+
+std::optional<Structural> structural_from_name(const std::string& name) {
+  for (Structural s :
+       {Structural::kDistributedSlip, Structural::kLoadCopies, Structural::kTensionCopies})
+    if (name == structural_name(s)) return s;
+  return std::nullopt;
+}
+
+// The families the model already has, level terms and structure.
+bool family_present(const TsmModelSpec& spec, std::string_view family) {
+  if (family == "distributed_slip" && spec.slip.enabled) return true;
+  if (family == "load_dependent" && spec.slip.enabled && spec.slip.load_copies) return true;
+  if (family == "tension_dependent" && spec.slip.enabled && spec.slip.tension_copies) return true;
+  return std::any_of(spec.terms.begin(), spec.terms.end(),
+                     [&](const Term& t) { return term_family(t.kind) == family; });
+}
+
+// The structural candidates the current model and the data allow.
+std::vector<Structural> structural_candidates(const TsmModelSpec& spec, const FitData& d,
+                                              const GapOptions& o) {
+  const auto wanted = [&](Structural s) {
+    if (o.candidates.empty()) return true;
+    return std::any_of(o.candidates.begin(), o.candidates.end(), [&](const std::string& c) {
+      return c == structural_name(s) || c == structural_family(s);
+    });
+  };
+  std::vector<Structural> out;
+  const CopiesInData copies = copies_in_data(d);
+  if (!spec.slip.enabled) {
+    if (wanted(Structural::kDistributedSlip)) out.push_back(Structural::kDistributedSlip);
+    return out;
+  }
+  if (copies.load && !family_present(spec, "load_dependent") && wanted(Structural::kLoadCopies))
+    out.push_back(Structural::kLoadCopies);
+  if (copies.tension && !family_present(spec, "tension_dependent") &&
+      wanted(Structural::kTensionCopies))
+    out.push_back(Structural::kTensionCopies);
+  return out;
+}
+
+// The structural candidate added to `current` and identified: the linear
+// block exactly, the elements' spread by grid and BOBYQA, their number by
+// BIC (separable_fit.hpp); the current model's own parameters from where
+// they are.
+CandidateTrial refit_structural(const FitData& d, const TsmFrictionModel& current,
+                                std::span<const double> f_cur, const ErrorMetrics& gap_cur,
+                                double noise, Structural which, const GapOptions& o,
+                                std::uint64_t seed) {
+  TsmModelSpec spec = current.spec();
+  FitOptions fo = o.base_fit;
+  fo.progress = nullptr;
+  fo.seed = seed;
+  fo.threads = 1;
+  fo.slip_copies_from_data = false;
+  fo.global_stage = false;
+  switch (which) {
+    case Structural::kDistributedSlip:
+      spec.slip = default_distributed_slip();
+      fo.global_stage = true;  // the spread and the element count are searched
+      break;
+    case Structural::kLoadCopies:
+      spec.slip.load_copies = true;
+      spec.slip.load_weight = {};
+      break;
+    case Structural::kTensionCopies:
+      spec.slip.tension_copies = true;
+      spec.slip.tension_weight = {};
+      spec.slip.tension_ref = std::round(mean_tension(d) * 10.0) / 10.0;
+      break;
+  }
+  const FitResult fit = identify(TsmFrictionModel(spec), d, fo);
+  CandidateTrial t = score_trial(d, f_cur, gap_cur, noise, fit, o);
+  t.name = structural_name(which);
+  t.family = structural_family(which);
+  t.evaluations = fit.evaluations;
   return t;
 }
 
@@ -512,6 +684,7 @@ void fit_base(GapResult& g, const FrictionModel& base, const GapOptions& o, cons
   auto start = base.clone();
   adapt_scale_to_data(*start, g.data);
   FitOptions bo = o.base_fit;
+  bo.slip_copies_from_data = false;  // the copies are effects the rounds name
   if (!bo.progress) {
     bo.progress = [&](const FitProgress& p) {
       say("base fit: " + std::string(p.stage) + ", " + std::to_string(p.evaluations) +
@@ -530,16 +703,21 @@ void fit_base(GapResult& g, const FrictionModel& base, const GapOptions& o, cons
 // yet in the model.
 std::string stop_before_round(const GapResult& g, const GapState& cur,
                               const std::vector<TermKind>& kinds, const GapOptions& o,
-                              std::vector<TermKind>& todo) {
+                              std::vector<TermKind>& todo, std::vector<Structural>& structural) {
   if (static_cast<int>(g.effects.size()) >= o.max_effects)
     return "reached the maximum of " + std::to_string(o.max_effects) + " effects";
   if (cur.gap.rmse <= o.noise_stop * g.noise)
     return "the gap (" + num(cur.gap.rmse) + " N) is at the measurement-noise floor (" +
            num(g.noise) + " N)";
+  const TsmModelSpec& spec = cur.model->spec();
   for (TermKind k : kinds) {
-    if (!cur.model->spec().has(k) && !has_family(cur.model->spec(), k)) todo.push_back(k);
+    // Level terms need a Bouc-Wen part to add to.
+    if (!spec.terms.empty() && !spec.has(k) && !family_present(spec, term_family(k)) &&
+        offered(g.data, k, o))
+      todo.push_back(k);
   }
-  if (todo.empty()) return "every candidate is already in the model";
+  structural = structural_candidates(spec, g.data, o);
+  if (todo.empty() && structural.empty()) return "every candidate is already in the model";
   return {};
 }
 
@@ -547,7 +725,8 @@ std::string stop_before_round(const GapResult& g, const GapState& cur,
 // pool of worker threads; the trials sorted best gain first (ties to catalog
 // order, so the choice is deterministic).
 void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& todo,
-                const GapOptions& o, const Say& say, Clock::time_point t_start, GapRound& round) {
+                const std::vector<Structural>& structural, const GapOptions& o, const Say& say,
+                Clock::time_point t_start, GapRound& round) {
   const FitData& d = g.data;
   const auto residual = residual_of(d, cur.f);
   const auto train_w = d.weights(SampleRole::kTrain);
@@ -561,15 +740,32 @@ void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& 
       static_cast<double>(d.count(SampleRole::kTrain)) / correlation_time(train_resid);
   const double bic_cur = bic(mse_cur, n_eff, free_count(*cur.model));
 
-  round.trials.resize(todo.size());
-  std::vector<std::exception_ptr> errors(todo.size());
+  // The structural candidates first: distributed slip's refit is the
+  // longest, so the pool starts it first.
+  const std::size_t total = structural.size() + todo.size();
+  round.trials.resize(total);
+  std::vector<std::exception_ptr> errors(total);
   std::atomic<std::size_t> next{0};
   std::atomic<std::size_t> done{0};
   const auto work = [&] {
-    for (std::size_t c = next.fetch_add(1); c < todo.size(); c = next.fetch_add(1)) {
+    for (std::size_t ci = next.fetch_add(1); ci < total; ci = next.fetch_add(1)) {
+      if (ci < structural.size()) {
+        try {
+          CandidateTrial& t = round.trials[ci];
+          t = refit_structural(d, *cur.model, cur.f, cur.gap, g.noise, structural[ci], o,
+                               o.base_fit.seed + 53 * (ci + 1));
+          t.bic = bic(t.train_mse, n_eff, t.free_parameters);
+          t.delta_bic = t.bic - bic_cur;
+        } catch (...) {
+          errors[ci] = std::current_exception();
+        }
+        done.fetch_add(1);
+        continue;
+      }
+      const std::size_t c = ci - structural.size();
       try {
         const Prepared p = prepare_candidate(d, *cur.model, cur.f, residual, todo[c]);
-        CandidateTrial& t = round.trials[c];
+        CandidateTrial& t = round.trials[ci];
         if (p.explained < o.min_explained) {
           // Its regressors explain next to nothing of the residual: a
           // refit cannot shrink the gap (saves most of a null round).
@@ -586,7 +782,7 @@ void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& 
           t.delta_bic = t.bic - bic_cur;
         }
       } catch (...) {
-        errors[c] = std::current_exception();
+        errors[ci] = std::current_exception();
       }
       done.fetch_add(1);
     }
@@ -594,12 +790,12 @@ void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& 
   const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
   const int threads = o.threads > 0 ? o.threads : hw;
   std::vector<std::thread> pool;
-  for (int w = 0; w < std::min<int>(threads, static_cast<int>(todo.size())); ++w)
+  for (int w = 0; w < std::min<int>(threads, static_cast<int>(total)); ++w)
     pool.emplace_back(work);
-  while (done.load() < todo.size()) {
+  while (done.load() < total) {
     std::this_thread::sleep_for(std::chrono::milliseconds(250));
     say("round " + std::to_string(g.rounds.size() + 1) + ": " + std::to_string(done.load()) + "/" +
-        std::to_string(todo.size()) + " candidates refitted, " +
+        std::to_string(total) + " candidates refitted, " +
         num(std::chrono::duration<double>(Clock::now() - t_start).count(), 3) + " s");
   }
   for (auto& t : pool)
@@ -616,10 +812,10 @@ void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& 
 // Rivals: other effects that qualified nearly as well as the winner. Would
 // the winner still add after the rival? If not, this data cannot tell them
 // apart (decided after the last round: find_confounds).
-void check_rivals(GapResult& g, const GapState& cur, const CandidateTrial& win, const GapOptions& o,
-                  const Say& say, GapRound& round) {
+void check_rivals(GapResult& g, const CandidateTrial& win, const GapOptions& o, const Say& say,
+                  GapRound& round) {
   const FitData& d = g.data;
-  const TermKind kind = *term_kind_from_name(win.name);
+  const std::optional<TermKind> kind = term_kind_from_name(win.name);
   std::map<std::string, const CandidateTrial*> rivals;
   for (const auto& t : round.trials) {
     if (t.family == win.family || !t.qualifies || t.gain < o.confound_ratio * win.gain) continue;
@@ -627,14 +823,19 @@ void check_rivals(GapResult& g, const GapState& cur, const CandidateTrial& win, 
   }
   for (const auto& [family, r] : rivals) {
     say("checking whether " + win.family + " still adds after " + family);
-    TsmFrictionModel with_rival(with_neutral_term(cur.model->spec(), *term_kind_from_name(r->name),
-                                                  d.motion.front().t, d.motion.back().t));
-    with_rival.set_values(r->values);
+    TsmFrictionModel with_rival(r->fitted);
     const auto f_r = simulate_friction(with_rival, d.motion);
     const auto gap_r = error_metrics(d, f_r, SampleRole::kValidation);
-    const Prepared pw = prepare_candidate(d, with_rival, f_r, residual_of(d, f_r), kind);
-    const CandidateTrial back =
-        refit_candidate(d, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
+    CandidateTrial back;
+    if (kind) {
+      const Prepared pw = prepare_candidate(d, with_rival, f_r, residual_of(d, f_r), *kind);
+      back = refit_candidate(d, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
+    } else if (win.name == "distributed_slip" && with_rival.spec().slip.enabled) {
+      continue;  // the rival is a copy of distributed slip: nothing to add it to
+    } else {
+      back = refit_structural(d, with_rival, f_r, gap_r, g.noise, *structural_from_name(win.name),
+                              o, o.base_fit.seed + 977);
+    }
     g.evaluations += back.evaluations;
     round.rivals.push_back({family, r->gain, back.gain, back.qualifies});
   }
@@ -655,6 +856,7 @@ void polish(GapResult& g, TsmFrictionModel& model, const CandidateTrial& win, co
   ro.progress = nullptr;
   ro.global_stage = false;
   ro.starts = 1;
+  ro.slip_copies_from_data = false;
   for (const auto& p : model.parameters()) {
     if (p.unit == "s" && !p.fixed) ro.bounds.push_back({p.name, p.value - 0.01, p.value + 0.01});
   }
@@ -674,11 +876,20 @@ void describe_shape(const FitData& d, const TsmFrictionModel& model, TermKind ki
   const auto& spec = model.spec();
   const bool asym = spec.has(TermKind::kDirectionAsymmetry);
   e.variable = variable_of(term_family(kind));
+  if (kind == TermKind::kLoadScaling) e.variable = "distal_load";
   for (const auto& t : spec.terms) {
     if (t.kind != kind) continue;
     const std::size_t stride = std::max<std::size_t>(1, d.size() / 400);
     for (std::size_t i = 0; i < d.size(); i += stride) {
       const Motion& m = d.motion[i];
+      if (is_multiplicative(kind)) {
+        // The friction it adds: the other terms' level times (g - 1), with
+        // the distal load taken from the measured friction.
+        const double g = term_scaling(t, m, d.measured[i]);
+        const double v = kind == TermKind::kLoadScaling ? m.distal : m.tension;
+        e.shape.push_back({v, spec.gamma * sum_of_term_levels(spec.terms, m, asym) * (g - 1.0)});
+        continue;
+      }
       const double v = e.variable == std::string("x")      ? m.x
                        : e.variable == std::string("load") ? m.load
                        : e.variable == std::string("t")    ? m.t
@@ -689,18 +900,89 @@ void describe_shape(const FitData& d, const TsmFrictionModel& model, TermKind ki
   std::sort(e.shape.begin(), e.shape.end());
 }
 
+// A structural effect for people: what it is, and what the data chose
+// (the elements' number and spread, the copies' sizes).
+EffectFound describe_structural(const TsmFrictionModel& model, Structural which) {
+  const DistributedSlipSpec& s = model.spec().slip;
+  EffectFound e;
+  e.name = structural_family(which);
+  e.form = structural_name(which);
+  const auto add = [&](const std::string& name, double v) { e.parameters.push_back({name, v}); };
+  switch (which) {
+    case Structural::kDistributedSlip: {
+      e.variable = "element_width";
+      e.meaning =
+          "distributed slip: slip spreads along the sheath, segment after segment, so the "
+          "transition after a reversal is the sum of many elasto-slide elements (break "
+          "displacements from stiff to compliant) instead of one hysteresis state";
+      double total = 0.0;
+      for (int i = 0; i < s.elements; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        e.shape.push_back({s.width(k), s.weight[k]});
+        total += s.weight[k];
+      }
+      e.where = "after each reversal, in the transition from sticking to sliding; the data chose " +
+                std::to_string(s.elements) + " elements with widths " + num(s.width_min, 3) +
+                " .. " + num(s.width_max, 3) + " rad (break forces " + num(total, 3) + " N in all)";
+      add("distributed_slip.elements", s.elements);
+      add("distributed_slip.width_min", s.width_min);
+      add("distributed_slip.width_max", s.width_max);
+      add("distributed_slip.smoothing", s.smoothing);
+      break;
+    }
+    case Structural::kLoadCopies:
+    case Structural::kTensionCopies: {
+      const bool load = which == Structural::kLoadCopies;
+      const auto& w = load ? s.load_weight : s.tension_weight;
+      e.variable = load ? "distal_load" : "tension";
+      e.meaning = load ? "capstan effect on the distal load: every slip element's break force and "
+                         "the sliding friction scale with the load the tendons carry to the tip, "
+                         "D = tau_out / R"
+                       : "the friction scales with the tension the tendons carry: every slip "
+                         "element and the sliding friction scale with (T1 + T3) / 2";
+      double sum = 0.0, base = 0.0;
+      for (std::size_t k = 0; k < s.basis_count(); ++k) {
+        const std::size_t i = s.basis_index(k);
+        if (i < kSlidingIndex + 3) sum += w[i], base += s.weight[i];
+      }
+      // The relative growth of the break forces and Coulomb levels per N.
+      const double per_n = base > 0.0 ? sum / base : 0.0;
+      e.where = std::string(load ? "in contact, growing with the tip load"
+                                 : "where the mean tendon tension changes") +
+                "; the friction grows by " + num(100.0 * per_n, 3) + " % per N" +
+                (load ? "" : " (reference " + num(s.tension_ref, 3) + " N)");
+      add(load ? "distributed_slip.load_growth_per_N" : "distributed_slip.tension_growth_per_N",
+          per_n);
+      break;
+    }
+  }
+  return e;
+}
+
 // The winner joins the model: polished, described, and the new current state.
 void accept_effect(GapResult& g, GapState& cur, const CandidateTrial& win, const GapOptions& o,
                    const Say& say) {
   const FitData& d = g.data;
-  const TermKind kind = *term_kind_from_name(win.name);
-  auto next_model = std::make_unique<TsmFrictionModel>(
-      with_neutral_term(cur.model->spec(), kind, d.motion.front().t, d.motion.back().t));
-  next_model->set_values(win.values);
+  auto next_model = std::make_unique<TsmFrictionModel>(win.fitted);
   std::vector<double> f = simulate_friction(*next_model, d.motion);
   ErrorMetrics gap_after = win.validation;
-  if (o.reidentify) polish(g, *next_model, win, o, say, f, gap_after);
+  // A structural candidate's fit was already global in what it added.
+  const std::optional<TermKind> term = term_kind_from_name(win.name);
+  if (o.reidentify && term) polish(g, *next_model, win, o, say, f, gap_after);
   auto regimes_after = regime_errors(d, f, SampleRole::kValidation);
+  if (!term) {
+    EffectFound e = describe_structural(*next_model, *structural_from_name(win.name));
+    const std::string fell = where_it_fell(cur.regimes, regimes_after);
+    if (!fell.empty()) e.where += "; residual fell most at " + fell;
+    e.gap_after = gap_after;
+    e.gain = 1.0 - gap_after.rmse / cur.gap.rmse;
+    g.effects.push_back(std::move(e));
+    say("found " + win.name + ": validation RMSE " + num(cur.gap.rmse) + " -> " +
+        num(gap_after.rmse) + " N");
+    cur = {std::move(next_model), std::move(f), gap_after, std::move(regimes_after)};
+    return;
+  }
+  const TermKind kind = *term;
 
   EffectFound e;
   e.name = std::string(term_family(kind));
@@ -795,7 +1077,7 @@ ResidualDiagnostics diagnose_residual(const FitData& d, const TsmFrictionModel& 
   }
   diag.white = diag.correlation_time < 2.0;
   for (TermKind kind : candidates) {
-    if (model.spec().has(kind)) continue;
+    if (model.spec().has(kind) || !data_has_variable(d, kind)) continue;
     const Prepared p = prepare_candidate(d, model, simulated, r, kind);
     diag.regressors.push_back({std::string(term_info(kind).name), p.explained});
   }
@@ -840,9 +1122,10 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     GapRound round;
     round.before = cur.gap;
     std::vector<TermKind> todo;
-    g.stop_reason = stop_before_round(g, cur, kinds, o, todo);
+    std::vector<Structural> structural;
+    g.stop_reason = stop_before_round(g, cur, kinds, o, todo, structural);
     if (!g.stop_reason.empty()) break;
-    run_trials(g, cur, todo, o, say, t_start, round);
+    run_trials(g, cur, todo, structural, o, say, t_start, round);
     if (!round.trials.front().qualifies) {
       const auto& best = round.trials.front();
       g.stop_reason =
@@ -855,7 +1138,7 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     round.accepted = 0;
     CandidateTrial& win = round.trials.front();
     win.accepted = true;
-    check_rivals(g, cur, win, o, say, round);
+    check_rivals(g, win, o, say, round);
     accept_effect(g, cur, win, o, say);
     g.rounds.push_back(std::move(round));
   }

@@ -344,7 +344,12 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
   TsmModelSpec start = tsm->spec();
   FitResult r;
   // The copies the data can determine are solved; the others keep their values.
-  const CopiesInData copies = copies_in_data(data);
+  CopiesInData copies = copies_in_data(data);
+  if (!o.slip_copies_from_data) {
+    // Only the copies the start already has, where the data can determine them.
+    copies.tension = copies.tension && start.slip.tension_copies;
+    copies.load = copies.load && start.slip.load_copies;
+  }
   if (copies.tension && !start.slip.tension_copies) {
     start.slip.tension_copies = true;
     start.slip.tension_ref = std::round(mean_tension(data) * 10.0) / 10.0;

@@ -274,6 +274,9 @@ SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& 
     m.acc_sign = sign_of(m.xdd);
     const double tau_out = c.load_offset + c.load_amplitude * e * l;
     m.load = std::fabs(tau_out + c.radius_m * f_prev) / c.radius_m;
+    // The signed drive tau_in / R, as a recording gives it: a model that
+    // reads the distal load takes it as drive less its own friction.
+    m.drive = (tau_out + c.radius_m * f_prev) / c.radius_m;
     return std::pair{m, tau_out};
   };
 

@@ -24,6 +24,12 @@ struct Motion {
   /// N, the mean of the two proximal tensions (T1 + T3) / 2, which the
   /// distributed-slip tension copies scale with; NaN: not measured.
   double tension = std::numeric_limits<double>::quiet_NaN();
+  /// N, the measured distal load tau_out / R, where a fit has it (a
+  /// calibration recording with a tip sensor); NaN online, where a model
+  /// that reads the distal load takes it as drive less its own friction. In a
+  /// fit the measured one keeps the model from reading its own error through
+  /// drive - F.
+  double distal = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// sgn with sgn(0) = 0, as in the paper.

@@ -42,6 +42,20 @@ enum class TermKind : std::uint8_t {
   /// Memory: after a small reversal the stiff element returns at once while
   /// the other keeps its state, as a capstan's stuck sheath segments do.
   kHysteresisElements,
+  // Multiplicative forms: they add nothing to the sum of the terms but scale
+  // it (Ff = (sum of the other terms) x g), so a friction that grows with
+  // the tension its tendon carries grows in proportion to itself, as a
+  // capstan's does. Both read physical quantities that do not contain the
+  // friction: the distal load and the mean proximal tension.
+  /// g = 1 + k_abs |D| + k_signed D + k_along sgn(F) D, D = tau_out / R the
+  /// distal load, which the model takes as drive - F (tau_in / R less its
+  /// own last friction F); k_signed: two sheaths bent unequally carry the
+  /// load's tension unequally; k_along: the load adds to the tension of the
+  /// tendon that pulls against the friction (family load_dependent).
+  kLoadScaling,
+  /// g = 1 + k_t (T - t_ref), T = (T1 + T3) / 2 the mean proximal tension,
+  /// t_ref its mean over the data (family tension_dependent).
+  kTensionScaling,
 };
 
 inline constexpr int kMaxTermParams = 5;
@@ -87,6 +101,20 @@ double term_level(const Term& term, const Motion& m, bool asymmetric) noexcept;
 /// The sum of the terms' contributions, in their order: Ff before the floor.
 /// The reference for TsmFrictionModel's flat evaluation of the paper's terms.
 double sum_of_term_levels(std::span<const Term> terms, const Motion& m, bool asymmetric) noexcept;
+
+/// True for the terms that scale the sum instead of adding to it.
+constexpr bool is_multiplicative(TermKind kind) {
+  return kind == TermKind::kLoadScaling || kind == TermKind::kTensionScaling;
+}
+
+/// The factor g of a multiplicative term at motion `m`, where `friction` is
+/// the model's friction before this step (the distal load is drive -
+/// friction); 1 when its quantity is unknown (NaN), and kept within
+/// [kMinScaling, kMaxScaling] so that a fitted slope cannot turn the level
+/// over or run it away outside the data. 1 for any other term.
+inline constexpr double kMinScaling = 0.1;
+inline constexpr double kMaxScaling = 10.0;
+double term_scaling(const Term& term, const Motion& m, double friction) noexcept;
 
 /// True when xd takes the negative-velocity branch (xd < 0; xd = 0 is positive).
 constexpr bool negative_branch(double xd) {

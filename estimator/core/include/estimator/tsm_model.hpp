@@ -152,6 +152,7 @@ class TsmFrictionModel final : public FrictionModel {
   double z1_ = 0.0, z2_ = 0.0;
   FlatLevel flat_;
   bool asymmetric_ = false;
+  bool scaling_ = false;  // a multiplicative term (load_scaling, tension_scaling) is present
   double level_scale_positive_ = 1.0, level_scale_negative_ = 1.0;
   double lambda_ = 0.0;
   double z_ = 0.0;

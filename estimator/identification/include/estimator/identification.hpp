@@ -54,6 +54,10 @@ struct FitOptions {
   /// false: local polish only, from the initial values (start 0) and from
   /// small perturbations of them (other starts): a warm refit.
   bool global_stage = true;
+  /// Distributed slip: solve the tension and load copies wherever the data
+  /// vary their quantities (separable_fit.hpp). tsm gap turns it off, to
+  /// add those effects one at a time and name them.
+  bool slip_copies_from_data = true;
   /// NLopt algorithm of the global stage, by NLopt's name (GN_CRS2_LM,
   /// GN_ESCH, GN_ISRES, G_MLSL_LDS, ...).
   std::string global_algorithm = "G_MLSL";

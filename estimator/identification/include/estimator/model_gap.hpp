@@ -40,7 +40,9 @@ namespace tsmh::estimator {
 
 struct GapOptions {
   FitOptions base_fit;  ///< the base model's global fit
-  /// Candidate term names; empty: every catalog term except coulomb.
+  /// Candidate term or effect names; empty: every catalog term except
+  /// coulomb, and the structural ones: distributed_slip (elasto-slide
+  /// elements), then on a model with it load_copies and tension_copies.
   std::vector<std::string> candidates;
   /// A candidate must shrink the validation RMSE by at least this fraction.
   double margin = 0.10;
@@ -115,6 +117,7 @@ struct CandidateTrial {
   bool qualifies = false;
   bool accepted = false;
   std::vector<double> values;  ///< fitted parameter values (parameters() order)
+  TsmModelSpec fitted;         ///< the refitted model (the current one with the effect)
   long evaluations = 0;
 };
 
