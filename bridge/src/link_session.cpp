@@ -28,7 +28,9 @@ void LinkSession::name(std::uint64_t peer) noexcept {
 
 void LinkSession::close() noexcept {
   closing_.store(true, std::memory_order_release);
-  signer_.set_peer_id(kSessionClosedPeer);
+  // A session that ended in FAULT does not say a clean goodbye: its peer
+  // must not take the next master as if nothing had happened.
+  if (state() != SessionState::kFault) signer_.set_peer_id(kSessionClosedPeer);
 }
 
 void LinkSession::bind(std::uint64_t peer, std::int64_t now_ns) noexcept {
@@ -54,11 +56,23 @@ SessionVerdict LinkSession::conflict(const AuthTrailer& t) noexcept {
     fault_sender_.store(t.sender_id, std::memory_order_release);
     fault_names_.store(t.peer_id, std::memory_order_release);
     peer_.store(0, std::memory_order_release);
-    // Name nobody: the former peer holds too (its session no longer names it).
-    name(0);
     state_.store(SessionState::kFault, std::memory_order_release);
+    // Tell it: the former peer's session ends in FAULT too, and so does any
+    // other that hears us (set even after close(): a fault is no goodbye).
+    signer_.set_peer_id(kSessionFaultPeer);
   }
   return SessionVerdict::kOtherSession;
+}
+
+void LinkSession::tick(std::int64_t now_ns) noexcept {
+  const SessionState s = state();
+  if (s == SessionState::kBound && options_.rearm && now_ns - peer_heard_ns_ > options_.timeout_ns)
+    reopen();  // the peer fell silent: a slave holds and serves the next master
+  if (state() == SessionState::kOpen && candidate_ != 0 &&
+      now_ns - candidate_ns_ > options_.timeout_ns) {
+    candidate_ = 0;
+    name(0);
+  }
 }
 
 SessionVerdict LinkSession::observe(const AuthTrailer& t, std::int64_t now_ns) noexcept {
@@ -78,6 +92,8 @@ SessionVerdict LinkSession::observe(const AuthTrailer& t, std::int64_t now_ns) n
     reopen();  // the peer fell silent: a slave holds and serves the next master
     s = state();
   }
+  // A session in FAULT (the peer's, or another's on this channel): FAULT here too.
+  if (names == kSessionFaultPeer) return conflict(t);
   // A goodbye from anyone but the bound peer binds, moves and ends nothing.
   if (names == kSessionClosedPeer && !(s == SessionState::kBound && from == peer()))
     return SessionVerdict::kEnded;

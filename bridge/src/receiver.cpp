@@ -4,6 +4,7 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
@@ -68,6 +69,9 @@ void Receiver::add(std::unique_ptr<InboxBase> inbox) {
   if (running()) throw std::logic_error("Receiver::subscribe after start(): " + inbox->channel());
   check_channel_name(inbox->channel());
   routes_.push_back(std::make_unique<Route>(Route{inbox.get(), verifier_.get()}));
+  if (LinkSession* s = inbox->session();
+      s != nullptr && std::find(sessions_.begin(), sessions_.end(), s) == sessions_.end())
+    sessions_.push_back(s);
   lcm::Subscription* sub = lcm_->subscribeFunction<Route*>(regex_escape(inbox->channel()),
                                                            &on_raw_message, routes_.back().get());
   if (sub == nullptr) throw BridgeError("Receiver: cannot subscribe to " + inbox->channel());
@@ -133,9 +137,16 @@ void Receiver::back_off() noexcept {
 
 void Receiver::run() noexcept {
   const int lcm_fd = lcm_fd_;
+  // Sessions need a look even when nothing arrives (a silent peer).
+  const int timeout_ms = sessions_.empty() ? -1 : 100;
   while (!stop_requested_.load(std::memory_order_relaxed)) {
     pollfd fds[2] = {{lcm_fd, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
-    const int ready = poll(fds, 2, -1);
+    const int ready = poll(fds, 2, timeout_ms);
+    if (!sessions_.empty()) {
+      const std::int64_t now = realtime::monotonic_now_ns();
+      for (LinkSession* s : sessions_)
+        s->tick(now);
+    }
     if (ready < 0) {
       if (errno != EINTR) back_off();
       continue;

@@ -23,8 +23,10 @@
 //                           [--duration S] [--key FILE | --insecure]
 // With the installation's link key (docs/bridge.md, "Authentication") every
 // MASTER_STATE carries a MAC and only MASTER_FORCE that verifies drives the
-// motors. Project code it uses: the bridge's link_auth.hpp and the message
-// decoder every receiver of ours uses (lcmtypes/message_decoder.hpp).
+// motors, from one server session at a time (bridge/link_session.hpp).
+// Project code it uses: the bridge's link_auth.hpp and link_session.hpp,
+// and the message decoder every receiver of ours uses
+// (lcmtypes/message_decoder.hpp).
 // Server side: device: {driver: lcm, settings: {channel_prefix: LEFT_}}
 
 #include <pthread.h>
@@ -52,6 +54,7 @@
 #include "bridge/link_security.hpp"
 #include "files/cli_numbers.hpp"
 #include "lcmtypes/message_decoder.hpp"
+#include "bridge/link_session.hpp"
 #include "master_devices/axis_mapping.hpp"
 #include "master_devices/vendor_master.hpp"
 #include "realtime/clock.hpp"
@@ -104,6 +107,10 @@ struct ForceInbox {
     std::snprintf(last_rejection.data(), last_rejection.size(), "%s", why);
   }
 
+  /// One server at a time (docs/bridge.md, "Sessions"); null when unauthenticated.
+  tsmh::bridge::LinkSession* session = nullptr;
+  std::int64_t other_session = 0;  // keyed forces of another server's session
+
   void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
     std::size_t size = rbuf->data_size;
@@ -113,6 +120,18 @@ struct ForceInbox {
       if (auth.verdict != tsmh::bridge::AuthVerdict::kOk) {
         ++unauthentic;  // no MAC, wrong key, stale or replayed
         return;
+      }
+      // Only the bound server's forces; a hello binds, another server ends it.
+      using tsmh::bridge::SessionVerdict;
+      switch (session->observe(auth.trailer, tsmh::realtime::monotonic_now_ns())) {
+        case SessionVerdict::kAccept:
+          break;
+        case SessionVerdict::kHandshake:
+        case SessionVerdict::kEnded:
+          return;
+        case SessionVerdict::kOtherSession:
+          ++other_session;
+          return;
       }
       size = auth.payload_size;
     }
@@ -263,9 +282,14 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "external-master-adapter: %s\n", security.notice.c_str());
   std::unique_ptr<tsmh::bridge::MessageSigner> signer;
   std::unique_ptr<tsmh::bridge::MessageVerifier> verifier;
+  std::unique_ptr<tsmh::bridge::LinkSession> session;
   if (security.key) {
     signer = std::make_unique<tsmh::bridge::MessageSigner>(security.key);
     verifier = std::make_unique<tsmh::bridge::MessageVerifier>(security.key);
+    // The next server is served after this one's goodbye or its silence for
+    // more than the session timeout (1 s); zero torque meanwhile.
+    session = std::make_unique<tsmh::bridge::LinkSession>(
+        *signer, tsmh::bridge::SessionOptions{.rearm = true});
   }
 
   lcm::LCM lcm(url);  // an empty URL honours LCM_DEFAULT_URL, as LCM's tools do
@@ -279,6 +303,7 @@ int main(int argc, char** argv) {
   }
   ForceInbox inbox(slave_joints);
   inbox.verifier = verifier.get();
+  inbox.session = session.get();
   lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_raw, &inbox);
   // ttl=0 means this host: LCM's socket listens on every interface, so
   // confine it (bridge/host_only.hpp), or refuse to run.
@@ -321,8 +346,9 @@ int main(int argc, char** argv) {
   std::int64_t seq = 0;
   std::int64_t watchdog_trips = 0;
   bool was_fresh = false;
+  bool session_over = false;
 
-  while (!stop_requested(stop_signals) &&
+  while (!session_over && !stop_requested(stop_signals) &&
          (duration_s <= 0.0 || tsmh::realtime::monotonic_now_ns() - start < duration_s * 1e9)) {
     next += period_ns;  // absolute deadlines: no drift
     tsmh::realtime::sleep_until_ns(next);
@@ -330,6 +356,7 @@ int main(int argc, char** argv) {
     while (lcm.handleTimeout(0) > 0) {
     }  // drain MASTER_FORCE without blocking
     const std::int64_t now = tsmh::realtime::monotonic_now_ns();
+    if (session) session->tick(now);  // a silent server ends its session after 1 s
     const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= watchdog_ms * 1e6;
     if (was_fresh && !fresh) {
       // Once per trip, not per period: the operator learns why the handle went limp.
@@ -340,10 +367,14 @@ int main(int argc, char** argv) {
                    static_cast<double>(now - inbox.received_ns) * 1e-6);
     }
     was_fresh = fresh;
+    // Torque only from the bound server's session; another server ends it.
+    const auto session_state = session ? session->state() : tsmh::bridge::SessionState::kBound;
+    session_over = session_state == tsmh::bridge::SessionState::kFault;
+    const bool bound = session_state == tsmh::bridge::SessionState::kBound;
     // Slave-joint torques -> the handle -> the device's joints (J^T), within
     // the profile's limits; the pose is the one of the previous update.
-    device->write(fresh && inbox.enable ? mapping.joint_torques(inbox.torque)
-                                        : tsmh::master_devices::JointArray{});
+    device->write(fresh && inbox.enable && bound ? mapping.joint_torques(inbox.torque)
+                                                 : tsmh::master_devices::JointArray{});
     const double dt = static_cast<double>(period_ns) * 1e-9;
     tsmh::master_devices::JointArray coordinates{};
     std::uint32_t buttons = 0;
@@ -380,5 +411,16 @@ int main(int argc, char** argv) {
       static_cast<long long>(inbox.rejected), inbox.rejected > 0 ? " (the last: " : "",
       inbox.last_rejection.data(), inbox.rejected > 0 ? ")" : "",
       static_cast<long long>(inbox.unauthentic));
+  if (session_over) {
+    const auto f = session->fault();
+    std::fprintf(stderr,
+                 "external-master-adapter: FAULT: another server session on the link (sender "
+                 "%016llx naming %016llx: a second keyed server, a restarted one or a replay); "
+                 "torque zero, exit 4 (%lld such forces)\n",
+                 static_cast<unsigned long long>(f.sender_id),
+                 static_cast<unsigned long long>(f.names),
+                 static_cast<long long>(inbox.other_session));
+    return 4;
+  }
   return 0;
 }

@@ -38,6 +38,7 @@
 #include "bridge/link_security.hpp"
 #include "files/cli_numbers.hpp"
 #include "lcmtypes/message_decoder.hpp"
+#include "bridge/link_session.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
@@ -110,6 +111,9 @@ struct CommandInbox {
   int joints = 0;
   /// Null: unauthenticated (no key, host-local URL or --insecure).
   tsmh::bridge::MessageVerifier* verifier = nullptr;
+  /// One master at a time (docs/bridge.md, "Sessions"); null when unauthenticated.
+  tsmh::bridge::LinkSession* session = nullptr;
+  std::int64_t other_session = 0;  // keyed messages of another master session
   tsmh::master_command_t newest;
   /// Exactly `joints` joints and the exact size for them, checked before
   /// anything is allocated (lcm-gen's decode() alone sizes its arrays for
@@ -128,6 +132,18 @@ struct CommandInbox {
       if (auth.verdict != tsmh::bridge::AuthVerdict::kOk) {
         ++unauthentic;  // no MAC, wrong key, stale or replayed
         return;
+      }
+      // Only the bound server's commands; a hello binds, another master ends it.
+      using tsmh::bridge::SessionVerdict;
+      switch (session->observe(auth.trailer, tsmh::realtime::monotonic_now_ns())) {
+        case SessionVerdict::kAccept:
+          break;
+        case SessionVerdict::kHandshake:
+        case SessionVerdict::kEnded:
+          return;
+        case SessionVerdict::kOtherSession:
+          ++other_session;
+          return;
       }
       size = auth.payload_size;
     }
@@ -218,9 +234,14 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "slave-node-skeleton: %s\n", security.notice.c_str());
   std::unique_ptr<tsmh::bridge::MessageSigner> signer;
   std::unique_ptr<tsmh::bridge::MessageVerifier> verifier;
+  std::unique_ptr<tsmh::bridge::LinkSession> session;
   if (security.key) {
     signer = std::make_unique<tsmh::bridge::MessageSigner>(security.key);
     verifier = std::make_unique<tsmh::bridge::MessageVerifier>(security.key);
+    // A real robot serves the next server after this one's goodbye or its
+    // silence for more than the session timeout (1 s), holding meanwhile.
+    session = std::make_unique<tsmh::bridge::LinkSession>(
+        *signer, tsmh::bridge::SessionOptions{.rearm = true});
   }
 
   lcm::LCM lcm(url);
@@ -235,6 +256,7 @@ int main(int argc, char** argv) {
   const int n = robot.joints();
   CommandInbox inbox(n);
   inbox.verifier = verifier.get();
+  inbox.session = session.get();
   lcm.subscribe(prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
   // ttl=0 means this host: LCM's socket listens on every interface, so
   // confine it (bridge/host_only.hpp), or refuse to run.
@@ -266,7 +288,12 @@ int main(int argc, char** argv) {
   std::int64_t seq = 0;
   std::int64_t holds = 0;
   bool was_driving = false;
-  while (!stop_requested(stop_signals) &&
+  bool session_over = false;
+  // After a session FAULT: hold and keep publishing (the messages say FAULT)
+  // for 2 s, so that a late process of the other session stops too; then exit 4.
+  std::int64_t fault_since = 0;
+  while ((!session_over || tsmh::realtime::monotonic_now_ns() - fault_since < 2'000'000'000) &&
+         !stop_requested(stop_signals) &&
          (duration_s <= 0.0 || tsmh::realtime::monotonic_now_ns() - start < duration_s * 1e9)) {
     next += period_ns;  // absolute deadlines: no drift
     tsmh::realtime::sleep_until_ns(next);
@@ -274,8 +301,16 @@ int main(int argc, char** argv) {
     while (lcm.handleTimeout(0) > 0) {
     }  // drain MASTER_COMMAND without blocking
     const std::int64_t now = tsmh::realtime::monotonic_now_ns();
+    if (session) session->tick(now);  // a silent server ends its session after 1 s
     const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= command_timeout_ms * 1e6;
-    const bool driving = fresh && inbox.newest.enable;
+    // Without a bound session (between servers, or after another master
+    // appeared) the robot holds, whatever the last command said.
+    const auto session_state = session ? session->state() : tsmh::bridge::SessionState::kBound;
+    if (!session_over && session_state == tsmh::bridge::SessionState::kFault)
+      fault_since = tsmh::realtime::monotonic_now_ns();
+    session_over = session_state == tsmh::bridge::SessionState::kFault;
+    const bool driving =
+        fresh && inbox.newest.enable && session_state == tsmh::bridge::SessionState::kBound;
     if (driving) {
       // While the operator clutches, the server freezes the reference: just follow it.
       for (int j = 0; j < n; ++j)
@@ -307,10 +342,33 @@ int main(int argc, char** argv) {
     lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   }
   robot.hold();
+  if (session && !session_over) {
+    // Goodbye: the last state ends the server's session at once.
+    session->close();
+    state.utime = tsmh::realtime::monotonic_utime();
+    state.seq = seq++;
+    state.status = 2;
+    const int size = state.getEncodedSize();
+    bytes.resize(static_cast<std::size_t>(size) + tsmh::bridge::kAuthTrailerBytes);
+    state.encode(bytes.data(), 0, size);
+    signer->sign(state_channel, bytes.data(), static_cast<std::size_t>(size), bytes.data() + size);
+    lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
   std::printf(
       "slave-node-skeleton: sent %lld SLAVE_STATE, holds %lld, rejected commands %lld, "
       "unauthenticated commands %lld\n",
       static_cast<long long>(seq), static_cast<long long>(holds),
       static_cast<long long>(inbox.rejected), static_cast<long long>(inbox.unauthentic));
+  if (session_over) {
+    const auto f = session->fault();
+    std::fprintf(stderr,
+                 "slave-node-skeleton: FAULT: another master session on the link (sender %016llx "
+                 "naming %016llx: a second keyed master, a restarted one or a replay); holding, "
+                 "exit 4 (%lld such commands)\n",
+                 static_cast<unsigned long long>(f.sender_id),
+                 static_cast<unsigned long long>(f.names),
+                 static_cast<long long>(inbox.other_session));
+    return 4;
+  }
   return 0;
 }

@@ -242,8 +242,17 @@ class EventLog {
 /// Waits for a stop signal or the runner finishing, logging loop events and
 /// keeping the crash messages fresh every 50 ms. Returns the signal or 0.
 int wait_for_stop(const sigset_t& set, const haptics::LoopRunner& runner, EventLog& log,
-                  haptic_server::CalibrationLog& calibration, haptic_server::CrashOutputs& crash) {
+                  haptic_server::CalibrationLog& calibration, haptic_server::CrashOutputs& crash,
+                  haptics::HapticLoop& loop) {
   while (!runner.finished()) {
+    // Another session on the slave or master link: the session is over for
+    // good (the loop is in FAULT, torque zero); stop as on a signal.
+    const auto fault = static_cast<haptics::FaultReason>(loop.events().fault.load());
+    if (fault == haptics::FaultReason::kSlaveSession ||
+        fault == haptics::FaultReason::kMasterSession) {
+      log.poll();
+      return 0;
+    }
     timespec timeout{0, 50'000'000};
     const int sig = sigtimedwait(&set, nullptr, &timeout);
     if (sig > 0) return sig;
@@ -321,7 +330,23 @@ void print_delay_summary(const haptics::HapticLoop& loop) {
                static_cast<unsigned long long>(c.passivity_ticks), dissipated, w_min);
 }
 
+// One line per keyed session: whom it was bound to, and who ended it.
+void print_session(const char* what, const bridge::LinkSession& s) {
+  using ull = unsigned long long;
+  std::fprintf(stderr, "  session %s: %s", what, bridge::to_string(s.state()));
+  if (s.peer() != 0) std::fprintf(stderr, ", bound to %016llx", static_cast<ull>(s.peer()));
+  if (s.state() == bridge::SessionState::kFault) {
+    const auto f = s.fault();
+    std::fprintf(stderr,
+                 "; ended by another session: sender %016llx naming %016llx (%llu such messages)",
+                 static_cast<ull>(f.sender_id), static_cast<ull>(f.names),
+                 static_cast<ull>(s.other_session()));
+  }
+  std::fprintf(stderr, "; this end %016llx\n", static_cast<ull>(s.my_id()));
+}
+
 void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink& link,
+                   const haptics::LcmDeviceSessionView* master_session,
                    const std::string& slave_channel, double seconds, int exit_code,
                    const char* verdict) {
   const auto lat = loop.lateness().summary();
@@ -389,6 +414,8 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
                static_cast<ull>(c.estimate_lost_ticks), static_cast<ull>(c.estimator_resets),
                static_cast<ull>(c.faults));
   print_delay_summary(loop);
+  if (link.session() != nullptr) print_session("slave ", *link.session());
+  if (master_session != nullptr) print_session("master", master_session->session());
   std::fprintf(stderr, "  end:    state %s; exit %d (%s)\n",
                std::string(to_string(loop.state())).c_str(), exit_code, verdict);
 }
@@ -396,6 +423,12 @@ void print_summary(const haptics::HapticLoop& loop, const haptics::LcmSlaveLink&
 /// The exit code of a session that ran (see kExit*).
 int session_exit_code(const haptics::HapticLoop& loop, const char** verdict) {
   const auto& c = loop.counters();
+  // Another session on the link says the most: the session could not hold.
+  if (loop.fault() == haptics::FaultReason::kSlaveSession ||
+      loop.fault() == haptics::FaultReason::kMasterSession) {
+    *verdict = "ended in FAULT";
+    return kExitFault;
+  }
   if (c.slave_samples == 0) {
     *verdict = "no SLAVE_STATE was ever received: nothing was rendered";
     return kExitNoSlave;
@@ -643,7 +676,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
         {.config_path = o.config,
          .master_has_calibrate_button = device->spec().has_calibrate_button},
         std::move(paper_joints));
-    const int sig = wait_for_stop(stop_signals, runner, events, calibration, *crash);
+    const int sig = wait_for_stop(stop_signals, runner, events, calibration, *crash, loop);
     events.poll();  // anything the loop reported in its last ticks
     calibration.poll(tsmh::realtime::monotonic_now_ns());
     events.clear();
@@ -651,6 +684,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     runner.join();  // the loop thread wrote zero torque on its way out
     crash.reset();  // before the sockets and descriptors it knows are closed
     const double seconds = static_cast<double>(tsmh::realtime::monotonic_now_ns() - t0) * 1e-9;
+    link.goodbye();  // the slave holds and is free for the next server at once
     link.stop();
     device->close();
     if (sig)
@@ -661,7 +695,13 @@ int run(const Options& o, const sigset_t& stop_signals) {
     std::string verdict_text = verdict;
     if (exit_code == kExitFault && loop.state() == haptics::LoopState::kFault)
       verdict_text += std::string(": ") + std::string(to_string(loop.fault()));
-    print_summary(loop, link, slave_channel, seconds, exit_code, verdict_text.c_str());
+    // The master session only when the lcm driver is the master device.
+    const auto* master_session =
+        cfg.device_driver == "lcm"
+            ? dynamic_cast<const haptics::LcmDeviceSessionView*>(device_auth.get())
+            : nullptr;
+    print_summary(loop, link, master_session, slave_channel, seconds, exit_code,
+                  verdict_text.c_str());
     if (const auto* lcm_device = dynamic_cast<const master_devices::LcmDevice*>(device.get());
         lcm_device != nullptr && lcm_device->rejected_messages() > 0)
       std::fprintf(stderr, "  device: %llu MASTER_STATE rejected, never used; the last: %s\n",
@@ -670,6 +710,7 @@ int run(const Options& o, const sigset_t& stop_signals) {
     if (trace) write_trace_and_report(loop, *trace, cfg, calibration, o.quiet);
   } catch (...) {
     loop.shutdown();  // zero torque before anything else happens
+    link.goodbye();
     device->close();
     throw;
   }

@@ -1,5 +1,6 @@
 #include "lcm_device_auth.hpp"
 
+#include <cstdio>
 #include <string>
 
 #include "realtime/clock.hpp"
@@ -7,18 +8,20 @@
 namespace tsmh::haptics {
 namespace {
 
-class BridgeLcmAuth final : public master_devices::LcmMessageAuth {
+using master_devices::LcmAuthResult;
+
+class BridgeLcmAuth final : public master_devices::LcmMessageAuth, public LcmDeviceSessionView {
  public:
   explicit BridgeLcmAuth(std::shared_ptr<const bridge::LinkKey> key)
-      : signer_(key), verifier_(std::move(key)) {}
+      : signer_(key), verifier_(std::move(key)), session_(signer_) {}
 
-  std::optional<std::size_t> verify(const std::string& channel, const std::uint8_t* data,
-                                    std::size_t size, std::string& why) noexcept override {
+  LcmAuthResult verify(const std::string& channel, const std::uint8_t* data, std::size_t size,
+                       std::string& why) noexcept override {
     const bridge::AuthResult r =
         verifier_.verify(channel, data, size, realtime::wall_clock_utime());
     switch (r.verdict) {
       case bridge::AuthVerdict::kOk:
-        return r.payload_size;
+        return judge(r, why);
       case bridge::AuthVerdict::kMissing:
         why = "no MAC trailer (the sender has no link key)";
         break;
@@ -35,17 +38,46 @@ class BridgeLcmAuth final : public master_devices::LcmMessageAuth {
         why = "replayed (sender and sequence already seen)";
         break;
     }
-    return std::nullopt;
+    return {};
   }
   std::size_t trailer_size() const noexcept override { return bridge::kAuthTrailerBytes; }
   void sign(const std::string& channel, const std::uint8_t* payload, std::size_t size,
             std::uint8_t* trailer) noexcept override {
     signer_.sign(channel, payload, size, trailer);
   }
+  void close_session() noexcept override { session_.close(); }
+  const bridge::LinkSession& session() const noexcept override { return session_; }
 
  private:
+  // One master session (bridge/link_session.hpp): only the bound adapter's
+  // MASTER_STATE is used; another keyed master ends the session.
+  LcmAuthResult judge(const bridge::AuthResult& r, std::string& why) {
+    using Verdict = LcmAuthResult::Verdict;
+    switch (session_.observe(r.trailer, realtime::monotonic_now_ns())) {
+      case bridge::SessionVerdict::kAccept:
+        return {Verdict::kUse, r.payload_size};
+      case bridge::SessionVerdict::kHandshake:
+        return {Verdict::kHandshake, r.payload_size};
+      case bridge::SessionVerdict::kOtherSession: {
+        char text[160];
+        std::snprintf(text, sizeof text,
+                      "another master session: sender %016llx naming %016llx (a second keyed "
+                      "master, a restarted one or a replay): the session ends in FAULT",
+                      static_cast<unsigned long long>(r.trailer.sender_id),
+                      static_cast<unsigned long long>(r.trailer.peer_id));
+        why = text;
+        return {Verdict::kOtherSession, 0};
+      }
+      case bridge::SessionVerdict::kEnded:
+        why = "the master session has ended";
+        return {};
+    }
+    return {};
+  }
+
   bridge::MessageSigner signer_;
   bridge::MessageVerifier verifier_;
+  bridge::LinkSession session_;  // the server does not re-arm: a new master, a new server
 };
 
 }  // namespace

@@ -193,12 +193,15 @@ void HapticLoop::decide_state(TickFacts& f) noexcept {
                           config_.device_stale_fault_s);
   const double nominal_dt = 1.0 / config_.rate_hz;
   f.before = machine_.state();
-  f.state = machine_.update({.dead_man = reading_.buttons.dead_man,
-                             .e_stop = reading_.buttons.e_stop,
-                             .device_ok = device_ok,
-                             .slave_lost = !(f.slave_age_s <= config_.slave_timeout_s) &&
-                                           counters_.ticks * nominal_dt > config_.slave_timeout_s,
-                             .estimate_lost = f.lost_s > config_.estimate_fault_s});
+  f.state = machine_.update(
+      {.dead_man = reading_.buttons.dead_man,
+       .e_stop = reading_.buttons.e_stop,
+       .device_ok = device_ok,
+       .slave_lost = !(f.slave_age_s <= config_.slave_timeout_s) &&
+                     counters_.ticks * nominal_dt > config_.slave_timeout_s,
+       .estimate_lost = f.lost_s > config_.estimate_fault_s,
+       .slave_session_over = link_.session_over(),
+       .master_session_over = reading_.fault == master_devices::FaultCode::kOtherSession});
   if (f.state == LoopState::kFault && f.before != LoopState::kFault) {
     ++counters_.faults;
     events_.faults.store(counters_.faults, std::memory_order_relaxed);
@@ -392,6 +395,9 @@ std::int32_t HapticLoop::status_flags_of(const TickFacts& f) const noexcept {
   if (overrun_in_period_) flags |= status_flags::kOverrun;
   if (oscillation_.tripped()) flags |= status_flags::kOscillation;
   if (passivity_in_period_) flags |= status_flags::kPassivityActive;
+  if (machine_.fault() == FaultReason::kSlaveSession ||
+      machine_.fault() == FaultReason::kMasterSession)
+    flags |= status_flags::kOtherSession;
   return flags;
 }
 

@@ -4,13 +4,19 @@ namespace tsmh::haptics {
 
 LcmSlaveLink::LcmSlaveLink(const LcmSlaveLinkConfig& config)
     : rx_(config.bridge), tx_(config.bridge) {
+  // The server never re-arms: a slave that said goodbye or fell silent is
+  // the end of this session (a new slave, a new server process).
+  if (bridge::MessageSigner* signer = tx_.signer())
+    session_ = std::make_unique<bridge::LinkSession>(*signer, bridge::SessionOptions{});
   bridge::InboxOptions<bridge::SlaveStateSample> state_options;
   state_options.expected_joints = config.joints;
   state_options.limits = config.state_limits;
+  state_options.session = session_.get();
   state_ = &rx_.subscribe(state_options);
   if (config.subscribe_truth) {
     bridge::InboxOptions<bridge::SlaveTruthSample> truth_options;
     truth_options.expected_joints = config.joints;
+    truth_options.session = session_.get();
     truth_ = &rx_.subscribe(truth_options);
   }
   bridge::InboxOptions<bridge::CalibrationRequestSample> calibration_options;
@@ -50,6 +56,19 @@ std::uint64_t LcmSlaveLink::latest_calibration_request(
 void LcmSlaveLink::publish_command(const bridge::MasterCommandSample& cmd) noexcept {
   command_->publish(cmd);
   last_command_.store(cmd);
+}
+
+void LcmSlaveLink::goodbye() noexcept {
+  if (!session_) return;
+  session_->close();
+  bridge::MasterCommandSample c;
+  last_command_.load(c);
+  // After the last one, or the slave drops it (duplicate, time backwards).
+  c.seq += 1;
+  c.utime += 1;
+  c.enable = false;
+  c.clutch = false;
+  command_->publish(c);
 }
 
 void LcmSlaveLink::publish_status(const bridge::HapticStatusSample& status) noexcept {

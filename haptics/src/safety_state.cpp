@@ -26,6 +26,12 @@ std::string_view to_string(FaultReason r) noexcept {
       return "slave state lost";
     case FaultReason::kEstimateLost:
       return "torque estimate lost";
+    case FaultReason::kSlaveSession:
+      return "another slave session on the link (a second keyed slave, a restarted one or a "
+             "replay)";
+    case FaultReason::kMasterSession:
+      return "another master session on the link (a second keyed master, a restarted one or a "
+             "replay)";
   }
   return "?";
 }
@@ -38,6 +44,10 @@ LoopState SafetyStateMachine::update(const SafetyInputs& in) noexcept {
   FaultReason cause = FaultReason::kNone;
   if (in.e_stop)
     cause = FaultReason::kEStop;
+  else if (in.slave_session_over)
+    cause = FaultReason::kSlaveSession;
+  else if (in.master_session_over)
+    cause = FaultReason::kMasterSession;
   else if (!in.device_ok)
     cause = FaultReason::kDevice;
   else if (in.slave_lost)
@@ -46,7 +56,12 @@ LoopState SafetyStateMachine::update(const SafetyInputs& in) noexcept {
     cause = FaultReason::kEstimateLost;
 
   if (cause != FaultReason::kNone) {
-    if (state_ != LoopState::kFault) fault_ = cause;
+    // The first cause is kept, except that the end of the session (another
+    // session on a link) overrides any: it is final and what the operator
+    // must be told.
+    const bool session_over =
+        cause == FaultReason::kSlaveSession || cause == FaultReason::kMasterSession;
+    if (state_ != LoopState::kFault || session_over) fault_ = cause;
     go(LoopState::kFault);
     return state_;
   }

@@ -92,14 +92,40 @@ struct LcmDevice::Impl {
     const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
     std::size_t size = rbuf->data_size;
     if (const auto& auth = device.settings_.auth) {
-      const auto payload = auth->verify(channel, data, size, auth_error);
-      if (!payload) return reject("not authenticated: " + auth_error);
-      size = *payload;
+      using Verdict = LcmAuthResult::Verdict;
+      const LcmAuthResult r = auth->verify(channel, data, size, auth_error);
+      switch (r.verdict) {
+        case Verdict::kUse:
+          break;
+        case Verdict::kHandshake:
+          return answer_handshake();
+        case Verdict::kRefuse:
+          return reject("not authenticated: " + auth_error);
+        case Verdict::kOtherSession: {
+          // Another master holds the key: this session is over. Torque off
+          // and a fault the loop sees (FAULT, the server ends).
+          FaultCode expected = FaultCode::kNone;
+          device.fault_.compare_exchange_strong(expected, FaultCode::kOtherSession);
+          device.enable_requested_ = false;
+          return reject(auth_error);
+        }
+      }
+      size = r.payload_size;
     }
     const auto trailing =
         device.settings_.auth ? lcmtypes::Trailing::kReject : lcmtypes::Trailing::kIgnore;
     if (const auto error = decoder.decode(data, size, trailing)) return reject(error->what.data());
     on_state(decoder.message());
+  }
+
+  // A hello of the master's session: its content is not used, but it is
+  // answered (zero torque, disabled) so the adapter learns our id and binds.
+  void answer_handshake() {
+    force.utime = device.clock_->now_ns() / 1000;
+    force.seq = force_seq++;
+    force.enable = false;
+    std::fill(force.torque.begin(), force.torque.end(), 0.0);
+    publish_force();
   }
 
   void publish_force() {
@@ -237,6 +263,12 @@ void LcmDevice::close() noexcept {
   if (!opened_.exchange(false)) return;
   stopping_ = true;
   if (thread_.joinable()) thread_.join();
+  // Goodbye: a last zero force that ends the master's session at once (it
+  // then waits for the next server instead of for its timeout).
+  if (impl_ && settings_.auth) {
+    settings_.auth->close_session();
+    impl_->answer_handshake();
+  }
   if (impl_ && impl_->subscription) lcm_->unsubscribe(impl_->subscription);
   impl_.reset();
 }

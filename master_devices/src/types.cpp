@@ -32,6 +32,8 @@ std::string_view to_string(FaultCode f) {
       return "handshake";
     case FaultCode::kLinkLost:
       return "link lost";
+    case FaultCode::kOtherSession:
+      return "another master session on the link";
   }
   return "?";
 }

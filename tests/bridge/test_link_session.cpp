@@ -74,14 +74,22 @@ TEST(LinkSession, ASecondKeyedSenderJoiningEndsTheSessionInFault) {
   EXPECT_EQ(server.session.state(), SessionState::kFault);
   EXPECT_EQ(server.session.fault().sender_id, intruder.signer.sender_id());
   EXPECT_EQ(server.session.fault().names, 0U);
-  EXPECT_EQ(server.signer.peer_id(), 0U) << "names nobody: the slave's session ends too";
+  EXPECT_EQ(server.signer.peer_id(), kSessionFaultPeer) << "says so: the slave's session ends too";
   // Nothing is used after: not even the former peer's messages.
   EXPECT_EQ(server.session.observe(slave.next(), kMs), SessionVerdict::kEnded);
   EXPECT_EQ(server.session.observe(intruder.next(), kMs), SessionVerdict::kEnded);
   EXPECT_EQ(server.session.other_session(), 2U);
-  // The former peer, bound to the server, now gets messages naming nobody:
-  // a hello from its own peer is not used (it holds) and ends nothing there.
-  EXPECT_EQ(slave.session.observe(server.next(), kMs), SessionVerdict::kHandshake);
+  // The former peer hears that its master's session is in FAULT: FAULT too,
+  // and it never serves the next master as if nothing had happened.
+  EXPECT_EQ(slave.session.observe(server.next(), kMs), SessionVerdict::kOtherSession);
+  EXPECT_EQ(slave.session.state(), SessionState::kFault);
+  // Stopping after a FAULT is no goodbye: the marker stays.
+  server.session.close();
+  EXPECT_EQ(server.signer.peer_id(), kSessionFaultPeer);
+  // An open session that hears a session in FAULT on its channel: FAULT too.
+  End newcomer({.rearm = true});
+  EXPECT_EQ(newcomer.session.observe(server.next(), kMs), SessionVerdict::kOtherSession);
+  EXPECT_EQ(newcomer.session.state(), SessionState::kFault);
 }
 
 TEST(LinkSession, TwoPairsOnOneChannelEndBothSessions) {

@@ -22,6 +22,7 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "realtime/clock.hpp"
+#include "session_answer.hpp"
 
 namespace {
 
@@ -123,6 +124,8 @@ TEST(Node, FollowsCommandsPublishesStateAndTruthAndHoldsWhenCommandsStop) {
   const auto key = test_key();
   ASSERT_NE(key, nullptr) << "ctest sets TSMH_LINK_KEY";
   MessageSigner signer(key);
+  // The commander answers the node's session, as the server does.
+  const tsmh::haptics::test::SessionAnswer answer("", prefix + "SLAVE_STATE", key, &signer);
   const std::string channel = prefix + "MASTER_COMMAND";
   pump(lcm, 1.5, [&] {
     cmd.utime = static_cast<std::int64_t>(monotonic_s() * 1e6);
@@ -205,6 +208,7 @@ TEST(Node, OnlyAuthenticatedCommandsMoveIt) {
 
   // The authenticated commander: 0.8 s to 0.2 rad (recorded), then 0.8 s to -0.1 rad.
   MessageSigner signer(key);
+  const tsmh::haptics::test::SessionAnswer answer("", prefix + "SLAVE_STATE", key, &signer);
   std::vector<std::vector<std::uint8_t>> recorded;
   pump(lcm, 0.8, [&] {
     recorded.push_back(encode(next(0.2), channel, &signer));

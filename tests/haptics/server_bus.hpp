@@ -23,6 +23,7 @@
 
 #include "bridge/link_auth.hpp"
 #include "realtime/clock.hpp"
+#include "session_answer.hpp"
 #include "test_link_key.hpp"
 
 namespace tsmh::haptics::test {
@@ -85,6 +86,8 @@ class Bus {
   void run_console() {
     lcm::LCM out(url_);
     const auto signer = test_signer();
+    // The console's session with the server's lcm driver (docs/bridge.md "Sessions").
+    const SessionAnswer answer(url_, prefix_ + "MASTER_FORCE", test_link_key(), signer.get());
     const std::string channel = prefix_ + "MASTER_STATE";
     tsmh::master_state_t m{};
     m.num_joints = 2;

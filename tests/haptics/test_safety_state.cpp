@@ -36,5 +36,26 @@ TEST(SafetyState, Transitions) {
   EXPECT_EQ(m.fault(), FaultReason::kDevice) << "the first cause is kept";
 }
 
+TEST(SafetyState, AnotherSessionEndsItWhateverCameFirstAndNeverClears) {
+  SafetyStateMachine m;
+  SafetyInputs in;
+  in.device_ok = true;
+  in.dead_man = true;
+  m.update(in);
+  in.slave_lost = true;
+  EXPECT_EQ(m.update(in), LoopState::kFault);
+  EXPECT_EQ(m.fault(), FaultReason::kSlaveLost);
+  in.slave_session_over = true;
+  EXPECT_EQ(m.update(in), LoopState::kFault);
+  EXPECT_EQ(m.fault(), FaultReason::kSlaveSession) << "the end of the session is what counts";
+  in.slave_lost = false;
+  in.dead_man = false;
+  EXPECT_EQ(m.update(in), LoopState::kFault) << "no re-arm: the session is over";
+  SafetyStateMachine master;
+  in = {.dead_man = true, .device_ok = true, .master_session_over = true};
+  EXPECT_EQ(master.update(in), LoopState::kFault);
+  EXPECT_EQ(master.fault(), FaultReason::kMasterSession);
+}
+
 }  // namespace
 }  // namespace tsmh::haptics

@@ -31,9 +31,11 @@
 #include "bridge/codec.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/stop_signals.hpp"
+#include "server_child.hpp"
 #include "realtime/clock.hpp"
 #include "realtime/latest_value.hpp"
 #include "scratch_dir_fixture.hpp"
+#include "session_answer.hpp"
 #include "slave_samples.hpp"
 #include "test_link_key.hpp"
 
@@ -41,6 +43,7 @@ namespace tsmh::haptics {
 namespace {
 
 namespace fs = std::filesystem;
+using test::Child;
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
@@ -120,83 +123,6 @@ bool wait_until(Pred done, std::chrono::milliseconds timeout) {
   return true;
 }
 
-/// A child process with stdout+stderr in a file; killed (SIGKILL) if still
-/// running when destroyed.
-class Child {
- public:
-  /// `cpu` >= 0: the whole process runs on that CPU only.
-  Child(const std::vector<std::string>& argv, const fs::path& log, int cpu = -1) : log_(log) {
-    pid_ = fork();
-    if (pid_ == 0) {
-      if (cpu >= 0) {
-        cpu_set_t set;
-        CPU_ZERO(&set);
-        CPU_SET(cpu, &set);
-        sched_setaffinity(0, sizeof set, &set);
-      }
-      // The test blocks nothing, but be explicit: the child starts with the
-      // default dispositions, as from a shell.
-      sigset_t none;
-      sigemptyset(&none);
-      pthread_sigmask(SIG_SETMASK, &none, nullptr);
-      const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(fd, 1);
-      dup2(fd, 2);
-      std::vector<char*> args;
-      for (const auto& a : argv)
-        args.push_back(const_cast<char*>(a.c_str()));
-      args.push_back(nullptr);
-      execv(args[0], args.data());
-      _exit(127);
-    }
-  }
-  ~Child() {
-    if (pid_ > 0 && !exited_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-
-  void signal(int sig) const { kill(pid_, sig); }
-  bool running() {
-    if (exited_) return false;
-    int st = 0;
-    if (waitpid(pid_, &st, WNOHANG) == pid_) {
-      exited_ = true;
-      status_ = st;
-    }
-    return !exited_;
-  }
-  /// Waits up to `timeout` for the exit; returns the exit code, or -1 (still
-  /// running or killed by a signal: then `what` says which).
-  int wait(std::chrono::milliseconds timeout, std::string* what = nullptr) {
-    wait_until([&] { return !running(); }, timeout);
-    if (!exited_) {
-      if (what) *what = "still running";
-      return -1;
-    }
-    if (WIFSIGNALED(status_)) {
-      if (what) *what = std::string("killed by ") + bridge::signal_name(WTERMSIG(status_));
-      return -1;
-    }
-    return WEXITSTATUS(status_);
-  }
-  std::string log() const {
-    std::ifstream in(log_);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
-
- private:
-  pid_t pid_ = -1;
-  bool exited_ = false;
-  int status_ = 0;
-  fs::path log_;
-};
-
 /// The test's side of the wire: master console and slave, both publishing at
 /// ~1 kHz from one thread until stopped; listens to what the server sends.
 class Peer {
@@ -209,6 +135,13 @@ class Peer {
         command_(rx_.subscribe<bridge::MasterCommandSample>({})),
         status_(rx_.subscribe<bridge::HapticStatusSample>({})) {
     sign_slave_with(test::test_signer());
+    // One session each (docs/bridge.md, "Sessions"): the console answers the
+    // server's MASTER_FORCE, the slave its MASTER_COMMAND, as a real adapter
+    // and slave do, so the server binds to them.
+    master_answer_ = std::make_unique<test::SessionAnswer>(
+        url(), prefix_ + "MASTER_FORCE", test::test_link_key(), master_signer_.get());
+    slave_answer_ = std::make_unique<test::SessionAnswer>(
+        url(), prefix_ + "MASTER_COMMAND", test::test_link_key(), slave_signer_.load());
     rx_.start();
   }
   ~Peer() { stop(); }
@@ -311,6 +244,9 @@ class Peer {
   std::mutex mutex_;
   std::vector<bridge::HapticStatusSample> statuses_;
   std::thread thread_;
+  // Last: they hold the signers above and end before them.
+  std::unique_ptr<test::SessionAnswer> master_answer_;
+  std::unique_ptr<test::SessionAnswer> slave_answer_;
 };
 
 class ServerFaults : public test::ScratchDirTest {

@@ -24,6 +24,7 @@
 #include "bridge/codec.hpp"
 #include "realtime/clock.hpp"
 #include "scratch_dir_fixture.hpp"
+#include "session_answer.hpp"
 #include "slave_samples.hpp"
 #include "test_link_key.hpp"
 
@@ -114,6 +115,9 @@ class FakeSlave {
     thread_ = std::thread([this, prefix, seconds, age_us, skip_every] {
       lcm::LCM lcm(url());
       const auto signer = test::test_signer();  // a legitimate slave holds the link key
+      // ...and answers the server's session (docs/bridge.md, "Sessions").
+      const test::SessionAnswer answer(url(), prefix + "MASTER_COMMAND", test::test_link_key(),
+                                       signer.get());
       bridge::SlaveStateSample s = test::constant_tension_state(30.0, 29.0);
       const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
       std::int64_t sent = 0;

@@ -261,13 +261,13 @@ TEST(LcmDevice, ChannelPrefixAndRegistration) {
 // what does not verify and sign what goes out.
 class TagAuth final : public LcmMessageAuth {
  public:
-  std::optional<std::size_t> verify(const std::string& channel, const std::uint8_t* data,
-                                    std::size_t size, std::string& why) noexcept override {
+  LcmAuthResult verify(const std::string& channel, const std::uint8_t* data, std::size_t size,
+                       std::string& why) noexcept override {
     if (size >= 2 && data[size - 2] == static_cast<std::uint8_t>(channel.size()) &&
         data[size - 1] == kTag)
-      return size - 2;
+      return {LcmAuthResult::Verdict::kUse, size - 2};
     why = "no tag";
-    return std::nullopt;
+    return {};
   }
   std::size_t trailer_size() const noexcept override { return 2; }
   void sign(const std::string& channel, const std::uint8_t*, std::size_t,
@@ -326,6 +326,78 @@ TEST(LcmDevice, WithAuthOnlyVerifiedStateIsUsedAndForceIsSigned) {
   ASSERT_GE(f.size(), 2u);
   EXPECT_EQ(f[f.size() - 2], std::string("MASTER_FORCE").size());
   EXPECT_EQ(f[f.size() - 1], TagAuth::kTag);
+}
+
+// The session verdicts (haptic-server plugs in the bridge's LinkSession;
+// tests/haptics checks the real one end to end): a hello is answered with a
+// zero, disabled force and not used; another session faults the device.
+class SessionTagAuth final : public LcmMessageAuth {
+ public:
+  LcmAuthResult verify(const std::string&, const std::uint8_t* data, std::size_t size,
+                       std::string& why) noexcept override {
+    using Verdict = LcmAuthResult::Verdict;
+    if (size < 1) return {};
+    switch (data[size - 1]) {
+      case kUse:
+        return {Verdict::kUse, size - 1};
+      case kHello:
+        return {Verdict::kHandshake, size - 1};
+      case kOther:
+        why = "another master session";
+        return {Verdict::kOtherSession, 0};
+    }
+    why = "no tag";
+    return {};
+  }
+  std::size_t trailer_size() const noexcept override { return 1; }
+  void sign(const std::string&, const std::uint8_t*, std::size_t,
+            std::uint8_t* trailer) noexcept override {
+    trailer[0] = kUse;
+  }
+  static constexpr std::uint8_t kUse = 1, kHello = 2, kOther = 3;
+};
+
+void publish_tagged(lcm::LCM& lcm, double q0, std::uint8_t tag) {
+  tsmh::master_state_t m{};
+  m.num_joints = 2;
+  m.q = {q0, 0.0};
+  m.qd = {0.0, 0.0};
+  m.buttons = 1;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()) + 1);
+  m.encode(bytes.data(), 0, m.getEncodedSize());
+  bytes.back() = tag;
+  lcm.publish("MASTER_STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
+}
+
+TEST(LcmDevice, AHelloIsAnsweredButNotUsedAndAnotherSessionFaults) {
+  LcmSettings s;
+  s.auth = std::make_shared<SessionTagAuth>();
+  Rig rig(s);
+  rig.device->set_enabled(true);
+  rig.device->write_torque({0.2, 0.2});
+  publish_tagged(*rig.lcm, 0.4, SessionTagAuth::kHello);
+  for (int i = 0; i < 500 && rig.log.count() == 0; ++i)
+    std::this_thread::sleep_for(1ms);
+  ASSERT_EQ(rig.log.count(), 1u) << "a hello is answered: the master learns our id";
+  EXPECT_FALSE(rig.log.last().enable);
+  EXPECT_EQ(rig.log.last().torque[0], 0.0);
+  EXPECT_EQ(rig.device->read(rig.now()).status, DeviceStatus::kDisconnected)
+      << "its content is not used";
+
+  publish_tagged(*rig.lcm, 0.1, SessionTagAuth::kUse);
+  for (int i = 0; i < 500 && rig.log.count() == 1; ++i)
+    std::this_thread::sleep_for(1ms);
+  EXPECT_DOUBLE_EQ(rig.device->read(rig.now()).q[0], 0.1);
+
+  const std::uint64_t rejected = rig.device->rejected_messages();
+  publish_tagged(*rig.lcm, 0.9, SessionTagAuth::kOther);
+  for (int i = 0; i < 500 && rig.device->rejected_messages() == rejected; ++i)
+    std::this_thread::sleep_for(1ms);
+  const DeviceReading r = rig.device->read(rig.now());
+  EXPECT_EQ(r.status, DeviceStatus::kFault);
+  EXPECT_EQ(r.fault, FaultCode::kOtherSession);
+  EXPECT_DOUBLE_EQ(r.q[0], 0.1) << "another session's state is never used";
+  EXPECT_NE(rig.device->last_error().find("another master session"), std::string::npos);
 }
 
 }  // namespace

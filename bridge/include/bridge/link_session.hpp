@@ -22,9 +22,11 @@
 //                                           closed (re-armed if rearm_after_close)
 //   anything else from a sender with the key: another session, a second
 //   process joining, a restarted peer, a replay of an old session (it names
-//   an id that is not mine): refused as other_session and the session ends
-//   in FAULT for good (also when still open: a message naming another id
-//   never binds anything, and a second live hello is a conflict too).
+//   an id that is not mine), a session in FAULT (it names "fault"): refused
+//   as other_session and the session ends in FAULT for good (also when
+//   still open: a message naming another id never binds anything, and a
+//   second live hello is a conflict too). A session in FAULT names "fault",
+//   so its peer ends in FAULT too.
 //
 // Messages that fail authentication never get here: nobody without the key
 // can bind or end a session. Pure logic: no clock of its own (times are the
@@ -40,6 +42,10 @@ namespace tsmh::bridge {
 
 /// The peer id of a goodbye: "this sender ends the session" (never a random id in practice).
 inline constexpr std::uint64_t kSessionClosedPeer = ~std::uint64_t{0};
+/// The peer id of a session in FAULT: "another session appeared here". Its
+/// peer ends in FAULT too, and so does any session that hears it: two pairs
+/// on one channel all stop, none takes over the other's slave.
+inline constexpr std::uint64_t kSessionFaultPeer = ~std::uint64_t{0} - 1;
 
 enum class SessionState : std::uint8_t {
   kOpen,    ///< not bound: waiting for a peer's handshake
@@ -83,10 +89,17 @@ class LinkSession {
   /// Receive thread: one authenticated message's trailer, received at now_ns
   /// (CLOCK_MONOTONIC). No allocation, no lock.
   SessionVerdict observe(const AuthTrailer& t, std::int64_t now_ns) noexcept;
+  /// Receive thread, periodically (the Receiver does it every 100 ms): a
+  /// candidate silent for longer than the timeout is forgotten, and with
+  /// rearm a bound peer silent that long ends the session (open again), so
+  /// this end stops naming a process that is gone before anyone new arrives
+  /// (a new peer would take that for another session).
+  void tick(std::int64_t now_ns) noexcept;
 
   /// This end says goodbye: every message signed from now on names
   /// kSessionClosedPeer, and the peer's session ends when it gets one (a
-  /// slave holds and re-arms; the server ends). Any thread; for a clean stop.
+  /// slave holds and re-arms; the server ends). Any thread; for a clean
+  /// stop. A session in FAULT keeps naming kSessionFaultPeer instead.
   void close() noexcept;
 
   std::uint64_t my_id() const noexcept { return my_id_; }

@@ -86,6 +86,7 @@ class Receiver {
   std::unique_ptr<MessageVerifier> verifier_;
   std::vector<std::unique_ptr<InboxBase>> inboxes_;
   std::vector<std::unique_ptr<Route>> routes_;
+  std::vector<LinkSession*> sessions_;  // distinct sessions of the inboxes, ticked by run()
   int lcm_fd_ = -1;
   int host_only_sockets_ = 0;
   int wake_fd_ = -1;  // eventfd: stop() wakes the thread out of poll()

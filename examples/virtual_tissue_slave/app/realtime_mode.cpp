@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <bridge/link_security.hpp>
+#include <bridge/link_session.hpp>
 #include <bridge/receiver.hpp>
 #include <bridge/sender.hpp>
 #include <bridge/stop_signals.hpp>
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <memory>
 #include <realtime/clock.hpp>
 #include <realtime/histogram.hpp>
 #include <thread>
@@ -106,19 +108,75 @@ void pin_to_cpu(int cpu) {
 
 // The newest MASTER_COMMAND into the gate's view. Version 0: none yet, or
 // (practically never) the read gave up against the receive thread: keep the
-// previous view, only its age grows.
+// previous view, only its age grows. `bound`: the master session is bound
+// (always true without a key); otherwise hold, whatever the last command said.
 void take_command(bridge::Inbox<bridge::MasterCommandSample>& commands,
-                  bridge::MasterCommandSample& cmd, CommandView& view, std::int64_t now_ns) {
+                  bridge::MasterCommandSample& cmd, CommandView& view, std::int64_t now_ns,
+                  bool bound) {
   const std::uint64_t version = commands.latest(cmd);
   if (version != 0) {
     view.version = version;
-    view.enable = cmd.enable;
+    view.enable = cmd.enable && bound;
     view.clutch = cmd.clutch;
     for (std::size_t j = 0; j < kJoints; ++j)
       view.position_ref[j] = cmd.position_ref[j];
   }
+  if (!bound) view.enable = false;
   if (view.version != 0) view.age_s = static_cast<double>(now_ns - cmd.receive_ns) * 1e-9;
 }
+
+// Says what the master session does, from its own thread (the loop never
+// prints): bound to a master, a master's goodbye or silence (holding,
+// waiting for the next), the end in FAULT.
+class SessionLog {
+ public:
+  explicit SessionLog(const bridge::LinkSession* session) : session_(session) {
+    if (session_ != nullptr) thread_ = std::thread([this] { run(); });
+  }
+  ~SessionLog() {
+    stop_.store(true, std::memory_order_relaxed);
+    if (thread_.joinable()) thread_.join();
+  }
+  SessionLog(const SessionLog&) = delete;
+  SessionLog& operator=(const SessionLog&) = delete;
+
+ private:
+  void run() {
+    std::uint64_t binds = 0;
+    auto state = bridge::SessionState::kOpen;
+    while (!stop_.load(std::memory_order_relaxed)) {
+      report(binds, state);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    report(binds, state);
+  }
+  void report(std::uint64_t& binds, bridge::SessionState& state) const {
+    const auto now = session_->state();
+    const std::uint64_t b = session_->binds();
+    if (b != binds && now == bridge::SessionState::kBound)
+      std::fprintf(stderr, "virtual-slave: session: following master %016llx\n",
+                   static_cast<unsigned long long>(session_->peer()));
+    if (now != state && state == bridge::SessionState::kBound && now == bridge::SessionState::kOpen)
+      std::fprintf(stderr,
+                   "virtual-slave: session: the master ended its session (goodbye, or silent "
+                   "for more than 1 s): holding, waiting for the next master\n");
+    if (now != state && now == bridge::SessionState::kFault) {
+      const auto f = session_->fault();
+      std::fprintf(stderr,
+                   "virtual-slave: FAULT: another master session on the link (sender %016llx "
+                   "naming %016llx: a second keyed master, a restarted one or a replay): "
+                   "holding, exiting in 2 s\n",
+                   static_cast<unsigned long long>(f.sender_id),
+                   static_cast<unsigned long long>(f.names));
+    }
+    binds = b;
+    state = now;
+  }
+
+  const bridge::LinkSession* session_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 struct LoopTiming {
   realtime::LogHistogram lateness, compute;
@@ -162,10 +220,19 @@ int run_realtime_mode(const CliOptions& o) {
   config.key = security.key;
   std::fprintf(stderr, "virtual-slave: %s\n", security.notice.c_str());
   bridge::Receiver rx(config);
+  bridge::Sender tx(config);
+  // One master at a time (docs/bridge.md, "Sessions"): the slave binds to the
+  // server that answers its SLAVE_STATE; after that server's goodbye or its
+  // silence for longer than the session timeout it holds and serves the
+  // next; any other keyed master meanwhile ends the session: hold, exit 4.
+  std::unique_ptr<bridge::LinkSession> session;
+  if (tx.signer() != nullptr)
+    session =
+        std::make_unique<bridge::LinkSession>(*tx.signer(), bridge::SessionOptions{.rearm = true});
   bridge::InboxOptions<bridge::MasterCommandSample> inbox_options;
   inbox_options.expected_joints = kJoints;
+  inbox_options.session = session.get();
   auto& commands = rx.subscribe<bridge::MasterCommandSample>(inbox_options);
-  bridge::Sender tx(config);
   // The truth goes out before the state of the same tick (the sender drains
   // its outboxes in creation order, LCM delivers one socket in order): a
   // consumer that sees SLAVE_STATE seq N then already holds SLAVE_TRUTH N.
@@ -184,6 +251,7 @@ int run_realtime_mode(const CliOptions& o) {
   try_realtime_priority(o.rt_priority);
   rx.start();
   tx.start();
+  const SessionLog session_log(session.get());
   std::fprintf(stderr,
                "virtual-slave: 1 kHz on %s, channels %sMASTER_COMMAND -> %sSLAVE_STATE, "
                "%sSLAVE_TRUTH; %s\n",
@@ -208,6 +276,12 @@ int run_realtime_mode(const CliOptions& o) {
   bool rerouted = std::isnan(rr.at_s);
 
   std::int64_t next = realtime::monotonic_now_ns() + period_ns;
+  bool session_over = false;
+  // After a session FAULT the slave holds and keeps publishing (its messages
+  // say FAULT) for this many ticks before it exits, so that a late process
+  // of the other session learns it too and stops.
+  constexpr std::int64_t kFaultLingerTicks = 2000;
+  std::int64_t fault_ticks = 0;
   while (!stop.requested() && (end_ticks < 0 || seq < end_ticks)) {
     if (!realtime::sleep_until_ns(next)) continue;  // a signal: check the stop request
     const std::int64_t woke = realtime::monotonic_now_ns();
@@ -220,7 +294,11 @@ int run_realtime_mode(const CliOptions& o) {
       timing.overruns += missed;
       next += missed * period_ns;
     }
-    take_command(commands, cmd, view, woke);
+    const bridge::SessionState session_state =
+        session ? session->state() : bridge::SessionState::kBound;
+    // Ends after this tick: the state it publishes already says holding.
+    session_over = session_state == bridge::SessionState::kFault;
+    take_command(commands, cmd, view, woke, session_state == bridge::SessionState::kBound);
     const auto& refs = gate.update(view, dt);
     if (!rerouted && slave.time() >= rr.at_s) {
       apply_reroute(slave, setup.params, rr, setup.joint_index);
@@ -240,11 +318,27 @@ int run_realtime_mode(const CliOptions& o) {
     ++seq;
     timing.compute.record(realtime::monotonic_now_ns() - woke);
     next += period_ns;
+    if (session_over && ++fault_ticks >= kFaultLingerTicks) break;
   }
 
+  // A clean stop says goodbye: the server's session ends at once (it then
+  // faults on a missing slave as before, but no next slave is mistaken for
+  // a second one while this one is still "alive").
+  if (session && !session_over) {
+    session->close();
+    state.utime = realtime::monotonic_now_ns() / 1000;
+    state.seq = seq;
+    state_box.publish(state);
+  }
   rx.stop();
   tx.stop();
   print_summary(seq, timing, state_box.stats(), commands);
+  if (session_over) {
+    std::fprintf(stderr,
+                 "virtual-slave: exit 4: the master session ended in FAULT (another keyed "
+                 "master on the link); the joints were held\n");
+    return 4;
+  }
   return 0;
 }
 

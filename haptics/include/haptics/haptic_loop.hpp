@@ -110,6 +110,9 @@ inline constexpr std::int32_t kPassivityActive =
 // Drift alarm and recalibration.
 inline constexpr std::int32_t kDriftSuspected = 1 << 8;  ///< some joint's friction drifted
 inline constexpr std::int32_t kRecalibrating = 1 << 9;   ///< collecting or identifying
+/// Another keyed sender on the slave or master link ended the session
+/// (bridge/link_session.hpp): FAULT, the server stops.
+inline constexpr std::int32_t kOtherSession = 1 << 14;
 }  // namespace status_flags
 
 /// What the loop thread reports to a non-real-time thread (which logs it):

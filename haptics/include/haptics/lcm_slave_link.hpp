@@ -3,6 +3,11 @@
 // SLAVE_STATE, and SLAVE_TRUTH when evaluating against the virtual slave)
 // and a bridge Sender (MASTER_COMMAND, HAPTIC_STATUS through non-blocking
 // outboxes). Construction opens LCM and may throw BridgeError with a fix.
+// With a link key, SLAVE_STATE and SLAVE_TRUTH belong to one slave session
+// (bridge/link_session.hpp): the server binds to the first slave that
+// answers its MASTER_COMMAND, and any other keyed sender there ends the
+// session (session_over()); a new slave needs a new server process.
+// CALIBRATION_REQUEST may come from any keyed process.
 
 #include <memory>
 
@@ -37,6 +42,17 @@ class LcmSlaveLink final : public SlaveLink {
   void publish_command(const bridge::MasterCommandSample& cmd) noexcept override;
   void publish_status(const bridge::HapticStatusSample& status) noexcept override;
   SlaveLinkStats stats() const noexcept override;
+  bool session_over() const noexcept override {
+    return session_ && session_->state() == bridge::SessionState::kFault;
+  }
+  /// The slave session; null on an unkeyed link.
+  const bridge::LinkSession* session() const noexcept { return session_.get(); }
+  /// Ends the session deliberately (a clean stop, after the loop's last
+  /// tick): the session is closed and the last command is sent once more,
+  /// disabled and saying goodbye, so the slave holds and waits for the next
+  /// server at once instead of after its timeout. Call it from the thread
+  /// that published the commands, or after that thread ended.
+  void goodbye() noexcept;
   std::uint64_t latest_calibration_request(bridge::CalibrationRequestSample& out) noexcept override;
 
   bridge::ChannelStats state_stats() const noexcept { return state_->stats(); }
@@ -54,6 +70,7 @@ class LcmSlaveLink final : public SlaveLink {
  private:
   bridge::Receiver rx_;
   bridge::Sender tx_;
+  std::unique_ptr<bridge::LinkSession> session_;  // declared after tx_: it uses tx_'s signer
   bridge::Inbox<bridge::SlaveStateSample>* state_ = nullptr;
   bridge::Inbox<bridge::SlaveTruthSample>* truth_ = nullptr;
   bridge::Inbox<bridge::CalibrationRequestSample>* calibration_ = nullptr;

@@ -3,7 +3,8 @@
 //
 //   DISABLED --dead-man pressed, device ok, no fault--> ENABLED
 //   ENABLED  --dead-man released-----------------------> DISABLED
-//   any      --e-stop, device fault/disconnect, slave or estimate lost, internal error--> FAULT
+//   any      --e-stop, device fault/disconnect, slave or estimate lost, another
+//              session on the slave or master link, internal error-----> FAULT
 //   FAULT    --cause gone AND dead-man released--------> DISABLED
 //
 // FAULT latches: the operator must let go of the dead-man before torque can
@@ -22,6 +23,11 @@ enum class FaultReason : std::int32_t {
   kDevice,        ///< the master device reports fault or disconnected
   kSlaveLost,     ///< no slave state for longer than the slave timeout
   kEstimateLost,  ///< slave state arrives but no valid estimate for longer than its timeout
+  /// A second keyed sender on SLAVE_STATE (another slave, a restarted one, a
+  /// replay of an older session): the slave session is over (the server ends).
+  kSlaveSession,
+  /// The same on MASTER_STATE (the `lcm` master driver).
+  kMasterSession,
 };
 
 std::string_view to_string(LoopState s) noexcept;
@@ -33,6 +39,8 @@ struct SafetyInputs {
   bool device_ok = false;
   bool slave_lost = false;
   bool estimate_lost = false;
+  bool slave_session_over = false;   ///< another session on the slave link
+  bool master_session_over = false;  ///< another session on the master link
 };
 
 class SafetyStateMachine {

@@ -26,6 +26,9 @@ class SlaveLink {
   virtual void publish_command(const bridge::MasterCommandSample& cmd) noexcept = 0;
   virtual void publish_status(const bridge::HapticStatusSample& status) noexcept = 0;
   virtual SlaveLinkStats stats() const noexcept = 0;
+  /// The slave session ended for good: another keyed sender appeared on
+  /// SLAVE_STATE (bridge/link_session.hpp). Unkeyed links have no session.
+  virtual bool session_over() const noexcept { return false; }
   /// Newest CALIBRATION_REQUEST (an external console asks for a
   /// recalibration); its version, 0 when none. Links without one never ask.
   virtual std::uint64_t latest_calibration_request(

@@ -14,19 +14,33 @@
 
 namespace tsmh::master_devices {
 
+/// What to do with one incoming MASTER_STATE.
+struct LcmAuthResult {
+  enum class Verdict : std::uint8_t {
+    kUse,           ///< authentic, from the session's peer: decode and use it
+    kHandshake,     ///< authentic, part of binding the session: answer (zero force), do not use
+    kRefuse,        ///< not authentic (or the session is over): drop, count, say why
+    kOtherSession,  ///< authentic but another master: the session ends, the device faults
+  };
+  Verdict verdict = Verdict::kRefuse;
+  std::size_t payload_size = 0;  ///< the bytes before the trailer (kUse, kHandshake)
+};
+
 class LcmMessageAuth {
  public:
   virtual ~LcmMessageAuth() = default;
-  /// The payload size of an authentic message on `channel` (the bytes before
-  /// its trailer), or nullopt with `why` set: the message is dropped and
-  /// counted, never decoded.
-  virtual std::optional<std::size_t> verify(const std::string& channel, const std::uint8_t* data,
-                                            std::size_t size, std::string& why) noexcept = 0;
+  /// Judges a message on `channel`; `why` is set when it is refused or ends
+  /// the session. A refused message is dropped and counted, never decoded.
+  virtual LcmAuthResult verify(const std::string& channel, const std::uint8_t* data,
+                               std::size_t size, std::string& why) noexcept = 0;
   /// Bytes sign() appends after a payload.
   virtual std::size_t trailer_size() const noexcept = 0;
   /// Writes the trailer of `payload` published on `channel` to trailer[0..trailer_size()).
   virtual void sign(const std::string& channel, const std::uint8_t* payload, std::size_t size,
                     std::uint8_t* trailer) noexcept = 0;
+  /// Every message signed after this says goodbye: the peer's session ends
+  /// at once (a clean stop) instead of after its timeout.
+  virtual void close_session() noexcept {}
 };
 
 }  // namespace tsmh::master_devices

@@ -46,6 +46,7 @@ enum class FaultCode : std::uint8_t {
   kHostRequested,   ///< the host called raise_fault()
   kHandshake,       ///< the device did not accept the calibration we sent
   kLinkLost,        ///< the link went away (unplugged) on a device that cannot resume by itself
+  kOtherSession,    ///< a second keyed master on the link (lcm driver): the session is over
 };
 
 std::string_view to_string(DeviceStatus s);
