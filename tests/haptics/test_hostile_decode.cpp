@@ -35,6 +35,7 @@
 #include "realtime/clock.hpp"
 #include "realtime/latest_value.hpp"
 #include "scratch_dir_fixture.hpp"
+#include "session_answer.hpp"
 #include "slave_samples.hpp"
 #include "test_link_key.hpp"
 
@@ -393,11 +394,18 @@ TEST_F(HostileDecode, ServerRefusesARepeatedTtl) {
 
 // The server's side of external-master-adapter: answers its MASTER_STATE
 // with MASTER_FORCE (enable, 0.05 N m), and once with `hostile`.
+// Plays the server: 1 kHz MASTER_FORCE, and once, at message 300, the
+// hostile body (`hostile_body`: unsigned; signed here when keyed). Keyed, it
+// first answers the adapter's session (as a server does), so the hostile
+// message comes from the bound session and reaches the decoder: the body,
+// not the session or the MAC, is what is wrong.
 void serve_adapter(const std::string& prefix, bridge::MessageSigner* signer,
-                   const std::vector<std::uint8_t>& hostile, Child& adapter,
+                   const std::vector<std::uint8_t>& hostile_body, Child& adapter,
                    std::chrono::milliseconds run_for) {
   lcm::LCM lcm(url());
   const std::string channel = prefix + "MASTER_FORCE";
+  const test::SessionAnswer answer(url(), prefix + "MASTER_STATE",
+                                   signer ? test::test_link_key() : nullptr, signer);
   tsmh::master_force_t f{};
   f.num_joints = 2;
   f.torque = {0.05, -0.05};
@@ -409,12 +417,21 @@ void serve_adapter(const std::string& prefix, bridge::MessageSigner* signer,
     f.seq = seq;
     const auto b = encode(f, channel, signer);
     lcm.publish(channel, b.data(), static_cast<unsigned>(b.size()));
-    if (!sent && seq == 300) {
+    const bool bound =
+        answer.session() == nullptr || answer.session()->state() == bridge::SessionState::kBound;
+    if (!sent && seq >= 300 && bound) {
+      std::vector<std::uint8_t> hostile = hostile_body;
+      if (signer) {  // signed after the change: the MAC verifies, the body is hostile
+        const std::size_t size = hostile.size();
+        hostile.resize(size + bridge::kAuthTrailerBytes);
+        signer->sign(channel, hostile.data(), size, hostile.data() + size);
+      }
       lcm.publish(channel, hostile.data(), static_cast<unsigned>(hostile.size()));
       sent = true;
     }
     std::this_thread::sleep_for(1ms);
   }
+  EXPECT_TRUE(sent) << "the adapter's session never bound";
 }
 
 void expect_adapter_survives(HostileDecode* t, const fs::path& dir, bool keyed) {
@@ -434,8 +451,8 @@ void expect_adapter_survives(HostileDecode* t, const fs::path& dir, bool keyed) 
   Child adapter({program(TSMH_EXTERNAL_MASTER_ADAPTER, "TSMH_ADAPTER_UNDER_TEST"), "--lcm-url",
                  url(), "--prefix", prefix, "--duration", "2.5"},
                 dir / "adapter.log", env);
-  serve_adapter(prefix, signer.get(), claiming_2pow28_joints(hostile, channel, signer.get()),
-                adapter, 2s);
+  serve_adapter(prefix, signer.get(), claiming_2pow28_joints(hostile, channel, nullptr), adapter,
+                2s);
   std::string what;
   EXPECT_EQ(adapter.wait(8s, &what), 0) << what << "\n" << adapter.log();
   const std::string log = adapter.log();

@@ -150,16 +150,28 @@ class SessionLog {
     }
     report(binds, state);
   }
+  // Polled: a master may bind and leave between two looks (its goodbye
+  // 10 ms after binding), so the counts decide, not the states alone.
   void report(std::uint64_t& binds, bridge::SessionState& state) const {
+    using bridge::SessionState;
     const auto now = session_->state();
     const std::uint64_t b = session_->binds();
-    if (b != binds && now == bridge::SessionState::kBound)
-      std::fprintf(stderr, "virtual-slave: session: following master %016llx\n",
-                   static_cast<unsigned long long>(session_->peer()));
-    if (now != state && state == bridge::SessionState::kBound && now == bridge::SessionState::kOpen)
+    if (state == SessionState::kBound &&
+        (now == SessionState::kOpen || (b != binds && now == SessionState::kBound)))
       std::fprintf(stderr,
                    "virtual-slave: session: the master ended its session (goodbye, or silent "
                    "for more than 1 s): holding, waiting for the next master\n");
+    if (b != binds) {
+      const std::uint64_t brief = b - binds - (now == SessionState::kBound ? 1 : 0);
+      if (brief > 0)
+        std::fprintf(stderr,
+                     "virtual-slave: session: %llu master session(s) began and ended within "
+                     "20 ms\n",
+                     static_cast<unsigned long long>(brief));
+      if (now == SessionState::kBound)
+        std::fprintf(stderr, "virtual-slave: session: following master %016llx\n",
+                     static_cast<unsigned long long>(session_->peer()));
+    }
     if (now != state && now == bridge::SessionState::kFault) {
       const auto f = session_->fault();
       std::fprintf(stderr,
