@@ -88,6 +88,12 @@ bool CrashStop::reopen_node(std::size_t output, const std::string& node) noexcep
   return ok;
 }
 
+bool CrashStop::adopt_descriptor(std::size_t output, int fd) noexcept {
+  if (output >= used_ || outputs_[output].datagram) return false;
+  // dup3: dup2 would drop close-on-exec from the handler's descriptor.
+  return dup3(fd >= 0 ? fd : null_fd_, outputs_[output].fd, O_CLOEXEC) >= 0;
+}
+
 bool CrashStop::set(std::size_t output, const std::uint8_t* bytes, std::size_t size) noexcept {
   if (output >= used_ || size > kMaxBytes || size == 0) return false;
   // Once the handler has started, the buffer it reads must stay as it is.

@@ -9,7 +9,10 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/udpm_frame.hpp"
 #include "master_devices/console_device.hpp"
+#include "master_devices/haply_device.hpp"
+#include "master_devices/haply_protocol.hpp"
 #include "master_devices/lcm_device.hpp"
+#include "master_devices/mapped_device.hpp"
 #include "master_devices/protocol.hpp"
 #include "realtime/clock.hpp"
 
@@ -28,6 +31,14 @@ std::string hidraw_node(master_devices::Device& device, const std::string& drive
   if (console == nullptr) return {};
   std::string path = console->connected_path();
   return path.rfind("/dev/", 0) == 0 ? path : std::string{};
+}
+
+// The Haply board behind the `haply` driver, with or without a mapping.
+master_devices::HaplyDevice* haply_board(master_devices::Device& device) {
+  if (auto* haply = dynamic_cast<master_devices::HaplyDevice*>(&device)) return haply;
+  if (auto* mapped = dynamic_cast<master_devices::MappedDevice*>(&device))
+    return dynamic_cast<master_devices::HaplyDevice*>(&mapped->inner());
+  return nullptr;
 }
 
 }  // namespace
@@ -63,13 +74,33 @@ CrashOutputs::CrashOutputs(Setup setup) : s_(std::move(setup)) {
     summary_ += std::string(summary_.empty() ? "" : ", ") + "zero OUTPUT report on " +
                 (console_node_.empty() ? std::string("the console's hidraw node") : console_node_);
   }
-  stop_.find_senders({link_port_, device_port_}, {console_node_});
+  if (s_.driver == "haply") {
+    if (master_devices::HaplyDevice* board = haply_board(s_.device)) {
+      // The board has no watchdog: it keeps the last torque it was sent. Its
+      // port is exclusive, so the handler writes the zero state command on a
+      // copy of the driver's own descriptor (follow_haply()).
+      haply_ = static_cast<int>(stop_.add_node());
+      haply_node_ = board->settings().port;
+      std::array<std::uint8_t, master_devices::haply::kMaxFrame> frame{};
+      const std::size_t n = board->zero_torque_frame(frame.data());
+      stop_.set(static_cast<std::size_t>(haply_), frame.data(), n);
+      summary_ +=
+          std::string(summary_.empty() ? "" : ", ") + "zero torque to the board on " + haply_node_;
+    }
+  }
+  if (haply_ >= 0) follow_haply();
+  find_senders();
   refresh(realtime::monotonic_now_ns());
   stop_.install();
 }
 
+void CrashOutputs::find_senders() {
+  stop_.find_senders({link_port_, device_port_}, {console_node_, haply_node_});
+}
+
 void CrashOutputs::refresh(std::int64_t now_ns) {
   if (console_ >= 0) follow_console();
+  if (haply_ >= 0) follow_haply();
   if (now_ns < next_refresh_ns_) return;
   next_refresh_ns_ = now_ns + kRefreshNs;
   if (hold_ >= 0) prepare_hold();
@@ -130,7 +161,22 @@ void CrashOutputs::follow_console() {
   if (node.empty() || node == console_node_) return;
   if (!stop_.reopen_node(static_cast<std::size_t>(console_), node)) return;
   console_node_ = node;
-  stop_.find_senders({link_port_, device_port_}, {console_node_});
+  find_senders();
+}
+
+// The haply driver opens the port again after an unplug (clear_fault()),
+// under another descriptor: the handler's copy follows it, and the new one
+// joins the silenced ones. While the link is down the copy points at
+// /dev/null. (The driver may close its descriptor just after it is read
+// here; then dup3 fails and the copy stays as it was until the next look.)
+void CrashOutputs::follow_haply() {
+  const master_devices::HaplyDevice* board = haply_board(s_.device);
+  if (board == nullptr) return;
+  const int fd = board->port_descriptor();
+  if (fd == haply_fd_) return;
+  if (!stop_.adopt_descriptor(static_cast<std::size_t>(haply_), fd)) return;
+  haply_fd_ = fd;
+  find_senders();
 }
 
 }  // namespace tsmh::haptic_server

@@ -55,7 +55,8 @@ class CrashOutputs {
   CrashOutputs& operator=(const CrashOutputs&) = delete;
 
   /// Main thread, at least every 50 ms: re-makes the signed messages every
-  /// kRefreshNs, and follows a console that came back on another node.
+  /// kRefreshNs, and follows a console that came back on another node and
+  /// a Haply board whose port was opened again.
   void refresh(std::int64_t now_ns);
 
   /// What the handler would do, one line ("hold to the slave on ..., zero
@@ -66,10 +67,14 @@ class CrashOutputs {
   void prepare_hold();
   void prepare_force();
   void follow_console();
+  void follow_haply();
+  void find_senders();
 
   Setup s_;
   bridge::CrashStop stop_;
-  int hold_ = -1, force_ = -1, console_ = -1;
+  int hold_ = -1, force_ = -1, console_ = -1, haply_ = -1;
+  int haply_fd_ = -1;       // the board's port descriptor the haply output copies
+  std::string haply_node_;  // its port, so the driver's own descriptor is silenced
   std::string force_channel_;
   int force_dof_ = 0;
   int link_port_ = 0, device_port_ = 0;

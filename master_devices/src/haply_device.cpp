@@ -235,6 +235,7 @@ void HaplyDevice::open() {
   handshake(port_);
   enabled_.store(false);
   fault_.store(FaultCode::kNone);
+  port_fd_.store(port_.fd());
   link_up_.store(true);
   status_.store(DeviceStatus::kOk);
   set_error("");
@@ -242,8 +243,13 @@ void HaplyDevice::open() {
   io_ = std::thread([this] { io_loop(); });
 }
 
+std::size_t HaplyDevice::zero_torque_frame(std::uint8_t* out) const noexcept {
+  return haply::encode_state(s_.board, JointArray{}, out);
+}
+
 void HaplyDevice::close() noexcept {
   if (running_.exchange(false)) io_.join();
+  port_fd_.store(-1);
   if (port_.is_open()) {
     // Zero torque before letting go: the board keeps the last torque it got.
     std::uint8_t frame[haply::kMaxFrame];
@@ -272,6 +278,7 @@ bool HaplyDevice::clear_fault() {
       SerialPort port(s_.port);
       handshake(port);
       port_ = std::move(port);
+      port_fd_.store(port_.fd());
     } catch (const std::exception& e) {
       set_error(std::string(e.what()) + " (still faulted: the board was unplugged)");
       return false;
@@ -333,6 +340,7 @@ void HaplyDevice::write_torque(const JointArray& tau) noexcept {
 }
 
 void HaplyDevice::link_lost(const std::string& why) {
+  port_fd_.store(-1);
   port_.close();
   link_up_.store(false);
   enabled_.store(false);

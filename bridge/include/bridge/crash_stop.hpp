@@ -79,6 +79,10 @@ class CrashStop {
   /// one dup2(), so the handler never writes a closed or reused number.
   /// Main thread. False (and unchanged) when `node` cannot be opened.
   bool reopen_node(std::size_t output, const std::string& node) noexcept;
+  /// Points node output `output` at the file open on `fd` (one dup2(); -1:
+  /// back to /dev/null), for a device whose node cannot be opened twice (an
+  /// exclusive serial port). Main thread. False (and unchanged) on error.
+  bool adopt_descriptor(std::size_t output, int fd) noexcept;
 
   /// Replaces what output `output` sends. Main thread only (one writer); no
   /// allocation. False when too long, or once the handler has started.

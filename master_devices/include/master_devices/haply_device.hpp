@@ -87,6 +87,15 @@ class HaplyDevice final : public Device {
 
   const HaplySettings& settings() const { return s_; }
 
+  /// The port's descriptor while the link is up, else -1. The board has no
+  /// watchdog and the port is exclusive (no second open), so a crash handler
+  /// that must zero the torque keeps a dup() of this descriptor
+  /// (haptic-server's crash outputs). Any thread.
+  int port_descriptor() const noexcept { return port_fd_.load(); }
+  /// The state command with zero torque on every motor, as the crash handler
+  /// writes it; returns its length (<= haply::kMaxFrame).
+  std::size_t zero_torque_frame(std::uint8_t* out) const noexcept;
+
  private:
   struct Sample {
     std::int64_t t_ns = 0;
@@ -121,6 +130,7 @@ class HaplyDevice final : public Device {
   std::atomic<DeviceStatus> status_{DeviceStatus::kClosed};
   std::atomic<FaultCode> fault_{FaultCode::kNone};
   std::atomic<bool> enabled_{false}, running_{false}, link_up_{false};
+  std::atomic<int> port_fd_{-1};  // port_'s descriptor while the link is up
   // I/O thread only:
   Sample sample_;
   std::int64_t last_reply_ns_ = 0;

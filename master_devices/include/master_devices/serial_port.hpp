@@ -33,6 +33,8 @@ class SerialPort {
   SerialPort& operator=(const SerialPort&) = delete;
 
   bool is_open() const { return fd_ >= 0; }
+  /// The descriptor (-1 when closed): for a crash handler's copy of the port.
+  int fd() const { return fd_; }
   const std::string& path() const { return path_; }
   void close() noexcept;
 
