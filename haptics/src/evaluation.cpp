@@ -169,6 +169,7 @@ JointEvaluation evaluate_joint(const Trace& trace, const ServerConfig& config, s
   JointEvaluation je;
   je.name = config.joints[j].name;
   double se_est = 0, se_naive = 0, phantom = 0, phantom_naive = 0;
+  double se_est_contact = 0, se_naive_contact = 0, se_est_free = 0, se_naive_free = 0;
   const double force_scale = config.loop.force[j].scale;
   for (std::size_t i = 0; i < trace.size(); ++i) {
     const auto& row = trace[i];
@@ -181,11 +182,29 @@ JointEvaluation evaluate_joint(const Trace& trace, const ServerConfig& config, s
     se_naive += (q.tau_in - q.true_tau_out) * (q.tau_in - q.true_tau_out);
     je.true_peak = std::max(je.true_peak, std::fabs(q.true_tau_out));
     ++je.samples;
+    const double e_est = q.tau_out_est - q.true_tau_out, e_naive = q.tau_in - q.true_tau_out;
     if (std::fabs(q.true_tau_out) < kPhantomThreshold && std::isfinite(q.torque_cmd)) {
       phantom += q.torque_cmd * q.torque_cmd;
       phantom_naive += force_scale * force_scale * q.tau_in * q.tau_in;
+      se_est_free += e_est * e_est;
+      se_naive_free += e_naive * e_naive;
       ++je.free_samples;
     }
+    const bool contact = std::isfinite(q.indentation)
+                             ? q.indentation > 0.0
+                             : std::fabs(q.true_tau_out) >= kPhantomThreshold;
+    if (contact) {
+      se_est_contact += e_est * e_est;
+      se_naive_contact += e_naive * e_naive;
+      ++je.contact_samples;
+    }
+  }
+  if (je.contact_samples) {
+    const auto n = static_cast<double>(je.contact_samples);
+    je.contact_rmse_estimated = std::sqrt(se_est_contact / n);
+    je.contact_rmse_naive = std::sqrt(se_naive_contact / n);
+    je.contact_ratio =
+        je.contact_rmse_naive > 0 ? je.contact_rmse_estimated / je.contact_rmse_naive : 0.0;
   }
   if (je.samples) {
     je.rmse_estimated = std::sqrt(se_est / static_cast<double>(je.samples));
@@ -193,6 +212,8 @@ JointEvaluation evaluate_joint(const Trace& trace, const ServerConfig& config, s
     je.ratio = je.rmse_naive > 0 ? je.rmse_estimated / je.rmse_naive : 0.0;
   }
   if (je.free_samples) {
+    je.free_rmse_estimated = std::sqrt(se_est_free / static_cast<double>(je.free_samples));
+    je.free_rmse_naive = std::sqrt(se_naive_free / static_cast<double>(je.free_samples));
     je.phantom_rendered = std::sqrt(phantom / static_cast<double>(je.free_samples));
     je.phantom_naive = std::sqrt(phantom_naive / static_cast<double>(je.free_samples));
     je.phantom_ratio = je.phantom_naive > 0 ? je.phantom_rendered / je.phantom_naive : 0.0;
@@ -245,7 +266,14 @@ std::string report_to_json(const EvaluationReport& r) {
                         {"samples", j.free_samples},
                         {"phantom_rendered_nm", num(j.phantom_rendered)},
                         {"phantom_naive_nm", num(j.phantom_naive)},
-                        {"phantom_ratio", num(j.phantom_ratio)}}}});
+                        {"phantom_ratio", num(j.phantom_ratio)},
+                        {"rmse_estimated_nm", num(j.free_rmse_estimated)},
+                        {"rmse_naive_nm", num(j.free_rmse_naive)}}},
+                      {"in_contact",
+                       {{"samples", j.contact_samples},
+                        {"rmse_estimated_nm", num(j.contact_rmse_estimated)},
+                        {"rmse_naive_nm", num(j.contact_rmse_naive)},
+                        {"ratio", num(j.contact_ratio)}}}});
   const auto& d = r.discrimination;
   json doc = {{"loop",
                {{"rate_hz", num(r.rate_hz)},
@@ -361,6 +389,19 @@ std::string format_report(const EvaluationReport& r) {
                     "the master %.4f N m rms, naive %.4f N m rms, rendered / naive %.2f\n",
                     "", kPhantomThreshold, j.free_samples, j.phantom_rendered, j.phantom_naive,
                     j.phantom_ratio);
+      s += line;
+      std::snprintf(
+          line, sizeof line,
+          "      %-8s free motion: distal torque rmse estimated %.4f N m, naive %.4f N m\n", "",
+          j.free_rmse_estimated, j.free_rmse_naive);
+      s += line;
+    }
+    if (j.contact_samples) {
+      std::snprintf(line, sizeof line,
+                    "      %-8s in contact (%zu ticks): distal torque rmse estimated %.4f N m, "
+                    "naive %.4f N m, estimated / naive %.2f\n",
+                    "", j.contact_samples, j.contact_rmse_estimated, j.contact_rmse_naive,
+                    j.contact_ratio);
       s += line;
     }
   }

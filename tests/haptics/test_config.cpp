@@ -240,6 +240,43 @@ TEST(Evaluation, FindsTheNoduleEdgeAndBothStiffnesses) {
   EXPECT_NEAR(d.hard.ideal, d.hard.truth, 1e-9);
 }
 
+// The error in contact is reported apart from free motion: an estimate that
+// is exact in free motion and 0.01 N m off in contact must show both.
+TEST(Evaluation, InContactErrorIsReportedApartFromFreeMotion) {
+  ServerConfig config = parse_server_config(
+      "device: {driver: sim}\njoints:\n  - {force_scale: 0.6, max_torque_nm: 1}\n", "s.yaml", "/");
+  Trace trace(1, 3000);
+  for (int i = 0; i < 3000; ++i) {
+    const bool pressing = i >= 1000;  // 1000 free ticks, then 2000 in the tissue
+    TraceRow row;
+    row.state = static_cast<std::int32_t>(LoopState::kEnabled);
+    auto& q = row.joints[0];
+    q.indentation = pressing ? 0.002 : 0.0;
+    q.true_tau_out = pressing ? 0.05 : 0.0;
+    q.tau_out_est = q.true_tau_out + (pressing ? 0.01 : 0.0);
+    q.tau_in = q.true_tau_out + 0.04;  // the sheath's friction, everywhere
+    q.torque_cmd = 0.6 * q.tau_out_est;
+    q.true_x_out = 0.2;
+    q.master_q = 0.2;
+    trace.append(row);
+  }
+  const JointEvaluation je = evaluate_joint(trace, config, 0);
+  EXPECT_EQ(je.contact_samples, 2000u);
+  EXPECT_NEAR(je.contact_rmse_estimated, 0.01, 1e-12);
+  EXPECT_NEAR(je.contact_rmse_naive, 0.04, 1e-12);
+  EXPECT_NEAR(je.contact_ratio, 0.25, 1e-9);
+  EXPECT_EQ(je.free_samples, 1000u);
+  EXPECT_NEAR(je.free_rmse_estimated, 0.0, 1e-12);
+  EXPECT_NEAR(je.free_rmse_naive, 0.04, 1e-12);
+  EvaluationReport r;
+  r.joints.push_back(je);
+  EXPECT_NE(format_report(r).find("in contact (2000 ticks): distal torque rmse estimated 0.0100 "
+                                  "N m, naive 0.0400 N m, estimated / naive 0.25"),
+            std::string::npos)
+      << format_report(r);
+  EXPECT_NE(report_to_json(r).find("\"in_contact\""), std::string::npos);
+}
+
 // Presses that stay in the soft layer (one slope throughout): the split
 // still finds a "best" cut, and the deeper half used to be printed as the
 // nodule ("nodule 0.160 true 0.200: -20 %"). It is not reached.

@@ -29,6 +29,16 @@ struct JointEvaluation {
   double phantom_rendered = 0.0;     ///< N m on the master, rms of the torque written
   double phantom_naive = 0.0;        ///< N m on the master, rms of force_scale * tau_in
   double phantom_ratio = 0.0;        ///< phantom_rendered / phantom_naive
+  /// In contact: ticks where the tip indents the tissue (SLAVE_TRUTH's
+  /// indentation > 0; without one, |true tau_out| >= kPhantomThreshold).
+  /// The error there is what the surgeon feels the tissue by; free motion
+  /// (the ticks above) is where it shows as phantom torque instead.
+  std::size_t contact_samples = 0;
+  double contact_rmse_estimated = 0.0;  ///< N m, tau_out_est vs true tau_out
+  double contact_rmse_naive = 0.0;      ///< N m, tau_in vs true tau_out
+  double contact_ratio = 0.0;           ///< contact_rmse_estimated / contact_rmse_naive
+  double free_rmse_estimated = 0.0;     ///< N m, over the free-motion ticks
+  double free_rmse_naive = 0.0;         ///< N m, over the free-motion ticks
 };
 
 /// |true distal torque| below which a tick counts as free motion, N m.
