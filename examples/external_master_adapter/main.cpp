@@ -48,13 +48,10 @@
 #include <tsmh/version.hpp>
 #include <vector>
 
-#include "bridge/host_only.hpp"
-#include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
-#include "bridge/link_security.hpp"
+#include "bridge/node_link.hpp"
 #include "files/cli_numbers.hpp"
 #include "lcmtypes/message_decoder.hpp"
-#include "bridge/link_session.hpp"
 #include "master_devices/axis_mapping.hpp"
 #include "master_devices/vendor_master.hpp"
 #include "realtime/clock.hpp"
@@ -212,15 +209,15 @@ sigset_t block_stop_signals() {
 int main(int argc, char** argv) {
   CLI::App app{"external-master-adapter: a vendor master driver talking to haptic-server over LCM"};
   app.set_version_flag("--version", tsmh::version_line("external-master-adapter"));
-  std::string url;
-  std::string prefix;
   double rate_hz = 1000.0;
   double watchdog_ms = 50.0;
   double duration_s = 0.0;
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
-  app.add_option("--prefix,--channel-prefix", prefix,
-                 "per-arm channel prefix, e.g. LEFT_ -> LEFT_MASTER_STATE (--channel-prefix: old "
-                 "name)");
+  tsmh::bridge::NodeLinkOptions link;
+  tsmh::bridge::add_node_link_options(
+      app, link, "--prefix,--channel-prefix",
+      "per-arm channel prefix, e.g. LEFT_ -> LEFT_MASTER_STATE (--channel-prefix: old name)",
+      "run without a link key on a network LCM URL: anyone who reaches it can drive the "
+      "master's motors (isolated networks only)");
   app.add_option("--rate-hz", rate_hz, "device read / MASTER_STATE rate")
       ->check(tsmh::files::finite_range(1.0, 20000.0, "Hz"));
   app.add_option("--watchdog-ms", watchdog_ms, "zero torque when MASTER_FORCE is older")
@@ -238,11 +235,6 @@ int main(int argc, char** argv) {
   app.add_option("--mapping", mapping_file,
                  "the mapping to the slave's joints: joints: [{axis: NAME, scale: S}], "
                  "buttons: {dead_man: NAME, clutch: NAME, ...} (needed with --profile)");
-  tsmh::bridge::LinkSecurityOptions link;
-  app.add_option("--key", link.key_file, tsmh::bridge::kKeyOptionHelp);
-  app.add_flag("--insecure", link.insecure,
-               "run without a link key on a network LCM URL: anyone who reaches it can drive "
-               "the master's motors (isolated networks only)");
   CLI11_PARSE(app, argc, argv);
   const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
 
@@ -269,53 +261,19 @@ int main(int argc, char** argv) {
                profile.name.c_str(), profile.kinematics.joints,
                std::string(to_string(profile.kinematics.type)).c_str(), slave_joints);
 
-  tsmh::bridge::LinkSecurity security;
-  try {
-    security = tsmh::bridge::resolve_link_security(tsmh::bridge::resolve_lcm_url(url), link);
-  } catch (const tsmh::bridge::LinkKeyError& e) {
-    std::fprintf(stderr, "external-master-adapter: error: %s\n", e.what());
-    return 2;
-  } catch (const tsmh::bridge::LcmUrlError& e) {
-    std::fprintf(stderr, "external-master-adapter: error: %s\n", e.what());
-    return 2;
-  }
-  std::fprintf(stderr, "external-master-adapter: %s\n", security.notice.c_str());
-  std::unique_ptr<tsmh::bridge::MessageSigner> signer;
-  std::unique_ptr<tsmh::bridge::MessageVerifier> verifier;
-  std::unique_ptr<tsmh::bridge::LinkSession> session;
-  if (security.key) {
-    signer = std::make_unique<tsmh::bridge::MessageSigner>(security.key);
-    verifier = std::make_unique<tsmh::bridge::MessageVerifier>(security.key);
-    // The next server is served after this one's goodbye or its silence for
-    // more than the session timeout (1 s); zero torque meanwhile.
-    session = std::make_unique<tsmh::bridge::LinkSession>(
-        *signer, tsmh::bridge::SessionOptions{.rearm = true});
-  }
-
-  lcm::LCM lcm(url);  // an empty URL honours LCM_DEFAULT_URL, as LCM's tools do
-  if (!lcm.good()) {
-    std::fprintf(
-        stderr,
-        "external-master-adapter: cannot start LCM%s%s (no multicast route? ip link set lo "
-        "multicast on; ip route add 224.0.0.0/4 dev lo)\n",
-        url.empty() ? "" : " at ", url.c_str());
-    return 1;
-  }
+  // The next server is served after this one's goodbye or its silence for
+  // more than the session timeout (1 s); zero torque meanwhile.
+  tsmh::bridge::NodeLink node;
+  if (const int status = tsmh::bridge::start_node_link("external-master-adapter", link, node))
+    return status;
+  lcm::LCM& lcm = *node.lcm;
+  const auto& signer = node.signer;
+  const auto& session = node.session;
   ForceInbox inbox(slave_joints);
-  inbox.verifier = verifier.get();
+  inbox.verifier = node.verifier.get();
   inbox.session = session.get();
-  lcm.subscribe(prefix + "MASTER_FORCE", &ForceInbox::on_raw, &inbox);
-  // ttl=0 means this host: LCM's socket listens on every interface, so
-  // confine it (bridge/host_only.hpp), or refuse to run.
-  if (const auto port = tsmh::bridge::host_only_udpm_port(tsmh::bridge::resolve_lcm_url(url))) {
-    lcm.getFileno();  // LCM creates its receive socket here at the latest
-    if (tsmh::bridge::restrict_udp_port_to_host(*port) == 0) {
-      std::fprintf(stderr,
-                   "external-master-adapter: error: cannot confine LCM's socket to this host\n");
-      return 1;
-    }
-  }
-  const std::string state_channel = prefix + "MASTER_STATE";
+  lcm.subscribe(link.prefix + "MASTER_FORCE", &ForceInbox::on_raw, &inbox);
+  const std::string state_channel = link.prefix + "MASTER_STATE";
   std::vector<std::uint8_t> bytes;
 
   // The hand sweeps 0.2 rad at the joints, or 40 % of the half-workspace

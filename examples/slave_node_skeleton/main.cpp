@@ -3,7 +3,8 @@
 // writes; it depends on nothing of ours but the generated LCM types, their
 // decoder for untrusted bytes (lcmtypes/message_decoder.hpp) and the
 // bridge's message authentication (bridge/link_auth.hpp: a MAC trailer on
-// every message, docs/bridge.md "Authentication").
+// every message, docs/bridge.md "Authentication") with its start-up
+// (options, key, LCM: bridge/node_link.hpp).
 //
 //   every period (1 kHz):  drain MASTER_COMMAND (newest wins)
 //                          fresh and enabled -> position reference to the robot
@@ -32,13 +33,10 @@
 #include <tsmh/version.hpp>
 #include <vector>
 
-#include "bridge/host_only.hpp"
-#include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
-#include "bridge/link_security.hpp"
+#include "bridge/node_link.hpp"
 #include "files/cli_numbers.hpp"
 #include "lcmtypes/message_decoder.hpp"
-#include "bridge/link_session.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
@@ -197,13 +195,14 @@ int main(int argc, char** argv) {
       "slave-node-skeleton: the minimal slave node of a real robot for haptic-server "
       "(robot I/O stubbed; docs/real-robot.md)"};
   app.set_version_flag("--version", tsmh::version_line("slave-node-skeleton"));
-  std::string url;
-  std::string prefix;
   double rate_hz = 1000.0;
   double command_timeout_ms = 100.0;
   double duration_s = 0.0;
-  app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
-  app.add_option("--prefix", prefix, "per-arm channel prefix, e.g. ARM1_ -> ARM1_SLAVE_STATE");
+  tsmh::bridge::NodeLinkOptions link;
+  tsmh::bridge::add_node_link_options(
+      app, link, "--prefix", "per-arm channel prefix, e.g. ARM1_ -> ARM1_SLAVE_STATE",
+      "run without a link key on a network LCM URL: anyone who reaches it can move the robot "
+      "(isolated networks only)");
   app.add_option("--rate-hz", rate_hz, "control and SLAVE_STATE rate")
       ->check(tsmh::files::finite_range(100.0, 4000.0, "Hz"));
   app.add_option("--command-timeout-ms", command_timeout_ms,
@@ -211,64 +210,27 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)")
       ->check(tsmh::files::finite_range(0.0, 1e7, "s"));
-  tsmh::bridge::LinkSecurityOptions link;
-  app.add_option("--key", link.key_file, tsmh::bridge::kKeyOptionHelp);
-  app.add_flag("--insecure", link.insecure,
-               "run without a link key on a network LCM URL: anyone who reaches it can move "
-               "the robot (isolated networks only)");
   CLI11_PARSE(app, argc, argv);
   const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
 
   // Only authenticated peers move the robot: MASTER_COMMAND must carry a
   // valid MAC, and SLAVE_STATE carries ours, when a link key exists.
-  tsmh::bridge::LinkSecurity security;
-  try {
-    security = tsmh::bridge::resolve_link_security(tsmh::bridge::resolve_lcm_url(url), link);
-  } catch (const tsmh::bridge::LinkKeyError& e) {
-    std::fprintf(stderr, "slave-node-skeleton: error: %s\n", e.what());
-    return 2;
-  } catch (const tsmh::bridge::LcmUrlError& e) {
-    std::fprintf(stderr, "slave-node-skeleton: error: %s\n", e.what());
-    return 2;
-  }
-  std::fprintf(stderr, "slave-node-skeleton: %s\n", security.notice.c_str());
-  std::unique_ptr<tsmh::bridge::MessageSigner> signer;
-  std::unique_ptr<tsmh::bridge::MessageVerifier> verifier;
-  std::unique_ptr<tsmh::bridge::LinkSession> session;
-  if (security.key) {
-    signer = std::make_unique<tsmh::bridge::MessageSigner>(security.key);
-    verifier = std::make_unique<tsmh::bridge::MessageVerifier>(security.key);
-    // A real robot serves the next server after this one's goodbye or its
-    // silence for more than the session timeout (1 s), holding meanwhile.
-    session = std::make_unique<tsmh::bridge::LinkSession>(
-        *signer, tsmh::bridge::SessionOptions{.rearm = true});
-  }
-
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    std::fprintf(stderr,
-                 "slave-node-skeleton: cannot start LCM (no multicast route? ip link set lo "
-                 "multicast on; ip route add 224.0.0.0/4 dev lo)\n");
-    return 1;
-  }
+  // A real robot serves the next server after this one's goodbye or its
+  // silence for more than the session timeout (1 s), holding meanwhile.
+  tsmh::bridge::NodeLink node;
+  if (const int status = tsmh::bridge::start_node_link("slave-node-skeleton", link, node))
+    return status;
+  lcm::LCM& lcm = *node.lcm;
+  const auto& signer = node.signer;
+  const auto& session = node.session;
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
   StubRobot robot(static_cast<double>(period_ns) * 1e-9);  // REAL DRIVER: your RobotIo
   const int n = robot.joints();
   CommandInbox inbox(n);
-  inbox.verifier = verifier.get();
+  inbox.verifier = node.verifier.get();
   inbox.session = session.get();
-  lcm.subscribe(prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
-  // ttl=0 means this host: LCM's socket listens on every interface, so
-  // confine it (bridge/host_only.hpp), or refuse to run.
-  if (const auto port = tsmh::bridge::host_only_udpm_port(tsmh::bridge::resolve_lcm_url(url))) {
-    lcm.getFileno();  // LCM creates its receive socket here at the latest
-    if (tsmh::bridge::restrict_udp_port_to_host(*port) == 0) {
-      std::fprintf(stderr,
-                   "slave-node-skeleton: error: cannot confine LCM's socket to this host\n");
-      return 1;
-    }
-  }
-  const std::string state_channel = prefix + "SLAVE_STATE";
+  lcm.subscribe(link.prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
+  const std::string state_channel = link.prefix + "SLAVE_STATE";
   std::vector<std::uint8_t> bytes;
 
   tsmh::slave_state_t state;

@@ -1,0 +1,59 @@
+#pragma once
+// The start-up of a standalone LCM node that speaks our messages with
+// lcm-gen's types (external-master-adapter, slave-node-skeleton): its
+// --lcm-url/--prefix/--key/--insecure options, the link key (or the refusal
+// to run unkeyed on a network URL), the signer/verifier/session that go with
+// a key, and LCM itself, confined to this host for a ttl=0 URL. Programs
+// built on the bridge's Receiver/Sender get the same from BridgeConfig.
+
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+
+#include "bridge/link_auth.hpp"
+#include "bridge/link_security.hpp"
+#include "bridge/link_session.hpp"
+
+namespace tsmh::bridge {
+
+/// What the options hold.
+struct NodeLinkOptions {
+  std::string url;               ///< --lcm-url; empty: $LCM_DEFAULT_URL, then LCM's default
+  std::string prefix;            ///< --prefix: per-arm channel prefix
+  LinkSecurityOptions security;  ///< --key, --insecure
+};
+
+/// Adds --lcm-url, the prefix option (`prefix_names`, e.g. "--prefix"), --key
+/// and --insecure to a CLI11 app. A template so that the bridge needs no
+/// CLI11; only the programs that call it include <CLI/CLI.hpp>.
+/// `insecure_help` says what an unkeyed peer could do to this node.
+template <class App>
+void add_node_link_options(App& app, NodeLinkOptions& o, const char* prefix_names,
+                           const char* prefix_help, const char* insecure_help) {
+  app.add_option("--lcm-url", o.url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  app.add_option(prefix_names, o.prefix, prefix_help);
+  app.add_option("--key", o.security.key_file, kKeyOptionHelp);
+  app.add_flag("--insecure", o.security.insecure, insecure_help);
+}
+
+/// A started node's link. signer, verifier and session are null when the
+/// link is unauthenticated (no key on a host-local URL, or --insecure).
+struct NodeLink {
+  LinkSecurity security;
+  std::unique_ptr<MessageSigner> signer;
+  std::unique_ptr<MessageVerifier> verifier;
+  /// One peer session at a time, re-armed after the peer's goodbye or its
+  /// silence (a node serves the next server or master).
+  std::unique_ptr<LinkSession> session;
+  std::unique_ptr<lcm::LCM> lcm;
+};
+
+/// Resolves the link security (printing "<program>: <notice>" to stderr),
+/// creates LCM and, for a ttl=0 udpm URL, confines its receive socket to
+/// this host. Returns 0 with `out` filled, or the exit status after printing
+/// "<program>: error: ..." or the LCM failure: 2 for a bad URL or key (also
+/// no key on a network URL without --insecure), 1 when LCM cannot start or
+/// its socket cannot be confined.
+int start_node_link(const char* program, const NodeLinkOptions& options, NodeLink& out);
+
+}  // namespace tsmh::bridge
