@@ -12,6 +12,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -25,11 +26,19 @@ namespace tsmh::haptics::test {
 /// running when destroyed.
 class Child {
  public:
-  /// `cpu` >= 0: the whole process runs on that CPU only.
-  Child(const std::vector<std::string>& argv, const std::filesystem::path& log, int cpu = -1)
+  /// `cpu` >= 0: the whole process runs on that CPU only. `env`: variables
+  /// set in the child (an empty value unsets one).
+  Child(const std::vector<std::string>& argv, const std::filesystem::path& log, int cpu = -1,
+        const std::map<std::string, std::string>& env = {})
       : log_(log) {
     pid_ = fork();
     if (pid_ == 0) {
+      for (const auto& [k, v] : env) {
+        if (v.empty())
+          unsetenv(k.c_str());
+        else
+          setenv(k.c_str(), v.c_str(), 1);
+      }
       if (cpu >= 0) {
         cpu_set_t set;
         CPU_ZERO(&set);
@@ -52,6 +61,9 @@ class Child {
       _exit(127);
     }
   }
+  Child(const std::vector<std::string>& argv, const std::filesystem::path& log,
+        const std::map<std::string, std::string>& env)
+      : Child(argv, log, -1, env) {}
   ~Child() {
     if (pid_ > 0 && !exited_) {
       kill(pid_, SIGKILL);

@@ -35,6 +35,7 @@
 #include "realtime/clock.hpp"
 #include "realtime/latest_value.hpp"
 #include "scratch_dir_fixture.hpp"
+#include "server_child.hpp"
 #include "session_answer.hpp"
 #include "slave_samples.hpp"
 #include "test_link_key.hpp"
@@ -114,80 +115,7 @@ tsmh::master_state_t master_state(std::int64_t seq) {
   return m;
 }
 
-/// A child process with stdout+stderr in a file and its own environment
-/// additions; killed (SIGKILL) if still running when destroyed.
-class Child {
- public:
-  Child(const std::vector<std::string>& argv, const fs::path& log,
-        const std::map<std::string, std::string>& env)
-      : log_(log) {
-    pid_ = fork();
-    if (pid_ == 0) {
-      sigset_t none;
-      sigemptyset(&none);
-      pthread_sigmask(SIG_SETMASK, &none, nullptr);
-      for (const auto& [k, v] : env) {
-        if (v.empty())
-          unsetenv(k.c_str());
-        else
-          setenv(k.c_str(), v.c_str(), 1);
-      }
-      const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(fd, 1);
-      dup2(fd, 2);
-      std::vector<char*> args;
-      for (const auto& a : argv)
-        args.push_back(const_cast<char*>(a.c_str()));
-      args.push_back(nullptr);
-      execv(args[0], args.data());
-      _exit(127);
-    }
-  }
-  ~Child() {
-    if (pid_ > 0 && !exited_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-
-  void signal(int sig) const { kill(pid_, sig); }
-  bool running() {
-    if (exited_) return false;
-    int st = 0;
-    if (waitpid(pid_, &st, WNOHANG) == pid_) {
-      exited_ = true;
-      status_ = st;
-    }
-    return !exited_;
-  }
-  /// The exit code, or -1 (still running after `timeout`, or killed: `what` says).
-  int wait(std::chrono::milliseconds timeout, std::string* what = nullptr) {
-    wait_until([&] { return !running(); }, timeout);
-    if (!exited_) {
-      if (what) *what = "still running";
-      return -1;
-    }
-    if (WIFSIGNALED(status_)) {
-      if (what) *what = std::string("killed by ") + bridge::signal_name(WTERMSIG(status_));
-      return -1;
-    }
-    return WEXITSTATUS(status_);
-  }
-  std::string log() const {
-    std::ifstream in(log_);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
-
- private:
-  pid_t pid_ = -1;
-  bool exited_ = false;
-  int status_ = 0;
-  fs::path log_;
-};
+using test::Child;
 
 struct Force {
   bool enable = false;
