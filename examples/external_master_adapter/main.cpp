@@ -242,7 +242,7 @@ int main(int argc, char** argv) {
   tsmh::master_devices::MappingConfig mapping_cfg;
   try {
     if (profile_file.empty() != mapping_file.empty())
-      throw tsmh::master_devices::ConfigError("--profile and --mapping go together");
+      throw tsmh::config::ConfigError("--profile and --mapping go together");
     profile = profile_file.empty() ? default_profile()
                                    : tsmh::master_devices::load_master_profile(profile_file);
     const YAML::Node m =

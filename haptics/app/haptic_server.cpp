@@ -475,7 +475,7 @@ std::unique_ptr<master_devices::Device> create_device(
                                     std::filesystem::path(cfg.source).parent_path()};
   try {
     return registry.create(cfg.device_driver, cfg.device_settings, ctx);
-  } catch (const master_devices::ConfigError&) {
+  } catch (const config::ConfigError&) {
     throw;  // a bad setting: exit 2 with the file, field and line
   } catch (const std::exception& e) {
     throw DeviceError(std::string("cannot create the master device (") + cfg.device_driver +

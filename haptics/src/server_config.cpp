@@ -12,7 +12,7 @@
 namespace tsmh::haptics {
 namespace {
 
-using master_devices::FieldReader;
+using config::FieldReader;
 
 /// A number within [lo, hi] ((lo, hi] when lo_open), the fallback when absent.
 double in_range(FieldReader& r, const char* key, double fallback, double lo, double hi,
@@ -216,7 +216,7 @@ ServerConfig parse_server_config(const std::string& text, const std::string& ori
                       "): " + e.msg);
   }
   if (!root.IsMap()) throw ConfigError(origin + ": expected a YAML map");
-  master_devices::reject_duplicate_keys(root, origin);
+  config::reject_duplicate_keys(root, origin);
   FieldReader r(root, origin, "");
   ServerConfig c;
   c.source = origin;

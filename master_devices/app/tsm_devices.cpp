@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
       YAML::Node settings;
       md::DriverContext ctx;
       if (!config.empty()) {
-        settings = md::load_yaml_file(config, "settings");
+        settings = tsmh::config::load_yaml_file(config, "settings");
         ctx.source = config;
         ctx.path = "";
         ctx.base_dir = std::filesystem::path(config).parent_path();

@@ -16,16 +16,16 @@
 #include <string>
 #include <thread>
 
+#include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/registry.hpp"
-#include "master_devices/settings.hpp"
 #include "realtime/latest_value.hpp"
 #include "realtime/pacing.hpp"
 
 namespace tsmh::master_devices::skeleton {
 
-// STEP 1. Settings, with defaults, parsed by FieldReader so that every error
+// STEP 1. Settings, with defaults, parsed by config::FieldReader so that every error
 // names the file and the field (parse_settings below).
 struct Settings {
   int dof = 2;
@@ -35,7 +35,7 @@ struct Settings {
   double command_timeout_ms = 20.0;  ///< no write_torque() this long: zero torque
 };
 
-inline Settings parse_settings(FieldReader& r) {
+inline Settings parse_settings(config::FieldReader& r) {
   Settings s;
   s.dof = static_cast<int>(r.get_int("dof", 2));
   if (s.dof < 1 || s.dof > static_cast<int>(kMaxDof))
@@ -255,7 +255,7 @@ inline void register_skeleton_driver(DriverRegistry& registry, std::shared_ptr<V
                                      std::shared_ptr<const Clock> clock = monotonic_clock()) {
   registry.add("skeleton", "skeleton driver (docs/adding-a-driver.md)",
                [link, clock](const YAML::Node& settings, const DriverContext& ctx) {
-                 FieldReader r(settings, ctx.source, ctx.path);
+                 config::FieldReader r(settings, ctx.source, ctx.path);
                  return std::unique_ptr<Device>(
                      std::make_unique<SkeletonDevice>(parse_settings(r), link, clock));
                });

@@ -29,7 +29,7 @@ void limit_uniformly(JointArray& v, const JointArray& limit, std::size_t n) {
 
 MappingConfig parse_mapping(const YAML::Node& node, const MasterProfile& profile,
                             const std::string& origin, const std::string& path) {
-  FieldReader r(node, origin, path);
+  config::FieldReader r(node, origin, path);
   MappingConfig c;
   const YAML::Node joints = r.node("joints");
   if (!joints.IsDefined() || !joints.IsSequence() || joints.size() == 0 || joints.size() > kMaxDof)
@@ -37,7 +37,7 @@ MappingConfig parse_mapping(const YAML::Node& node, const MasterProfile& profile
                          " slave joints, each {axis: NAME, scale: S}");
   c.slave_joints = joints.size();
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    FieldReader j(joints[i], origin, r.element("joints", i));
+    config::FieldReader j(joints[i], origin, r.element("joints", i));
     const std::string axis = j.get_string("axis");
     c.axes[i].master_axis = profile.axis_index(axis);
     if (c.axes[i].master_axis < 0)
@@ -48,7 +48,7 @@ MappingConfig parse_mapping(const YAML::Node& node, const MasterProfile& profile
     c.axes[i].offset = j.get_double("offset", 0.0);
     j.reject_unknown();
   }
-  FieldReader b(r.node("buttons"), origin, r.field("buttons"));
+  config::FieldReader b(r.node("buttons"), origin, r.field("buttons"));
   auto role = [&](std::string_view key, int& bit) {
     if (!b.has(key)) return;
     const std::string name = b.get_string(key);

@@ -26,7 +26,7 @@ std::vector<ConnectedDevice> list_with(TransportProvider& provider, const std::s
   return out;
 }
 
-std::shared_ptr<EmulatorBus> make_emulator(FieldReader& r, const DeviceProfile& profile,
+std::shared_ptr<EmulatorBus> make_emulator(config::FieldReader& r, const DeviceProfile& profile,
                                            std::shared_ptr<const Clock> clock) {
   EmulatorBus::Options options;
   options.clock = std::move(clock);
@@ -38,11 +38,11 @@ std::shared_ptr<EmulatorBus> make_emulator(FieldReader& r, const DeviceProfile& 
   if (op.IsDefined()) {
     // A simulated hand on the emulated handle: the mechanism carries the
     // hand's inertia, the hand pushes with its arm impedance.
-    FieldReader o(op, r.source(), r.field("operator"));
+    config::FieldReader o(op, r.source(), r.field("operator"));
     const std::size_t dof = profile.joints.size();
     Scenario scenario = parse_scenario(o, dof);
     HandParams hand;
-    FieldReader h(o.node("hand"), o.source(), o.field("hand"));
+    config::FieldReader h(o.node("hand"), o.source(), o.field("hand"));
     hand.inertia_kgm2 = h.get_double("inertia_kgm2", hand.inertia_kgm2);
     hand.stiffness_nm_per_rad = h.get_double("stiffness_nm_per_rad", hand.stiffness_nm_per_rad);
     hand.damping_nms_per_rad = h.get_double("damping_nms_per_rad", hand.damping_nms_per_rad);
@@ -100,7 +100,7 @@ FirmwareConfig firmware_for_profile(const DeviceProfile& profile) {
   return c;
 }
 
-DeviceProfile select_profile(FieldReader& r, const std::vector<DeviceProfile>& known,
+DeviceProfile select_profile(config::FieldReader& r, const std::vector<DeviceProfile>& known,
                              const DriverContext& context) {
   if (!r.has("profile")) {
     r.node("profile");
@@ -130,26 +130,25 @@ void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions opt
   if (profiles->empty()) profiles->push_back(builtin_console_profile());
   const std::shared_ptr<const Clock> clock = options.clock ? options.clock : monotonic_clock();
 
-  auto console_factory =
-      [profiles, clock](
-          const std::string& driver,
-          std::function<std::shared_ptr<TransportProvider>(FieldReader&, const DeviceProfile&)>
-              make_provider) {
-        return [profiles, clock, driver, make_provider](const YAML::Node& settings,
-                                                        const DriverContext& ctx) {
-          FieldReader r(settings, ctx.source, ctx.path);
-          DeviceProfile profile = select_profile(r, *profiles, ctx);
-          ConsoleSettings cs = parse_console_settings(r);
-          std::shared_ptr<TransportProvider> provider = make_provider(r, profile);
-          r.reject_unknown();
-          return std::unique_ptr<Device>(std::make_unique<ConsoleDevice>(
-              driver, std::move(profile), std::move(cs), std::move(provider), clock));
-        };
-      };
+  auto console_factory = [profiles, clock](const std::string& driver,
+                                           std::function<std::shared_ptr<TransportProvider>(
+                                               config::FieldReader&, const DeviceProfile&)>
+                                               make_provider) {
+    return [profiles, clock, driver, make_provider](const YAML::Node& settings,
+                                                    const DriverContext& ctx) {
+      config::FieldReader r(settings, ctx.source, ctx.path);
+      DeviceProfile profile = select_profile(r, *profiles, ctx);
+      ConsoleSettings cs = parse_console_settings(r);
+      std::shared_ptr<TransportProvider> provider = make_provider(r, profile);
+      r.reject_unknown();
+      return std::unique_ptr<Device>(std::make_unique<ConsoleDevice>(
+          driver, std::move(profile), std::move(cs), std::move(provider), clock));
+    };
+  };
 
   registry.add("hid", "our 2-DOF console over hidapi (hidraw), protocol in docs/hid-protocol.md",
                console_factory("hid",
-                               [clock](FieldReader& r, const DeviceProfile&) {
+                               [clock](config::FieldReader& r, const DeviceProfile&) {
                                  HidapiProvider::Options o;
                                  o.clock = clock;
                                  o.read_timeout_ms = static_cast<int>(
@@ -165,7 +164,7 @@ void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions opt
 
   registry.add("usb", "our 2-DOF console over libusb (vendor interface, async transfers, hotplug)",
                console_factory("usb",
-                               [clock](FieldReader& r, const DeviceProfile&) {
+                               [clock](config::FieldReader& r, const DeviceProfile&) {
                                  LibusbProvider::Options o;
                                  o.clock = clock;
                                  o.in_transfers =
@@ -183,14 +182,14 @@ void register_builtin_drivers(DriverRegistry& registry, BuiltinDriverOptions opt
 
   registry.add(
       "emulator", "our console's firmware emulated in-process, through the hid/usb driver code",
-      console_factory("emulator", [clock](FieldReader& r, const DeviceProfile& profile) {
+      console_factory("emulator", [clock](config::FieldReader& r, const DeviceProfile& profile) {
         return std::static_pointer_cast<TransportProvider>(make_emulator(r, profile, clock));
       }));
 
   registry.add("sim",
                "simulated master with an operator hand model (scenarios palpate, sine, step)",
                [clock](const YAML::Node& settings, const DriverContext& ctx) {
-                 FieldReader r(settings, ctx.source, ctx.path);
+                 config::FieldReader r(settings, ctx.source, ctx.path);
                  SimSettings s = parse_sim_settings(r);
                  r.reject_unknown();
                  return std::unique_ptr<Device>(std::make_unique<SimDevice>(std::move(s), clock));

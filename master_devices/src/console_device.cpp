@@ -27,7 +27,7 @@ const char* firmware_fault_text(protocol::FirmwareFault f) {
 }
 }  // namespace
 
-ConsoleSettings parse_console_settings(FieldReader& r) {
+ConsoleSettings parse_console_settings(config::FieldReader& r) {
   ConsoleSettings s;
   s.path = r.get_string("path", "");
   s.serial = r.get_string("serial", "");

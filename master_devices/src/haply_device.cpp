@@ -57,12 +57,12 @@ std::string_view builtin_haply_profile_text(std::string_view name) {
 MasterProfile builtin_haply_profile(std::string_view name) {
   const std::string_view text = builtin_haply_profile_text(name);
   if (text.empty())
-    throw ConfigError("'" + std::string(name) +
-                      "' is not a built-in Haply profile (haply-2diy, haply-2diy-gen2)");
+    throw config::ConfigError("'" + std::string(name) +
+                              "' is not a built-in Haply profile (haply-2diy, haply-2diy-gen2)");
   return parse_master_profile(std::string(text), std::string(name) + ".yaml (built in)");
 }
 
-HaplySettings parse_haply_settings(FieldReader& r, const DriverContext& ctx) {
+HaplySettings parse_haply_settings(config::FieldReader& r, const DriverContext& ctx) {
   HaplySettings s;
   s.port = r.get_string("port", "");
   if (s.port.empty())
@@ -475,7 +475,7 @@ void register_haply_driver(DriverRegistry& registry, std::shared_ptr<const Clock
   registry.add(
       "haply", "Haply 2DIY pantograph board over USB serial (not yet verified on hardware)",
       [clock](const YAML::Node& settings, const DriverContext& ctx) {
-        FieldReader r(settings, ctx.source, ctx.path);
+        config::FieldReader r(settings, ctx.source, ctx.path);
         HaplySettings s = parse_haply_settings(r, ctx);
         const YAML::Node mapping = r.node("mapping");
         r.reject_unknown();

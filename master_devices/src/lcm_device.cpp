@@ -13,7 +13,7 @@
 
 namespace tsmh::master_devices {
 
-LcmSettings parse_lcm_settings(FieldReader& r) {
+LcmSettings parse_lcm_settings(config::FieldReader& r) {
   LcmSettings s;
   s.url = r.get_string("url", "");
   if (!s.url.empty()) {
@@ -329,7 +329,7 @@ void register_lcm_driver(DriverRegistry& registry, std::shared_ptr<const Clock> 
                          std::shared_ptr<LcmMessageAuth> auth) {
   registry.add("lcm", "external master driver over LCM (MASTER_STATE in, MASTER_FORCE out)",
                [clock, auth](const YAML::Node& settings, const DriverContext& ctx) {
-                 FieldReader r(settings, ctx.source, ctx.path);
+                 config::FieldReader r(settings, ctx.source, ctx.path);
                  LcmSettings s = parse_lcm_settings(r);
                  r.reject_unknown();
                  s.auth = auth;

@@ -22,7 +22,7 @@ int MasterProfile::button_bit(std::string_view n) const {
 
 namespace {
 
-void read_names(FieldReader& r, std::string_view key, std::size_t count, std::size_t max,
+void read_names(config::FieldReader& r, std::string_view key, std::size_t count, std::size_t max,
                 std::string* out, std::size_t* got) {
   const YAML::Node n = r.node(key);
   if (!n.IsDefined()) {
@@ -42,7 +42,7 @@ void read_names(FieldReader& r, std::string_view key, std::size_t count, std::si
   if (got) *got = n.size();
 }
 
-void positive_array(FieldReader& r, std::string_view key, JointArray& out, std::size_t n) {
+void positive_array(config::FieldReader& r, std::string_view key, JointArray& out, std::size_t n) {
   if (!r.has(key)) r.fail(key, "missing: one limit per axis (or one for all)");
   r.get_joint_array(key, out, n);
   for (std::size_t i = 0; i < n; ++i)
@@ -56,17 +56,17 @@ MasterProfile parse_master_profile(const std::string& yaml_text, const std::stri
   try {
     root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
-    throw ConfigError(origin + ": not valid YAML: " + e.what());
+    throw config::ConfigError(origin + ": not valid YAML: " + e.what());
   }
-  reject_duplicate_keys(root, origin);
-  FieldReader r(root, origin, "");
+  config::reject_duplicate_keys(root, origin);
+  config::FieldReader r(root, origin, "");
   MasterProfile p;
   p.name = r.get_string("name");
   p.description = r.get_string("description", "");
   p.update_rate_hz = r.get_positive("update_rate_hz", 0.0);
   if (!(p.update_rate_hz > 0.0)) r.fail("update_rate_hz", "missing: the device's update rate");
 
-  FieldReader k(r.node("kinematics"), origin, "kinematics");
+  config::FieldReader k(r.node("kinematics"), origin, "kinematics");
   const std::string type = k.get_string("type");
   const long long joints = k.get_int("joints");
   if (joints < 1 || joints > static_cast<long long>(kMaxDof))
@@ -88,7 +88,7 @@ MasterProfile parse_master_profile(const std::string& yaml_text, const std::stri
 
   const std::size_t n = p.task_axes();
   read_names(r, "axes", n, kMaxDof, p.axis_names.data(), nullptr);
-  FieldReader w(r.node("workspace"), origin, "workspace");
+  config::FieldReader w(r.node("workspace"), origin, "workspace");
   if (!w.has("min") || !w.has("max")) w.fail("min", "missing: workspace.min and workspace.max");
   w.get_joint_array("min", p.workspace_min, n);
   w.get_joint_array("max", p.workspace_max, n);
@@ -109,7 +109,7 @@ MasterProfile parse_master_profile(const std::string& yaml_text, const std::stri
 
 MasterProfile load_master_profile(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw ConfigError(path.string() + ": cannot read the master profile");
+  if (!in) throw config::ConfigError(path.string() + ": cannot read the master profile");
   std::stringstream ss;
   ss << in.rdbuf();
   return parse_master_profile(ss.str(), path.string());

@@ -8,7 +8,7 @@
 namespace tsmh::master_devices {
 namespace {
 
-JointProfile parse_joint(FieldReader& r) {
+JointProfile parse_joint(config::FieldReader& r) {
   JointProfile j;
   j.name = r.get_string("name", "");
   j.counts_per_rad = r.get_double("counts_per_rad");
@@ -42,7 +42,7 @@ JointProfile parse_joint(FieldReader& r) {
   return j;
 }
 
-std::uint16_t parse_usb_id(FieldReader& r, std::string_view key) {
+std::uint16_t parse_usb_id(config::FieldReader& r, std::string_view key) {
   const long long v = r.get_int(key);
   if (v < 0 || v > 0xFFFF) r.fail(key, "must be a 16-bit USB ID (0 .. 0xffff)");
   return static_cast<std::uint16_t>(v);
@@ -51,8 +51,8 @@ std::uint16_t parse_usb_id(FieldReader& r, std::string_view key) {
 }  // namespace
 
 DeviceProfile parse_profile(const YAML::Node& root, const std::string& source) {
-  if (!root.IsMap()) config_fail(source, "", "a profile must be a YAML map", root);
-  FieldReader r(root, source, "");
+  if (!root.IsMap()) config::config_fail(source, "", "a profile must be a YAML map", root);
+  config::FieldReader r(root, source, "");
   DeviceProfile p;
   p.source = source;
   p.name = r.get_string("name");
@@ -75,7 +75,7 @@ DeviceProfile parse_profile(const YAML::Node& root, const std::string& source) {
     r.fail("joints", "at most " + std::to_string(kMaxDof) + " joints are supported");
   }
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    FieldReader jr(joints[i], source, r.element("joints", i));
+    config::FieldReader jr(joints[i], source, r.element("joints", i));
     p.joints.push_back(parse_joint(jr));
   }
   r.reject_unknown();
@@ -83,13 +83,13 @@ DeviceProfile parse_profile(const YAML::Node& root, const std::string& source) {
 }
 
 DeviceProfile load_profile(const std::filesystem::path& path) {
-  return parse_profile(load_yaml_file(path, "profile"), path.string());
+  return parse_profile(config::load_yaml_file(path, "profile"), path.string());
 }
 
 std::vector<DeviceProfile> load_profiles(const std::filesystem::path& dir) {
   std::error_code ec;
   if (!std::filesystem::is_directory(dir, ec)) {
-    throw ConfigError(dir.string() + ": profile directory does not exist");
+    throw config::ConfigError(dir.string() + ": profile directory does not exist");
   }
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "master_devices/settings.hpp"
+#include "config/field_reader.hpp"
 
 namespace tsmh::master_devices {
 
@@ -28,8 +28,8 @@ std::unique_ptr<Device> DriverRegistry::create(std::string_view name, const YAML
     std::string known;
     for (const auto& [n, e] : entries_)
       known += (known.empty() ? "" : ", ") + n;
-    throw ConfigError(context.source + ": unknown device driver '" + std::string(name) +
-                      "' (registered: " + known + ")");
+    throw config::ConfigError(context.source + ": unknown device driver '" + std::string(name) +
+                              "' (registered: " + known + ")");
   }
   return it->second.factory(settings, context);
 }
@@ -58,7 +58,7 @@ std::vector<ConnectedDevice> DriverRegistry::list_connected() const {
 
 std::unique_ptr<Device> create_device(const DriverRegistry& registry, const YAML::Node& device_node,
                                       const DriverContext& context) {
-  FieldReader r(device_node, context.source, context.path);
+  config::FieldReader r(device_node, context.source, context.path);
   const std::string driver = r.get_string("driver");
   const YAML::Node settings = r.node("settings");
   r.reject_unknown();

@@ -127,7 +127,7 @@ Intention step(const StepScenario& s, double t, std::size_t dof) {
   return in;  // a true step: qd stays 0, the hand's own dynamics smooth it
 }
 
-int count(FieldReader& r, std::string_view key, int fallback) {
+int count(config::FieldReader& r, std::string_view key, int fallback) {
   const long long v = r.get_int(key, fallback);
   if (v < 0 || v > 1000) r.fail(key, "must be 0 .. 1000");
   return static_cast<int>(v);
@@ -179,7 +179,7 @@ std::string_view scenario_name(const Scenario& s) {
   }
 }
 
-Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
+Scenario parse_scenario(config::FieldReader& settings, std::size_t dof) {
   const std::string name = settings.get_string("scenario", "palpate");
   // Read every scenario's map key so that e.g. a `sine:` block next to
   // `scenario: palpate` is not reported as unknown, but only parse the chosen one.
@@ -187,7 +187,7 @@ Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
   const YAML::Node sine_node = settings.node("sine");
   const YAML::Node step_node = settings.node("step");
   if (name == "palpate") {
-    FieldReader r(palpate_node, settings.source(), settings.field("palpate"));
+    config::FieldReader r(palpate_node, settings.source(), settings.field("palpate"));
     PalpateScenario p;
     const long long joint = r.get_int("press_joint", 0);
     if (joint < 0 || static_cast<std::size_t>(joint) >= dof) {
@@ -214,7 +214,7 @@ Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
     p.alternate = r.get_bool("alternate", false);
     const YAML::Node sweep_node = r.node("sweep");
     if (sweep_node) {
-      FieldReader sw(sweep_node, settings.source(), r.field("sweep"));
+      config::FieldReader sw(sweep_node, settings.source(), r.field("sweep"));
       p.sweep.after_press = count(sw, "after_press", 0);
       if (p.sweep.after_press > p.soft_presses + p.hard_presses)
         sw.fail("after_press", "must be at most the number of presses");
@@ -229,7 +229,7 @@ Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
     return p;
   }
   if (name == "sine") {
-    FieldReader r(sine_node, settings.source(), settings.field("sine"));
+    config::FieldReader r(sine_node, settings.source(), settings.field("sine"));
     SineScenario s;
     r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
     r.get_joint_array("frequency_hz", s.frequency_hz, dof);
@@ -240,7 +240,7 @@ Scenario parse_scenario(FieldReader& settings, std::size_t dof) {
     return s;
   }
   if (name == "step") {
-    FieldReader r(step_node, settings.source(), settings.field("step"));
+    config::FieldReader r(step_node, settings.source(), settings.field("step"));
     StepScenario s;
     r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
     s.start_s = r.get_non_negative("start_s", s.start_s);

@@ -11,7 +11,7 @@
 #include "realtime/pacing.hpp"
 
 namespace tsmh::master_devices {
-SimSettings parse_sim_settings(FieldReader& r) {
+SimSettings parse_sim_settings(config::FieldReader& r) {
   SimSettings s;
   const std::string time = r.get_string("time", "real");
   if (time != "real" && time != "simulated") r.fail("time", "must be 'real' or 'simulated'");
@@ -24,14 +24,14 @@ SimSettings parse_sim_settings(FieldReader& r) {
   s.dof = static_cast<std::size_t>(dof);
   s.scenario = parse_scenario(r, s.dof);
 
-  FieldReader hand(r.node("hand"), r.source(), r.field("hand"));
+  config::FieldReader hand(r.node("hand"), r.source(), r.field("hand"));
   s.hand.inertia_kgm2 = hand.get_positive("inertia_kgm2", s.hand.inertia_kgm2);
   s.hand.stiffness_nm_per_rad =
       hand.get_positive("stiffness_nm_per_rad", s.hand.stiffness_nm_per_rad);
   s.hand.damping_nms_per_rad = hand.get_double("damping_nms_per_rad", s.hand.damping_nms_per_rad);
   if (s.hand.damping_nms_per_rad < 0) hand.fail("damping_nms_per_rad", "must be >= 0");
   hand.reject_unknown();
-  FieldReader handle(r.node("handle"), r.source(), r.field("handle"));
+  config::FieldReader handle(r.node("handle"), r.source(), r.field("handle"));
   s.handle.inertia_kgm2 = handle.get_positive("inertia_kgm2", s.handle.inertia_kgm2);
   s.handle.damping_nms_per_rad =
       handle.get_double("damping_nms_per_rad", s.handle.damping_nms_per_rad);

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "master_devices/settings.hpp"
+#include "config/field_reader.hpp"
 
 namespace tsmh::master_devices {
 
@@ -80,8 +80,9 @@ std::unique_ptr<VendorMaster> make_vendor_master(std::string_view name,
     return std::make_unique<MissingSdkMaster>(
         "openhaptics",
         "Geomagic/3D Systems Touch devices need the OpenHaptics HD API (proprietary)");
-  throw ConfigError("'" + std::string(name) + "' is not a known vendor master (expected one of: " +
-                    vendor_master_names() + ")");
+  throw config::ConfigError(
+      "'" + std::string(name) +
+      "' is not a known vendor master (expected one of: " + vendor_master_names() + ")");
 }
 
 }  // namespace tsmh::master_devices

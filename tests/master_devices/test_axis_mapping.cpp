@@ -122,7 +122,7 @@ TEST(AxisMapping, UnknownNamesAreErrorsNamingTheFieldAndTheKnownNames) {
   try {
     mapping(p, "joints: [{axis: w}]");
     FAIL() << "accepted axis w";
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("mapping.joints[0].axis"), std::string::npos) << what;
     EXPECT_NE(what.find("x, y, z"), std::string::npos) << what;
@@ -130,7 +130,7 @@ TEST(AxisMapping, UnknownNamesAreErrorsNamingTheFieldAndTheKnownNames) {
   try {
     mapping(p, "joints: [{axis: x}]\nbuttons: {clutch: trigger}");
     FAIL() << "accepted button trigger";
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("clutch"), std::string::npos) << what;
     EXPECT_NE(what.find("center, left, forward, right"), std::string::npos) << what;
@@ -138,7 +138,7 @@ TEST(AxisMapping, UnknownNamesAreErrorsNamingTheFieldAndTheKnownNames) {
   EXPECT_THROW(parse_master_profile("name: a\nupdate_rate_hz: 1000\nkinematics: {type: delta, "
                                     "joints: 3}\n",
                                     "p.yaml"),
-               ConfigError);
+               config::ConfigError);
 }
 
 // Central differences of the forward kinematics.

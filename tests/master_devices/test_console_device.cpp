@@ -694,10 +694,10 @@ TEST(ConsoleDevice, UnplugIsNotOkFromTheBoundEvenBeforeTheLinkLossPathFires) {
 TEST(ConsoleDevice, FreshnessSettingsAreValidated) {
   const auto error_of = [](const char* yaml) {
     YAML::Node node = YAML::Load(yaml);
-    FieldReader r(node, "server.yaml", "device.settings");
+    config::FieldReader r(node, "server.yaml", "device.settings");
     try {
       parse_console_settings(r);
-    } catch (const ConfigError& e) {
+    } catch (const config::ConfigError& e) {
       return std::string(e.what());
     }
     return std::string();

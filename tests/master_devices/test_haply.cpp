@@ -432,7 +432,7 @@ TEST(HaplyDriver, SettingsErrorsNameTheField) {
   auto error_of = [](const std::string& yaml) {
     try {
       make(YAML::Load(yaml));
-    } catch (const md::ConfigError& e) {
+    } catch (const tsmh::config::ConfigError& e) {
       return std::string(e.what());
     }
     return std::string("no error");

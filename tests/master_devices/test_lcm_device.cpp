@@ -186,7 +186,7 @@ TEST(LcmDevice, AnAmbiguousUrlIsASettingsError) {
     registry.create("lcm", YAML::Load("url: 'udpm://239.255.76.67:7667?ttl=0&ttl=1'\n"),
                     DriverContext{"server.yaml", "device.settings", {}});
     FAIL();
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("device.settings.url"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("option 'ttl' is given twice"), std::string::npos)
         << e.what();
@@ -249,7 +249,7 @@ TEST(LcmDevice, ChannelPrefixAndRegistration) {
     registry.create("lcm", YAML::Load("dof: 0\n"),
                     DriverContext{"server.yaml", "device.settings", {}});
     FAIL();
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("server.yaml: device.settings.dof: must be 1 .. 8"),
               std::string::npos);
   }

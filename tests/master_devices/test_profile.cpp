@@ -36,7 +36,7 @@ joints:
 std::string error_of(const std::string& yaml) {
   try {
     parse_profile(YAML::Load(yaml), "profile.yaml");
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     return e.what();
   }
   return "(no error)";
@@ -116,7 +116,7 @@ TEST(Profile, LoadProfileNamesTheFile) {
   try {
     load_profile("/nonexistent/profile.yaml");
     FAIL();
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/profile.yaml"), std::string::npos);
   }
 }

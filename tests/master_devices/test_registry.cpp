@@ -6,10 +6,10 @@
 #include <sstream>
 #include <thread>
 
+#include "config/field_reader.hpp"
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/registry.hpp"
-#include "master_devices/settings.hpp"
 
 namespace tsmh::master_devices {
 namespace {
@@ -46,9 +46,9 @@ TEST(Registry, RejectsDuplicateAndUnknownDrivers) {
   DriverContext ctx;
   ctx.source = "server.yaml";
   const std::string e = error_of([&] { r.create("phantom", YAML::Node(), ctx); });
-  EXPECT_NE(
-      e.find("server.yaml: unknown device driver 'phantom' (registered: emulator, haply, hid, sim, usb)"),
-      std::string::npos)
+  EXPECT_NE(e.find("server.yaml: unknown device driver 'phantom' (registered: emulator, haply, "
+                   "hid, sim, usb)"),
+            std::string::npos)
       << e;
 }
 

@@ -70,14 +70,14 @@ TEST(Scenarios, SineAndStep) {
 }
 
 Scenario parse(const std::string& yaml) {
-  FieldReader r(YAML::Load(yaml), "server.yaml", "device.settings");
+  config::FieldReader r(YAML::Load(yaml), "server.yaml", "device.settings");
   return parse_scenario(r, 2);
 }
 
 std::string error_of(const std::string& yaml) {
   try {
     parse(yaml);
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     return e.what();
   }
   return "(no error)";

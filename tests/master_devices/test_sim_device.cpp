@@ -140,10 +140,10 @@ TEST(SimDevice, RealTimeModeStreamsAndZeroesStaleCommands) {
 TEST(SimDevice, SettingsErrorsNameTheField) {
   auto error_of = [](const std::string& yaml) {
     try {
-      FieldReader r(YAML::Load(yaml), "server.yaml", "device.settings");
+      config::FieldReader r(YAML::Load(yaml), "server.yaml", "device.settings");
       parse_sim_settings(r);
       r.reject_unknown();
-    } catch (const ConfigError& e) {
+    } catch (const config::ConfigError& e) {
       return std::string(e.what());
     }
     return std::string("(no error)");

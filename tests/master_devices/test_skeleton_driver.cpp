@@ -48,10 +48,10 @@ TEST(SkeletonDriver, SettingsErrorsNameTheField) {
   try {
     registry.create("skeleton", YAML::Load("{dof: 9}"), {"server.yaml", "device.settings", {}});
     FAIL() << "dof 9 accepted";
-  } catch (const ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("device.settings.dof"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(registry.create("skeleton", YAML::Load("{rate: 5}"), {}), ConfigError);
+  EXPECT_THROW(registry.create("skeleton", YAML::Load("{rate: 5}"), {}), config::ConfigError);
 }
 
 TEST(SkeletonDriver, TorqueFollowsTheRules) {

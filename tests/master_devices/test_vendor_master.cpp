@@ -47,7 +47,7 @@ TEST(VendorMaster, StubsRefuseToRunNamingWhatIsMissing) {
   try {
     md::make_vendor_master("phantom", falcon, 1000.0, 0.01);
     FAIL();
-  } catch (const md::ConfigError& e) {
+  } catch (const tsmh::config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("'phantom' is not a known vendor master (expected one "
                                          "of: simulated, novint-falcon, force-dimension, "
                                          "openhaptics)"),

@@ -11,16 +11,16 @@
 #include <vector>
 
 #include "bridge/limits.hpp"
+#include "config/field_reader.hpp"
 #include "estimator/estimator_settings.hpp"
 #include "haptics/haptic_loop.hpp"
 #include "master_devices/device.hpp"
-#include "master_devices/settings.hpp"
 
 namespace tsmh::haptics {
 
 /// Bad configuration; the message names file, field and line. The same type
 /// as the device drivers' settings errors, so one catch covers both.
-using ConfigError = master_devices::ConfigError;
+using ConfigError = config::ConfigError;
 
 struct JointConfig {
   std::string name;

@@ -39,7 +39,7 @@ FirmwareConfig firmware_for_profile(const DeviceProfile& profile);
 /// The profile a console driver's settings select: `profile: NAME` of a
 /// known profile, `profile: FILE.yaml` (relative to the context's base_dir),
 /// or the first known profile when absent.
-DeviceProfile select_profile(FieldReader& settings, const std::vector<DeviceProfile>& known,
+DeviceProfile select_profile(config::FieldReader& settings, const std::vector<DeviceProfile>& known,
                              const DriverContext& context);
 
 }  // namespace tsmh::master_devices

@@ -30,13 +30,13 @@
 #include <string>
 #include <thread>
 
+#include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/device_clock.hpp"
 #include "master_devices/joint_calibration.hpp"
 #include "master_devices/profile.hpp"
 #include "master_devices/protocol.hpp"
-#include "master_devices/settings.hpp"
 #include "master_devices/transport.hpp"
 #include "realtime/latest_value.hpp"
 
@@ -62,7 +62,7 @@ struct ConsoleSettings {
 
 /// Reads ConsoleSettings keys from a driver settings map (all optional).
 /// `profile` is returned separately by the caller; this ignores it.
-ConsoleSettings parse_console_settings(FieldReader& r);
+ConsoleSettings parse_console_settings(config::FieldReader& r);
 
 struct ConsoleStats {
   std::uint64_t reports = 0;       ///< valid input reports

@@ -56,7 +56,7 @@ struct HaplySettings {
 /// Reads the driver's settings (port, profile, board, rate_hz, watchdog_ms,
 /// command_timeout_ms, open_timeout_ms, max_bad_replies, workspace_margin_m); does not call
 /// reject_unknown() (the factory also reads `mapping`).
-HaplySettings parse_haply_settings(FieldReader& r, const DriverContext& context);
+HaplySettings parse_haply_settings(config::FieldReader& r, const DriverContext& context);
 
 /// The built-in master profiles of the 2DIY (`haply-2diy`: third-generation
 /// geometry and board; `haply-2diy-gen2`), the same text as

@@ -17,11 +17,11 @@
 #include <string>
 #include <thread>
 
+#include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
 #include "master_devices/lcm_message_auth.hpp"
 #include "master_devices/registry.hpp"
-#include "master_devices/settings.hpp"
 #include "realtime/latest_value.hpp"
 
 namespace lcm {
@@ -53,7 +53,7 @@ struct LcmSettings {
   std::string force_channel() const { return channel_prefix + "MASTER_FORCE"; }
 };
 
-LcmSettings parse_lcm_settings(FieldReader& r);
+LcmSettings parse_lcm_settings(config::FieldReader& r);
 
 class LcmDevice final : public Device {
  public:

@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <string>
 
+#include "config/field_reader.hpp"
 #include "master_devices/kinematics.hpp"
-#include "master_devices/settings.hpp"
 
 namespace tsmh::master_devices {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "master_devices/settings.hpp"
+#include "config/field_reader.hpp"
 #include "master_devices/types.hpp"
 
 namespace tsmh::master_devices {
@@ -43,9 +43,9 @@ struct DeviceProfile {
 
 /// Validates and converts a profile document; `source` names it in errors.
 DeviceProfile parse_profile(const YAML::Node& root, const std::string& source);
-/// Reads and parses a profile file. Throws ConfigError.
+/// Reads and parses a profile file. Throws config::ConfigError.
 DeviceProfile load_profile(const std::filesystem::path& path);
-/// All *.yaml profiles in a directory, sorted by file name. Throws ConfigError.
+/// All *.yaml profiles in a directory, sorted by file name. Throws config::ConfigError.
 std::vector<DeviceProfile> load_profiles(const std::filesystem::path& dir);
 
 /// Our two-DOF console's profile (the same as profiles/tsm-console-2dof.yaml).

@@ -50,7 +50,7 @@ class DriverRegistry {
   /// Adds a driver. Throws std::invalid_argument when the name is taken or empty.
   void add(std::string name, std::string description, Factory factory, Lister lister = {});
   bool has(std::string_view name) const;
-  /// Creates (does not open) a device. Throws ConfigError for an unknown
+  /// Creates (does not open) a device. Throws config::ConfigError for an unknown
   /// driver (naming the known ones) or bad settings.
   std::unique_ptr<Device> create(std::string_view name, const YAML::Node& settings,
                                  const DriverContext& context = {}) const;

@@ -16,7 +16,7 @@
 #include <string_view>
 #include <variant>
 
-#include "master_devices/settings.hpp"
+#include "config/field_reader.hpp"
 #include "master_devices/types.hpp"
 
 namespace tsmh::master_devices {
@@ -94,6 +94,6 @@ PressWindow palpate_press(const PalpateScenario& p, int index);
 
 /// Reads `scenario: NAME` plus the optional map under the same name
 /// (e.g. `palpate: {soft_depth_rad: 0.1}`) from a driver settings map.
-Scenario parse_scenario(FieldReader& settings, std::size_t dof);
+Scenario parse_scenario(config::FieldReader& settings, std::size_t dof);
 
 }  // namespace tsmh::master_devices

@@ -21,9 +21,9 @@
 #include <string>
 #include <thread>
 
+#include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
-#include "master_devices/settings.hpp"
 #include "master_devices/simulated_operator.hpp"
 #include "realtime/latest_value.hpp"
 
@@ -48,7 +48,7 @@ struct SimSettings {
 };
 
 /// Parses a `sim` settings map; every error names source and field.
-SimSettings parse_sim_settings(FieldReader& r);
+SimSettings parse_sim_settings(config::FieldReader& r);
 
 class SimDevice final : public Device {
  public:

@@ -82,7 +82,7 @@ class SimulatedVendorMaster final : public VendorMaster {
 
 /// `simulated`, or a stub for a device whose SDK or firmware is not in this
 /// build: `novint-falcon`, `force-dimension`, `openhaptics`. Throws
-/// ConfigError naming the known names for another.
+/// config::ConfigError naming the known names for another.
 std::unique_ptr<VendorMaster> make_vendor_master(std::string_view name,
                                                  const MasterProfile& profile, double rate_hz,
                                                  double amplitude);

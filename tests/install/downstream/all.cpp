@@ -3,6 +3,7 @@
 #include <tsmh/master_state_t.hpp>
 
 #include "bridge/lcm_url.hpp"
+#include "config/field_reader.hpp"
 #include "haptics/server_config.hpp"
 #include "master_devices/lcm_device.hpp"
 #include "master_devices/protocol.hpp"

@@ -1,14 +1,11 @@
 #pragma once
-// Reading YAML maps (device profiles, driver settings) field by field, so that
-// every error names the file and the field at fault, e.g.
+// Reading a YAML configuration map field by field, so that every error names
+// the file and the field at fault, e.g.
 //   "profile.yaml: joints[1].counts_per_rad: must be > 0 (line 14)".
 // Unknown keys are errors too: a misspelt limit must not silently fall back
-// to its default.
-//
-// Public API of master_devices, not only the drivers' helper: haptic-server
-// reads its own configuration with it too (haptics/src/server_config.cpp),
-// so every configuration error of the project reads the same way
-// (docs/architecture.md "Defined once").
+// to its default. One reader for every configuration of the project:
+// haptic-server's own file (haptics), driver settings and device profiles
+// (master_devices), tsm-devices (docs/architecture.md "Defined once").
 
 #include <yaml-cpp/yaml.h>
 
@@ -18,11 +15,11 @@
 #include <string>
 #include <string_view>
 
-#include "master_devices/types.hpp"
+#include "realtime/joints.hpp"
 
-namespace tsmh::master_devices {
+namespace tsmh::config {
 
-/// Bad configuration: a profile or driver settings. The message names source and field.
+/// Bad configuration. The message names source and field.
 class ConfigError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -51,7 +48,7 @@ class FieldReader {
   double get_non_negative(std::string_view key, double fallback);
   /// One value per joint: a number (every joint) or a list of `dof` numbers.
   /// Leaves `out` unchanged when absent.
-  void get_joint_array(std::string_view key, JointArray& out, std::size_t dof);
+  void get_joint_array(std::string_view key, realtime::JointArray& out, std::size_t dof);
 
   /// "path.key" (or "key" at the root), for messages.
   std::string field(std::string_view key) const;
@@ -90,4 +87,4 @@ YAML::Node load_yaml_file(const std::filesystem::path& path, std::string_view wh
 [[noreturn]] void config_fail(const std::string& source, const std::string& field,
                               std::string_view message, const YAML::Node& at = YAML::Node());
 
-}  // namespace tsmh::master_devices
+}  // namespace tsmh::config

@@ -1,4 +1,4 @@
-#include "master_devices/settings.hpp"
+#include "config/field_reader.hpp"
 
 #include <cmath>
 #include <string>
@@ -8,7 +8,7 @@
 #include "files/input_file.hpp"
 #include "files/yaml_keys.hpp"
 
-namespace tsmh::master_devices {
+namespace tsmh::config {
 
 namespace {
 std::string line_of(const YAML::Node& n) {
@@ -163,7 +163,8 @@ double FieldReader::get_non_negative(std::string_view key, double fallback) {
   return v;
 }
 
-void FieldReader::get_joint_array(std::string_view key, JointArray& out, std::size_t dof) {
+void FieldReader::get_joint_array(std::string_view key, realtime::JointArray& out,
+                                  std::size_t dof) {
   const YAML::Node n = node(key);
   if (!n.IsDefined()) return;
   if (n.IsScalar()) {
@@ -182,4 +183,4 @@ void FieldReader::get_joint_array(std::string_view key, JointArray& out, std::si
   }
 }
 
-}  // namespace tsmh::master_devices
+}  // namespace tsmh::config
