@@ -2,7 +2,7 @@
 # or `cmake --install build --prefix DIR`) and the helpers every module uses
 # to put its targets into the exported package (docs/install.md):
 #
-#   bin/                          tsm, haptic-server, tsm-devices, virtual-slave,
+#   bin/                          tsm, tsm-link, haptic-server, tsm-devices, virtual-slave,
 #                                 external-master-adapter, slave-node-skeleton, tsm-lcm-spy
 #   lib/<multiarch>/              static libraries libtsmh_*.a
 #   lib/<multiarch>/cmake/tsmh/   tsmhConfig.cmake, tsmhConfigVersion.cmake, targets

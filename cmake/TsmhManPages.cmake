@@ -27,6 +27,7 @@ endfunction()
 if(TSMH_HELP2MAN)
   tsmh_man_page(haptic-server haptic-server "1 kHz haptic feedback server for tendon-sheath driven robots")
   tsmh_man_page(tsm tsm "tendon-sheath friction models: simulate, fit, gap, convert")
+  tsmh_man_page(tsm-link tsm-link "the LCM link key: create it, tell which one a host uses")
   tsmh_man_page(tsm-devices tsm-devices "list and probe tsm-haptics master devices")
   tsmh_man_page(virtual_slave_app virtual-slave "virtual tendon-sheath slave with tissue, over LCM or offline")
   tsmh_man_page(external-master-adapter external-master-adapter

@@ -112,7 +112,7 @@ LinkKey LinkKey::from_hex(std::string_view text, std::string_view where) {
   if (hex.size() != 2 * kLinkKeyBytes)
     throw LinkKeyError(std::string(where) + ": a link key is " + std::to_string(2 * kLinkKeyBytes) +
                        " hex digits, found " + std::to_string(hex.size()) +
-                       " characters (create one with `tsm keygen`)");
+                       " characters (create one with `tsm-link keygen`)");
   LinkKey k;
   for (std::size_t i = 0; i < kLinkKeyBytes; ++i) {
     const int hi = hex_value(hex[2 * i]);

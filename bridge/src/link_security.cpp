@@ -24,7 +24,7 @@ std::optional<std::filesystem::path> find_key_file(std::string_view flag, const 
     std::error_code ec;
     if (!std::filesystem::exists(p, ec))
       throw LinkKeyError("link key " + p.string() + " (from " + std::string(source) +
-                         ") does not exist; create it with `tsm keygen --output " + p.string() +
+                         ") does not exist; create it with `tsm-link keygen --output " + p.string() +
                          "`");
     return p;
   };
@@ -60,7 +60,7 @@ LinkSecurity resolve_link_security(std::string_view url, const LinkSecurityOptio
     s.notice = "LCM link NOT authenticated (no link key found): allowed only because '" +
                std::string(url) +
                "' is confined to this host (any local process can still command it; create a "
-               "key with `tsm keygen` to authenticate)";
+               "key with `tsm-link keygen` to authenticate)";
     return s;
   }
   std::string looked = "--key, $" + std::string(kLinkKeyEnv);
@@ -75,7 +75,7 @@ LinkSecurity resolve_link_security(std::string_view url, const LinkSecurityOptio
   throw LinkKeyError(
       "no LCM link key found (looked in: " + looked + ") and '" + std::string(url) +
       "' is reachable from other hosts (only udpm with ttl=0, memq:// and file:// stay on "
-      "this host). Create a key once with `tsm keygen` and give every peer a copy (mode 0600), "
+      "this host). Create a key once with `tsm-link keygen` and give every peer a copy (mode 0600), "
       "or on an isolated network pass --insecure");
 }
 

@@ -18,6 +18,5 @@ void add_simulate_command(CLI::App& app, Context& ctx);
 void add_convert_command(CLI::App& app, Context& ctx);
 void add_fit_command(CLI::App& app, Context& ctx);
 void add_gap_command(CLI::App& app, Context& ctx);
-void add_keygen_command(CLI::App& app, Context& ctx);
 
 }  // namespace tsmh::tsm_cli

@@ -301,7 +301,7 @@ void confine_lcm_device(const haptics::ServerConfig& cfg, const bridge::LinkSecu
   if (!security.key && !link.insecure && !bridge::is_host_local_url(url))
     throw bridge::LinkKeyError("the lcm master device's URL '" + url +
                                "' is reachable from other hosts and there is no link key (create "
-                               "one with `tsm keygen`, or pass --insecure on an isolated network)");
+                               "one with `tsm-link keygen`, or pass --insecure on an isolated network)");
   if (const auto port = bridge::host_only_udpm_port(url)) {
     if (bridge::restrict_udp_port_to_host(*port) == 0)
       throw DeviceError("lcm: cannot confine the master device's LCM socket for '" + url +

@@ -425,7 +425,7 @@ TEST_F(KeyFiles, NoKeyRunsOnlyOnHostLocalUrlsOrWithInsecure) {
     FAIL() << "ran unauthenticated on a network URL";
   } catch (const LinkKeyError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("tsm keygen"), std::string::npos) << what;
+    EXPECT_NE(what.find("tsm-link keygen"), std::string::npos) << what;
     EXPECT_NE(what.find("--insecure"), std::string::npos) << what;
     EXPECT_NE(what.find((dir_ / "empty" / "tsmh" / "link.key").string()), std::string::npos)
         << "says where it looked: " << what;

@@ -66,7 +66,7 @@ TEST_F(NodeLinkStart, NoKeyOnANetworkUrlIsRefusedWithExit2) {
   std::string err;
   EXPECT_EQ(start(o, link, err), 2);
   EXPECT_EQ(err.rfind("node-under-test: error: ", 0), 0U) << err;
-  EXPECT_NE(err.find("tsm keygen"), std::string::npos) << err;  // says how to make a key
+  EXPECT_NE(err.find("tsm-link keygen"), std::string::npos) << err;  // says how to make a key
   EXPECT_EQ(link.lcm, nullptr);                                 // LCM never started
   EXPECT_EQ(link.signer, nullptr);
 }

@@ -9,7 +9,7 @@ file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 
-foreach(f bin/tsm bin/haptic-server bin/tsm-devices bin/virtual-slave bin/external-master-adapter
+foreach(f bin/tsm bin/tsm-link bin/haptic-server bin/tsm-devices bin/virtual-slave bin/external-master-adapter
           include/tsmh/estimator/tsm_model.hpp include/tsmh/tsmh/master_state_t.hpp
           include/tsmh/tsmh/version.hpp share/tsm-haptics/profiles/tsm-console-2dof.yaml
           lib/udev/rules.d/70-tsm-haptics.rules share/doc/tsm-haptics/README.md
@@ -20,7 +20,7 @@ foreach(f bin/tsm bin/haptic-server bin/tsm-devices bin/virtual-slave bin/extern
 endforeach()
 if(MAN_PAGES)
   foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter
-          slave-node-skeleton)
+          slave-node-skeleton tsm-link)
     if(NOT EXISTS ${prefix}/share/man/man1/${program}.1)
       message(FATAL_ERROR "man page not installed: ${program}.1")
     endif()

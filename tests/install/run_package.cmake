@@ -45,7 +45,7 @@ foreach(f usr/lib/udev/rules.d/70-tsm-haptics.rules usr/share/tsm-haptics/profil
 endforeach()
 if(MAN_PAGES)
   foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter
-          slave-node-skeleton)
+          slave-node-skeleton tsm-link)
     if(NOT EXISTS ${root}/usr/share/man/man1/${program}.1)
       message(FATAL_ERROR "man page not installed: ${program}.1")
     endif()
@@ -63,7 +63,7 @@ if(NOT config)
   message(FATAL_ERROR "tsmhConfig.cmake not in tsm-haptics-dev")
 endif()
 foreach(program tsm haptic-server tsm-devices virtual-slave external-master-adapter
-          slave-node-skeleton)
+          slave-node-skeleton tsm-link)
   run(${root}/usr/bin/${program} --version)
   if(NOT out MATCHES "^${program} \\(tsm-haptics\\) ${VERSION}\n$")
     message(FATAL_ERROR "extracted ${program} --version: ${out}")

@@ -25,7 +25,7 @@
 // keyed Receiver accepts a message only with a valid MAC, a send time within
 // max_age of its own clock, and a (sender id, sequence) it has not seen
 // (a sliding 1024-bit window per sender). The key is 32 random bytes shared
-// by the peers of one installation (`tsm keygen`).
+// by the peers of one installation (`tsm-link keygen`).
 
 #include <array>
 #include <atomic>

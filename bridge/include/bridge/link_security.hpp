@@ -20,7 +20,7 @@ inline constexpr const char* kLinkKeyEnv = "TSMH_LINK_KEY";
 
 /// Search steps 3 and 4: $XDG_CONFIG_HOME/tsmh/link.key (else
 /// $HOME/.config/tsmh/link.key), then /etc/tsmh/link.key. The first is where
-/// `tsm keygen` writes by default.
+/// `tsm-link keygen` writes by default.
 std::vector<std::filesystem::path> default_key_locations(const char* xdg_config_home,
                                                          const char* home);
 
@@ -43,7 +43,7 @@ bool is_host_local_url(std::string_view url);
 /// of find_key_file()).
 inline constexpr const char* kKeyOptionHelp =
     "LCM link key file (default: $TSMH_LINK_KEY, ~/.config/tsmh/link.key, "
-    "/etc/tsmh/link.key; create one with `tsm keygen`)";
+    "/etc/tsmh/link.key; create one with `tsm-link keygen`)";
 
 struct LinkSecurityOptions {
   std::string key_file;   ///< --key FILE
