@@ -49,9 +49,9 @@
 #include <vector>
 
 #include "bridge/link_auth.hpp"
+#include "bridge/node_inbox.hpp"
 #include "bridge/node_link.hpp"
 #include "files/cli_numbers.hpp"
-#include "lcmtypes/message_decoder.hpp"
 #include "master_devices/axis_mapping.hpp"
 #include "master_devices/vendor_master.hpp"
 #include "realtime/clock.hpp"
@@ -78,72 +78,28 @@ buttons: {dead_man: dead_man}
 )";
 
 struct ForceInbox {
-  explicit ForceInbox(std::size_t slave_joints)
-      : joints(slave_joints),
-        decoder(
-            {static_cast<std::int32_t>(slave_joints), static_cast<std::int32_t>(slave_joints)}) {}
+  ForceInbox(const tsmh::bridge::NodeLink& node, std::size_t slave_joints)
+      : joints(slave_joints), link(node, static_cast<std::int32_t>(slave_joints)) {}
   std::size_t joints;  ///< the slave joints MASTER_STATE carries
   tsmh::master_devices::JointArray torque{};
   bool enable = false;
   std::int64_t received_ns = 0;
-  std::int64_t rejected = 0;
-  std::int64_t unauthentic = 0;
-  /// Why the last force was rejected (fixed size: no allocation per message).
-  std::array<char, 96> last_rejection{};
-  /// Null: unauthenticated (no key, host-local URL or --insecure).
-  tsmh::bridge::MessageVerifier* verifier = nullptr;
-  /// The project's MASTER_FORCE decoder: exactly `joints` joints and the exact
-  /// size for them, checked before anything is allocated. lcm-gen's decode()
-  /// alone sizes its arrays for whatever num_joints the bytes claim: a key
-  /// holder's (or, without a key, anyone's) MASTER_FORCE claiming 2^28 joints
-  /// made it allocate gigabytes and crash.
-  tsmh::lcmtypes::MessageDecoder<tsmh::master_force_t> decoder;
-
-  void reject(const char* why) {
-    ++rejected;
-    std::snprintf(last_rejection.data(), last_rejection.size(), "%s", why);
-  }
-
-  /// One server at a time (docs/bridge.md, "Sessions"); null when unauthenticated.
-  tsmh::bridge::LinkSession* session = nullptr;
-  std::int64_t other_session = 0;  // keyed forces of another server's session
+  /// Verify, session, then the project's MASTER_FORCE decoder: exactly
+  /// `joints` joints and the exact size for them, checked before anything is
+  /// allocated. lcm-gen's decode() alone sizes its arrays for whatever
+  /// num_joints the bytes claim: a key holder's (or, without a key, anyone's)
+  /// MASTER_FORCE claiming 2^28 joints made it allocate gigabytes and crash.
+  tsmh::bridge::NodeInbox<tsmh::master_force_t> link;
 
   void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
-    std::size_t size = rbuf->data_size;
-    if (verifier != nullptr) {
-      // Before decoding: only the holder of the link key drives the motors.
-      const auto auth = verifier->verify(channel, data, size, tsmh::realtime::wall_clock_utime());
-      if (auth.verdict != tsmh::bridge::AuthVerdict::kOk) {
-        ++unauthentic;  // no MAC, wrong key, stale or replayed
-        return;
-      }
-      // Only the bound server's forces; a hello binds, another server ends it.
-      using tsmh::bridge::SessionVerdict;
-      switch (session->observe(auth.trailer, tsmh::realtime::monotonic_now_ns())) {
-        case SessionVerdict::kAccept:
-          break;
-        case SessionVerdict::kHandshake:
-        case SessionVerdict::kEnded:
-          return;
-        case SessionVerdict::kOtherSession:
-          ++other_session;
-          return;
-      }
-      size = auth.payload_size;
-    }
-    // Without a key, another peer's MAC trailer is left unread (as by every
-    // LCM tool); with one, the verified payload must be exactly the message.
-    const auto trailing =
-        verifier != nullptr ? tsmh::lcmtypes::Trailing::kReject : tsmh::lcmtypes::Trailing::kIgnore;
-    if (const auto error = decoder.decode(data, size, trailing)) return reject(error->what.data());
-    on_force(decoder.message());
+    // Only the bound server's forces drive the motors.
+    if (const auto* msg = link.receive(rbuf->data, rbuf->data_size, channel)) on_force(*msg);
   }
 
   // `msg` holds exactly `joints` joints (the decoder's range).
   void on_force(const tsmh::master_force_t& msg) {
     for (std::size_t j = 0; j < joints; ++j) {
-      if (!std::isfinite(msg.torque[j])) return reject("torque is not finite");
+      if (!std::isfinite(msg.torque[j])) return link.reject("torque is not finite");
     }
     for (std::size_t j = 0; j < joints; ++j)
       torque[j] = msg.torque[j];
@@ -267,11 +223,8 @@ int main(int argc, char** argv) {
   if (const int status = tsmh::bridge::start_node_link("external-master-adapter", link, node))
     return status;
   lcm::LCM& lcm = *node.lcm;
-  const auto& signer = node.signer;
   const auto& session = node.session;
-  ForceInbox inbox(slave_joints);
-  inbox.verifier = node.verifier.get();
-  inbox.session = session.get();
+  ForceInbox inbox(node, slave_joints);
   lcm.subscribe(link.prefix + "MASTER_FORCE", &ForceInbox::on_raw, &inbox);
   const std::string state_channel = link.prefix + "MASTER_STATE";
   std::vector<std::uint8_t> bytes;
@@ -351,14 +304,7 @@ int main(int argc, char** argv) {
     state.buttons =
         (b.dead_man ? 1 : 0) | (b.e_stop ? 2 : 0) | (b.clutch ? 4 : 0) | (b.calibrate ? 8 : 0);
     state.status = pose_ok ? 0 : 1;  // bit 0 fault: no pose (the kinematics has no solution)
-    const int size = state.getEncodedSize();
-    const std::size_t trailer = signer ? tsmh::bridge::kAuthTrailerBytes : 0;
-    bytes.resize(static_cast<std::size_t>(size) + trailer);  // allocates only the first time
-    state.encode(bytes.data(), 0, size);
-    if (signer)
-      signer->sign(state_channel, bytes.data(), static_cast<std::size_t>(size),
-                   bytes.data() + size);
-    lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    tsmh::bridge::publish_message(node, state_channel, state, bytes);
   }
   device->write({});
   device->close();
@@ -366,9 +312,9 @@ int main(int argc, char** argv) {
       "external-master-adapter: sent %lld MASTER_STATE, watchdog trips %lld, rejected forces "
       "%lld%s%s%s, unauthenticated forces %lld\n",
       static_cast<long long>(seq), static_cast<long long>(watchdog_trips),
-      static_cast<long long>(inbox.rejected), inbox.rejected > 0 ? " (the last: " : "",
-      inbox.last_rejection.data(), inbox.rejected > 0 ? ")" : "",
-      static_cast<long long>(inbox.unauthentic));
+      static_cast<long long>(inbox.link.rejected()),
+      inbox.link.rejected() > 0 ? " (the last: " : "", inbox.link.last_rejection(),
+      inbox.link.rejected() > 0 ? ")" : "", static_cast<long long>(inbox.link.unauthentic()));
   if (session_over) {
     const auto f = session->fault();
     std::fprintf(stderr,
@@ -377,7 +323,7 @@ int main(int argc, char** argv) {
                  "torque zero, exit 4 (%lld such forces)\n",
                  static_cast<unsigned long long>(f.sender_id),
                  static_cast<unsigned long long>(f.names),
-                 static_cast<long long>(inbox.other_session));
+                 static_cast<long long>(inbox.link.other_session()));
     return 4;
   }
   return 0;

@@ -34,9 +34,9 @@
 #include <vector>
 
 #include "bridge/link_auth.hpp"
+#include "bridge/node_inbox.hpp"
 #include "bridge/node_link.hpp"
 #include "files/cli_numbers.hpp"
-#include "lcmtypes/message_decoder.hpp"
 #include "realtime/clock.hpp"
 
 namespace {
@@ -105,67 +105,28 @@ class StubRobot final : public RobotIo {
 /// The newest MASTER_COMMAND and when it arrived (this node's clock: the
 /// server's utime is on another host's clock when the nodes are apart).
 struct CommandInbox {
-  explicit CommandInbox(int n) : joints(n), decoder({n, n}) {}
-  int joints = 0;
-  /// Null: unauthenticated (no key, host-local URL or --insecure).
-  tsmh::bridge::MessageVerifier* verifier = nullptr;
-  /// One master at a time (docs/bridge.md, "Sessions"); null when unauthenticated.
-  tsmh::bridge::LinkSession* session = nullptr;
-  std::int64_t other_session = 0;  // keyed messages of another master session
+  CommandInbox(const tsmh::bridge::NodeLink& node, int n) : link(node, n) {}
   tsmh::master_command_t newest;
-  /// Exactly `joints` joints and the exact size for them, checked before
-  /// anything is allocated (lcm-gen's decode() alone sizes its arrays for
-  /// whatever num_joints the bytes claim).
-  tsmh::lcmtypes::MessageDecoder<tsmh::master_command_t> decoder;
+  /// Verify, session, then the project's checked decoder: exactly `n` joints
+  /// and the exact size for them, checked before anything is allocated
+  /// (lcm-gen's decode() alone sizes its arrays for whatever num_joints the
+  /// bytes claim).
+  tsmh::bridge::NodeInbox<tsmh::master_command_t> link;
   std::int64_t received_ns = 0;
   std::int64_t last_seq = -1;
-  std::int64_t rejected = 0;
-  std::int64_t unauthentic = 0;
   void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
-    std::size_t size = rbuf->data_size;
-    if (verifier != nullptr) {
-      // Before decoding: only the holder of the link key moves the robot.
-      const auto auth = verifier->verify(channel, data, size, tsmh::realtime::wall_clock_utime());
-      if (auth.verdict != tsmh::bridge::AuthVerdict::kOk) {
-        ++unauthentic;  // no MAC, wrong key, stale or replayed
-        return;
-      }
-      // Only the bound server's commands; a hello binds, another master ends it.
-      using tsmh::bridge::SessionVerdict;
-      switch (session->observe(auth.trailer, tsmh::realtime::monotonic_now_ns())) {
-        case SessionVerdict::kAccept:
-          break;
-        case SessionVerdict::kHandshake:
-        case SessionVerdict::kEnded:
-          return;
-        case SessionVerdict::kOtherSession:
-          ++other_session;
-          return;
-      }
-      size = auth.payload_size;
-    }
-    // Without a key, another peer's MAC trailer is left unread (as by every
-    // LCM tool); with one, the verified payload must be exactly the message.
-    const auto trailing =
-        verifier != nullptr ? tsmh::lcmtypes::Trailing::kReject : tsmh::lcmtypes::Trailing::kIgnore;
-    if (decoder.decode(data, size, trailing)) {
-      ++rejected;  // truncated, another type, wrong joint count: never decoded by lcm-gen
-      return;
-    }
-    on_command(decoder.message());
+    // Only the bound server's commands move the robot.
+    if (const auto* msg = link.receive(rbuf->data, rbuf->data_size, channel)) on_command(*msg);
   }
-  void on_command(const tsmh::master_command_t& m) {
-    const auto* msg = &m;
-    bool ok = msg->seq > last_seq;
-    for (int j = 0; ok && j < msg->num_joints; ++j)
-      ok = std::isfinite(msg->position_ref[static_cast<std::size_t>(j)]);
-    if (!ok) {
-      ++rejected;  // wrong joint count, NaN/Inf, duplicate or old: never moves the robot
-      return;
-    }
-    newest = *msg;
-    last_seq = msg->seq;
+  // `msg` holds exactly the node's joints (the decoder's range).
+  void on_command(const tsmh::master_command_t& msg) {
+    // NaN/Inf, duplicate or old: never moves the robot.
+    if (msg.seq <= last_seq) return link.reject("duplicate or old seq");
+    for (int j = 0; j < msg.num_joints; ++j)
+      if (!std::isfinite(msg.position_ref[static_cast<std::size_t>(j)]))
+        return link.reject("position_ref is not finite");
+    newest = msg;
+    last_seq = msg.seq;
     received_ns = tsmh::realtime::monotonic_now_ns();
   }
 };
@@ -221,14 +182,11 @@ int main(int argc, char** argv) {
   if (const int status = tsmh::bridge::start_node_link("slave-node-skeleton", link, node))
     return status;
   lcm::LCM& lcm = *node.lcm;
-  const auto& signer = node.signer;
   const auto& session = node.session;
   const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
   StubRobot robot(static_cast<double>(period_ns) * 1e-9);  // REAL DRIVER: your RobotIo
   const int n = robot.joints();
-  CommandInbox inbox(n);
-  inbox.verifier = node.verifier.get();
-  inbox.session = session.get();
+  CommandInbox inbox(node, n);
   lcm.subscribe(link.prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
   const std::string state_channel = link.prefix + "SLAVE_STATE";
   std::vector<std::uint8_t> bytes;
@@ -294,14 +252,7 @@ int main(int argc, char** argv) {
       state.T3[j] = samples[j].T3;
     }
     state.status = (driving ? 1 : 0) | (driving ? 0 : 2) | (sensors_ok ? 0 : 4);
-    const int size = state.getEncodedSize();
-    const std::size_t trailer = signer ? tsmh::bridge::kAuthTrailerBytes : 0;
-    bytes.resize(static_cast<std::size_t>(size) + trailer);  // allocates only the first time
-    state.encode(bytes.data(), 0, size);
-    if (signer)
-      signer->sign(state_channel, bytes.data(), static_cast<std::size_t>(size),
-                   bytes.data() + size);
-    lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    tsmh::bridge::publish_message(node, state_channel, state, bytes);
   }
   robot.hold();
   if (session && !session_over) {
@@ -310,17 +261,14 @@ int main(int argc, char** argv) {
     state.utime = tsmh::realtime::monotonic_utime();
     state.seq = seq++;
     state.status = 2;
-    const int size = state.getEncodedSize();
-    bytes.resize(static_cast<std::size_t>(size) + tsmh::bridge::kAuthTrailerBytes);
-    state.encode(bytes.data(), 0, size);
-    signer->sign(state_channel, bytes.data(), static_cast<std::size_t>(size), bytes.data() + size);
-    lcm.publish(state_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    tsmh::bridge::publish_message(node, state_channel, state, bytes);
   }
   std::printf(
       "slave-node-skeleton: sent %lld SLAVE_STATE, holds %lld, rejected commands %lld, "
       "unauthenticated commands %lld\n",
       static_cast<long long>(seq), static_cast<long long>(holds),
-      static_cast<long long>(inbox.rejected), static_cast<long long>(inbox.unauthentic));
+      static_cast<long long>(inbox.link.rejected()),
+      static_cast<long long>(inbox.link.unauthentic()));
   if (session_over) {
     const auto f = session->fault();
     std::fprintf(stderr,
@@ -329,7 +277,7 @@ int main(int argc, char** argv) {
                  "exit 4 (%lld such commands)\n",
                  static_cast<unsigned long long>(f.sender_id),
                  static_cast<unsigned long long>(f.names),
-                 static_cast<long long>(inbox.other_session));
+                 static_cast<long long>(inbox.link.other_session()));
     return 4;
   }
   return 0;

@@ -6,9 +6,11 @@
 // a key, and LCM itself, confined to this host for a ttl=0 URL. Programs
 // built on the bridge's Receiver/Sender get the same from BridgeConfig.
 
+#include <cstdint>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
@@ -55,5 +57,20 @@ struct NodeLink {
 /// no key on a network URL without --insecure), 1 when LCM cannot start or
 /// its socket cannot be confined.
 int start_node_link(const char* program, const NodeLinkOptions& options, NodeLink& out);
+
+/// Sends one of our messages (lcm-gen's type) on `channel`: encoded, signed
+/// with the link's key when it has one, published. `bytes` is the caller's
+/// buffer, kept between calls so that only the first call allocates.
+template <class Message>
+void publish_message(NodeLink& link, const std::string& channel, const Message& msg,
+                     std::vector<std::uint8_t>& bytes) {
+  const int size = msg.getEncodedSize();
+  const std::size_t trailer = link.signer ? kAuthTrailerBytes : 0;
+  bytes.resize(static_cast<std::size_t>(size) + trailer);
+  msg.encode(bytes.data(), 0, size);
+  if (link.signer)
+    link.signer->sign(channel, bytes.data(), static_cast<std::size_t>(size), bytes.data() + size);
+  link.lcm->publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+}
 
 }  // namespace tsmh::bridge
