@@ -7,11 +7,14 @@
 
 namespace tsmh::bridge {
 
-int start_node_link(const char* program, const NodeLinkOptions& options, NodeLink& out) {
-  std::string resolved;
+namespace {
+
+// The URL and the key, or the exit status 2 after saying why not.
+int resolve_security(const char* program, const NodeLinkOptions& options, std::string& url,
+                     LinkSecurity& security) {
   try {
-    resolved = resolve_lcm_url(options.url);
-    out.security = resolve_link_security(resolved, options.security);
+    url = resolve_lcm_url(options.url);
+    security = resolve_link_security(url, options.security);
   } catch (const LinkKeyError& e) {
     std::fprintf(stderr, "%s: error: %s\n", program, e.what());
     return 2;
@@ -19,7 +22,23 @@ int start_node_link(const char* program, const NodeLinkOptions& options, NodeLin
     std::fprintf(stderr, "%s: error: %s\n", program, e.what());
     return 2;
   }
-  std::fprintf(stderr, "%s: %s\n", program, out.security.notice.c_str());
+  std::fprintf(stderr, "%s: %s\n", program, security.notice.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int resolve_node_link(const char* program, const NodeLinkOptions& options, BridgeConfig& out) {
+  LinkSecurity security;
+  if (const int status = resolve_security(program, options, out.url, security)) return status;
+  out.prefix = options.prefix;
+  out.key = security.key;
+  return 0;
+}
+
+int start_node_link(const char* program, const NodeLinkOptions& options, NodeLink& out) {
+  std::string resolved;
+  if (const int status = resolve_security(program, options, resolved, out.security)) return status;
   if (out.security.key) {
     out.signer = std::make_unique<MessageSigner>(out.security.key);
     out.verifier = std::make_unique<MessageVerifier>(out.security.key);

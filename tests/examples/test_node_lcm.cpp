@@ -88,6 +88,32 @@ void pump(lcm::LCM& lcm, double seconds, F each) {
   }
 }
 
+// The start-up every standalone node shares (bridge/node_link.hpp): no key
+// on a URL that reaches the network is refused with exit 2 and the way to
+// make one; a URL the strict parser refuses likewise.
+TEST(Node, RefusesToRunUnkeyedOnANetworkUrlLikeEveryNode) {
+  char home[] = "/tmp/vs_nokey_XXXXXX";
+  ASSERT_NE(mkdtemp(home), nullptr);
+  auto run = [&](const char* url) {
+    const std::string cmd = std::string("env -u TSMH_LINK_KEY -u XDG_CONFIG_HOME HOME=") + home +
+                            " " + VIRTUAL_SLAVE_BIN + " --duration 1 --lcm-url '" + url + "' 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string out;
+    char buf[512];
+    while (p != nullptr && std::fgets(buf, sizeof buf, p) != nullptr)
+      out += buf;
+    const int status = p != nullptr ? pclose(p) : -1;
+    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, out);
+  };
+  const auto [network_rc, network] = run("udpm://239.255.76.67:7667?ttl=1");
+  EXPECT_EQ(network_rc, 2) << network;
+  EXPECT_NE(network.find("virtual-slave: error:"), std::string::npos) << network;
+  EXPECT_NE(network.find("tsm-link keygen"), std::string::npos) << network;
+  const auto [bad_rc, bad] = run("udpm://239.255.76.67:7667?ttl=0&ttl=1");
+  EXPECT_EQ(bad_rc, 2) << bad;
+  rmdir(home);
+}
+
 }  // namespace
 
 TEST(Node, FollowsCommandsPublishesStateAndTruthAndHoldsWhenCommandsStop) {

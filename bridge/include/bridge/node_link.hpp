@@ -3,8 +3,9 @@
 // lcm-gen's types (external-master-adapter, slave-node-skeleton): its
 // --lcm-url/--prefix/--key/--insecure options, the link key (or the refusal
 // to run unkeyed on a network URL), the signer/verifier/session that go with
-// a key, and LCM itself, confined to this host for a ttl=0 URL. Programs
-// built on the bridge's Receiver/Sender get the same from BridgeConfig.
+// a key, and LCM itself, confined to this host for a ttl=0 URL. A node built
+// on the bridge's Receiver/Sender (virtual-slave) takes the same options and
+// resolves them with resolve_node_link() into its BridgeConfig.
 
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge/lcm_url.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/link_session.hpp"
@@ -49,6 +51,13 @@ struct NodeLink {
   std::unique_ptr<LinkSession> session;
   std::unique_ptr<lcm::LCM> lcm;
 };
+
+/// The URL (resolve_lcm_url: empty is $LCM_DEFAULT_URL, then the default),
+/// the prefix and the link key for a node on the bridge's Receiver/Sender,
+/// printing "<program>: <notice>" to stderr. Returns 0 with `out` filled, or
+/// 2 after printing "<program>: error: ..." for a bad URL or key (also no key
+/// on a network URL without --insecure).
+int resolve_node_link(const char* program, const NodeLinkOptions& options, BridgeConfig& out);
 
 /// Resolves the link security (printing "<program>: <notice>" to stderr),
 /// creates LCM and, for a ttl=0 udpm URL, confines its receive socket to

@@ -1,6 +1,6 @@
 #include "cli_options.hpp"
 
-#include <bridge/link_security.hpp>
+#include <bridge/node_link.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -80,13 +80,9 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_flag("--no-compensation", o.no_compensation,
                "slave controller without the backlash compensation (PD only)");
 
-  app.add_option("--lcm-url", o.lcm_url,
-                 "LCM URL (default: $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0)");
-  app.add_option("--prefix", o.prefix, "channel prefix, e.g. ARM1_");
-  app.add_option("--key", o.key_file, bridge::kKeyOptionHelp);
-  app.add_flag("--insecure", o.insecure,
-               "run without a link key on a network LCM URL: anyone who reaches it can move "
-               "the slave (isolated networks only)");
+  bridge::add_node_link_options(app, o.link, "--prefix", "channel prefix, e.g. ARM1_",
+                                "run without a link key on a network LCM URL: anyone who "
+                                "reaches it can move the slave (isolated networks only)");
   app.add_option("--command-timeout", o.command_timeout_s,
                  "hold position when no MASTER_COMMAND arrived for this long, s")
       ->check(CLI::PositiveNumber);

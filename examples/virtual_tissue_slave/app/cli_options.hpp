@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge/node_link.hpp"
 #include "virtual_tissue_slave/offline.hpp"
 #include "virtual_tissue_slave/slave.hpp"
 #include "virtual_tissue_slave/tissue.hpp"
@@ -40,10 +41,9 @@ struct CliOptions {
   bool no_joint_encoder = false;
   bool no_compensation = false;
   // real time
-  std::string lcm_url;
-  std::string prefix;
-  std::string key_file;   ///< --key: LCM link key (docs/bridge.md, "Authentication")
-  bool insecure = false;  ///< --insecure: no key on a network URL
+  /// --lcm-url, --prefix, --key, --insecure: a standalone node's link
+  /// (bridge/node_link.hpp; docs/bridge.md "Authentication").
+  bridge::NodeLinkOptions link;
   double command_timeout_s = 0.1;
   int rt_priority = 0;
   int cpu = -1;  ///< pin the 1 kHz loop thread to this CPU (-1: no pinning)

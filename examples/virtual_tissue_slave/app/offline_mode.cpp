@@ -26,8 +26,9 @@ void check_output(const CliOptions& o) {
     throw std::invalid_argument("--output " + o.output + ": is a folder; name a file to write");
   std::vector<files::NamedInput> inputs;
   try {
-    if (const auto key = bridge::find_key_file(o.key_file, std::getenv(bridge::kLinkKeyEnv),
-                                               std::getenv("XDG_CONFIG_HOME"), std::getenv("HOME")))
+    if (const auto key =
+            bridge::find_key_file(o.link.security.key_file, std::getenv(bridge::kLinkKeyEnv),
+                                  std::getenv("XDG_CONFIG_HOME"), std::getenv("HOME")))
       inputs.push_back({"the link key", *key});
   } catch (const std::exception&) {
     // No key to protect.

@@ -5,8 +5,8 @@
 #include <sys/mman.h>
 
 #include <atomic>
-#include <bridge/link_security.hpp>
 #include <bridge/link_session.hpp>
+#include <bridge/node_link.hpp>
 #include <bridge/receiver.hpp>
 #include <bridge/sender.hpp>
 #include <bridge/stop_signals.hpp>
@@ -18,6 +18,7 @@
 #include <memory>
 #include <realtime/clock.hpp>
 #include <realtime/histogram.hpp>
+#include <realtime/pacing.hpp>
 #include <thread>
 
 #include "virtual_tissue_slave/command_gate.hpp"
@@ -223,14 +224,10 @@ int run_realtime_mode(const CliOptions& o) {
   CommandGateParams gate_params;
   gate_params.timeout_s = o.command_timeout_s;
 
+  // Only authenticated peers move the slave (docs/bridge.md, "Authentication"):
+  // the same options, key search and refusals as every standalone node.
   bridge::BridgeConfig config;
-  config.url = bridge::resolve_lcm_url(o.lcm_url);
-  config.prefix = o.prefix;
-  // Only authenticated peers move the slave (docs/bridge.md, "Authentication").
-  const auto security =
-      bridge::resolve_link_security(config.url, {.key_file = o.key_file, .insecure = o.insecure});
-  config.key = security.key;
-  std::fprintf(stderr, "virtual-slave: %s\n", security.notice.c_str());
+  if (const int status = bridge::resolve_node_link("virtual-slave", o.link, config)) return status;
   bridge::Receiver rx(config);
   bridge::Sender tx(config);
   // One master at a time (docs/bridge.md, "Sessions"): the slave binds to the
@@ -267,8 +264,8 @@ int run_realtime_mode(const CliOptions& o) {
   std::fprintf(stderr,
                "virtual-slave: 1 kHz on %s, channels %sMASTER_COMMAND -> %sSLAVE_STATE, "
                "%sSLAVE_TRUTH; %s\n",
-               config.url.c_str(), o.prefix.c_str(), o.prefix.c_str(), o.prefix.c_str(),
-               tissue_description(setup.tissue).c_str());
+               config.url.c_str(), config.prefix.c_str(), config.prefix.c_str(),
+               config.prefix.c_str(), tissue_description(setup.tissue).c_str());
   pin_to_cpu(o.cpu);
 
   // Everything the loop touches exists before it starts: no allocation,
@@ -287,7 +284,9 @@ int run_realtime_mode(const CliOptions& o) {
   const Reroute& rr = setup.reroute;
   bool rerouted = std::isnan(rr.at_s);
 
-  std::int64_t next = realtime::monotonic_now_ns() + period_ns;
+  // The project's pacing loop: absolute deadlines, re-based after an
+  // overrun rather than bursting to catch up (realtime/pacing.hpp).
+  realtime::Pacer pace(period_ns, realtime::monotonic_now_ns() + period_ns);
   bool session_over = false;
   // After a session FAULT the slave holds and keeps publishing (its messages
   // say FAULT) for this many ticks before it exits, so that a late process
@@ -295,17 +294,9 @@ int run_realtime_mode(const CliOptions& o) {
   constexpr std::int64_t kFaultLingerTicks = 2000;
   std::int64_t fault_ticks = 0;
   while (!stop.requested() && (end_ticks < 0 || seq < end_ticks)) {
-    if (!realtime::sleep_until_ns(next)) continue;  // a signal: check the stop request
+    if (!pace.wait()) continue;  // a signal: check the stop request
     const std::int64_t woke = realtime::monotonic_now_ns();
-    const std::int64_t late = woke - next;
-    timing.lateness.record(late);
-    if (late >= period_ns) {
-      // Missed whole periods: skip them and re-base on the deadline grid
-      // rather than bursting to catch up.
-      const std::int64_t missed = late / period_ns;
-      timing.overruns += missed;
-      next += missed * period_ns;
-    }
+    timing.lateness.record(woke - pace.due_ns());
     const bridge::SessionState session_state =
         session ? session->state() : bridge::SessionState::kBound;
     // Ends after this tick: the state it publishes already says holding.
@@ -319,7 +310,7 @@ int run_realtime_mode(const CliOptions& o) {
     const SlaveSample& s = slave.tick(refs);
 
     // The sample was measured at the deadline of this tick.
-    state.utime = next / 1000;
+    state.utime = pace.deadline_ns() / 1000;
     state.seq = seq;
     fill_state(state, s, setup.params, gate.status());
     truth.utime = state.utime;
@@ -328,8 +319,9 @@ int run_realtime_mode(const CliOptions& o) {
     truth_box.publish(truth);
     state_box.publish(state);
     ++seq;
-    timing.compute.record(realtime::monotonic_now_ns() - woke);
-    next += period_ns;
+    const std::int64_t done = realtime::monotonic_now_ns();
+    timing.compute.record(done - woke);
+    timing.overruns += pace.advance(done);
     if (session_over && ++fault_ticks >= kFaultLingerTicks) break;
   }
 
