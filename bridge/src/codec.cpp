@@ -13,166 +13,134 @@ std::size_t joints(std::int32_t n) noexcept {
   return static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(kMaxJoints)));
 }
 
-void put(const JointArray& a, std::int32_t n, std::vector<double>& v) {
-  v.assign(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(joints(n)));
+// Every message starts with these.
+template <class S, class M, class F>
+void header(S& s, M& m, F& f) {
+  f(s.utime, m.utime), f(s.seq, m.seq), f(s.num_joints, m.num_joints);
 }
 
-void get(const std::vector<double>& v, std::int32_t n, JointArray& a) noexcept {
-  const std::size_t k = std::min(joints(n), v.size());
-  std::copy_n(v.begin(), k, a.begin());
-  std::fill(a.begin() + static_cast<std::ptrdiff_t>(k), a.end(), 0.0);
+// One field list per message, walked in both directions: `f(sample_field,
+// message_field)` for each field, so a field added to a message is added in
+// one place and both directions follow.
+template <class S, class M, class F>
+void fields(S& s, M& m, F&& f, tsmh::slave_state_t* /*tag*/) {
+  header(s, m, f);
+  f(s.x_in, m.x_in), f(s.x_out, m.x_out), f(s.T1, m.T1), f(s.T3, m.T3);
+  f(s.radius_m, m.radius_m), f(s.status, m.status);
+}
+
+template <class S, class M, class F>
+void fields(S& s, M& m, F&& f, tsmh::slave_truth_t* /*tag*/) {
+  header(s, m, f);
+  f(s.tau_out, m.tau_out), f(s.friction, m.friction), f(s.tau_in, m.tau_in);
+  f(s.x_out, m.x_out), f(s.contact_force, m.contact_force), f(s.indentation, m.indentation);
+}
+
+template <class S, class M, class F>
+void fields(S& s, M& m, F&& f, tsmh::master_command_t* /*tag*/) {
+  header(s, m, f);
+  f(s.position_ref, m.position_ref), f(s.enable, m.enable), f(s.clutch, m.clutch);
+}
+
+template <class S, class M, class F>
+void fields(S& s, M& m, F&& f, tsmh::haptic_status_t* /*tag*/) {
+  header(s, m, f);
+  f(s.state, m.state), f(s.feedback_source, m.feedback_source), f(s.rate_hz, m.rate_hz);
+  f(s.lateness_p50_us, m.lateness_p50_us), f(s.lateness_p99_us, m.lateness_p99_us);
+  f(s.lateness_max_us, m.lateness_max_us), f(s.compute_p99_us, m.compute_p99_us);
+  f(s.overruns, m.overruns), f(s.slave_age_ms, m.slave_age_ms);
+  f(s.slave_rejected, m.slave_rejected), f(s.slave_seq_gaps, m.slave_seq_gaps);
+  f(s.slave_latency_p99_us, m.slave_latency_p99_us), f(s.flags, m.flags);
+  f(s.tau_in, m.tau_in), f(s.tau_out_est, m.tau_out_est), f(s.friction_est, m.friction_est);
+  f(s.torque_cmd, m.torque_cmd), f(s.master_q, m.master_q);
+  f(s.oscillation_trips, m.oscillation_trips), f(s.oscillation_rms, m.oscillation_rms);
+  f(s.passivity_energy, m.passivity_energy), f(s.passivity_dissipated, m.passivity_dissipated);
+  f(s.calibration_state, m.calibration_state), f(s.calibration_reason, m.calibration_reason);
+  f(s.calibration_joint, m.calibration_joint), f(s.friction_scale, m.friction_scale);
+  f(s.drift_scale, m.drift_scale);
+}
+
+template <class S, class M, class F>
+void fields(S& s, M& m, F&& f, tsmh::calibration_request_t* /*tag*/) {
+  header(s, m, f);
+  f(s.recalibrate, m.recalibrate);
+}
+
+// Sample -> message: scalars as they are, arrays as their first num_joints
+// entries (the sample's count, clamped to kMaxJoints).
+struct ToMessage {
+  std::size_t n;
+  template <class A, class B>
+  void operator()(const A& from, B& to) const {
+    to = static_cast<B>(from);
+  }
+  template <class T, std::size_t N, class B>
+  void operator()(const std::array<T, N>& from, std::vector<B>& to) const {
+    to.resize(n);
+    for (std::size_t j = 0; j < n; ++j)
+      to[j] = static_cast<B>(from[j]);
+  }
+};
+
+// Message -> sample: arrays of the message's num_joints entries (never more
+// than it holds or kMaxJoints), the rest zero.
+struct FromMessage {
+  std::size_t n;
+  template <class A, class B>
+  void operator()(A& to, const B& from) const noexcept {
+    to = static_cast<A>(from);
+  }
+  template <class T, std::size_t N, class B>
+  void operator()(std::array<T, N>& to, const std::vector<B>& from) const noexcept {
+    const std::size_t k = std::min(n, from.size());
+    for (std::size_t j = 0; j < N; ++j)
+      to[j] = j < k ? static_cast<T>(from[j]) : T{};
+  }
+};
+
+template <class Sample, class Message>
+void copy_to(const Sample& s, Message& m) {
+  fields(s, m, ToMessage{joints(s.num_joints)}, static_cast<Message*>(nullptr));
+}
+
+template <class Message, class Sample>
+void copy_from(const Message& m, Sample& s) noexcept {
+  fields(s, m, FromMessage{joints(m.num_joints)}, static_cast<Message*>(nullptr));
 }
 
 }  // namespace
 
 void to_message(const SlaveStateSample& s, tsmh::slave_state_t& m) {
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_joints = s.num_joints;
-  put(s.x_in, s.num_joints, m.x_in);
-  put(s.x_out, s.num_joints, m.x_out);
-  put(s.T1, s.num_joints, m.T1);
-  put(s.T3, s.num_joints, m.T3);
-  put(s.radius_m, s.num_joints, m.radius_m);
-  m.status = s.status;
+  copy_to(s, m);
 }
-
 void to_message(const SlaveTruthSample& s, tsmh::slave_truth_t& m) {
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_joints = s.num_joints;
-  put(s.tau_out, s.num_joints, m.tau_out);
-  put(s.friction, s.num_joints, m.friction);
-  put(s.tau_in, s.num_joints, m.tau_in);
-  put(s.x_out, s.num_joints, m.x_out);
-  put(s.contact_force, s.num_joints, m.contact_force);
-  put(s.indentation, s.num_joints, m.indentation);
+  copy_to(s, m);
 }
-
 void to_message(const MasterCommandSample& s, tsmh::master_command_t& m) {
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_joints = s.num_joints;
-  put(s.position_ref, s.num_joints, m.position_ref);
-  m.enable = s.enable;
-  m.clutch = s.clutch;
+  copy_to(s, m);
 }
-
 void to_message(const HapticStatusSample& s, tsmh::haptic_status_t& m) {
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_joints = s.num_joints;
-  m.state = s.state;
-  m.feedback_source = s.feedback_source;
-  m.rate_hz = s.rate_hz;
-  m.lateness_p50_us = s.lateness_p50_us;
-  m.lateness_p99_us = s.lateness_p99_us;
-  m.lateness_max_us = s.lateness_max_us;
-  m.compute_p99_us = s.compute_p99_us;
-  m.overruns = s.overruns;
-  m.slave_age_ms = s.slave_age_ms;
-  m.slave_rejected = s.slave_rejected;
-  m.slave_seq_gaps = s.slave_seq_gaps;
-  m.slave_latency_p99_us = s.slave_latency_p99_us;
-  m.flags = s.flags;
-  put(s.tau_in, s.num_joints, m.tau_in);
-  put(s.tau_out_est, s.num_joints, m.tau_out_est);
-  put(s.friction_est, s.num_joints, m.friction_est);
-  put(s.torque_cmd, s.num_joints, m.torque_cmd);
-  put(s.master_q, s.num_joints, m.master_q);
-  m.oscillation_trips = s.oscillation_trips;
-  put(s.oscillation_rms, s.num_joints, m.oscillation_rms);
-  put(s.passivity_energy, s.num_joints, m.passivity_energy);
-  put(s.passivity_dissipated, s.num_joints, m.passivity_dissipated);
-  m.calibration_state = s.calibration_state;
-  m.calibration_reason = s.calibration_reason;
-  m.calibration_joint = s.calibration_joint;
-  put(s.friction_scale, s.num_joints, m.friction_scale);
-  put(s.drift_scale, s.num_joints, m.drift_scale);
+  copy_to(s, m);
 }
 
 void to_message(const CalibrationRequestSample& s, tsmh::calibration_request_t& m) {
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_joints = s.num_joints;
-  const auto n =
-      static_cast<std::size_t>(std::clamp(s.num_joints, 0, static_cast<int>(kMaxJoints)));
-  m.recalibrate.assign(s.recalibrate.begin(), s.recalibrate.begin() + static_cast<long>(n));
-}
-
-void from_message(const tsmh::calibration_request_t& m, CalibrationRequestSample& s) noexcept {
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.num_joints = m.num_joints;
-  s.recalibrate = {};
-  for (std::size_t j = 0; j < m.recalibrate.size() && j < kMaxJoints; ++j)
-    s.recalibrate[j] = m.recalibrate[j] != 0;
+  copy_to(s, m);
 }
 
 void from_message(const tsmh::slave_state_t& m, SlaveStateSample& s) noexcept {
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.num_joints = m.num_joints;
-  get(m.x_in, m.num_joints, s.x_in);
-  get(m.x_out, m.num_joints, s.x_out);
-  get(m.T1, m.num_joints, s.T1);
-  get(m.T3, m.num_joints, s.T3);
-  get(m.radius_m, m.num_joints, s.radius_m);
-  s.status = m.status;
+  copy_from(m, s);
 }
-
 void from_message(const tsmh::slave_truth_t& m, SlaveTruthSample& s) noexcept {
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.num_joints = m.num_joints;
-  get(m.tau_out, m.num_joints, s.tau_out);
-  get(m.friction, m.num_joints, s.friction);
-  get(m.tau_in, m.num_joints, s.tau_in);
-  get(m.x_out, m.num_joints, s.x_out);
-  get(m.contact_force, m.num_joints, s.contact_force);
-  get(m.indentation, m.num_joints, s.indentation);
+  copy_from(m, s);
 }
-
 void from_message(const tsmh::master_command_t& m, MasterCommandSample& s) noexcept {
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.num_joints = m.num_joints;
-  get(m.position_ref, m.num_joints, s.position_ref);
-  s.enable = m.enable != 0;
-  s.clutch = m.clutch != 0;
+  copy_from(m, s);
 }
-
 void from_message(const tsmh::haptic_status_t& m, HapticStatusSample& s) noexcept {
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.num_joints = m.num_joints;
-  s.state = m.state;
-  s.feedback_source = m.feedback_source;
-  s.rate_hz = m.rate_hz;
-  s.lateness_p50_us = m.lateness_p50_us;
-  s.lateness_p99_us = m.lateness_p99_us;
-  s.lateness_max_us = m.lateness_max_us;
-  s.compute_p99_us = m.compute_p99_us;
-  s.overruns = m.overruns;
-  s.slave_age_ms = m.slave_age_ms;
-  s.slave_rejected = m.slave_rejected;
-  s.slave_seq_gaps = m.slave_seq_gaps;
-  s.slave_latency_p99_us = m.slave_latency_p99_us;
-  s.flags = m.flags;
-  get(m.tau_in, m.num_joints, s.tau_in);
-  get(m.tau_out_est, m.num_joints, s.tau_out_est);
-  get(m.friction_est, m.num_joints, s.friction_est);
-  get(m.torque_cmd, m.num_joints, s.torque_cmd);
-  get(m.master_q, m.num_joints, s.master_q);
-  s.oscillation_trips = m.oscillation_trips;
-  get(m.oscillation_rms, m.num_joints, s.oscillation_rms);
-  get(m.passivity_energy, m.num_joints, s.passivity_energy);
-  get(m.passivity_dissipated, m.num_joints, s.passivity_dissipated);
-  s.calibration_state = m.calibration_state;
-  s.calibration_reason = m.calibration_reason;
-  s.calibration_joint = m.calibration_joint;
-  get(m.friction_scale, m.num_joints, s.friction_scale);
-  get(m.drift_scale, m.num_joints, s.drift_scale);
+  copy_from(m, s);
+}
+void from_message(const tsmh::calibration_request_t& m, CalibrationRequestSample& s) noexcept {
+  copy_from(m, s);
 }
 
 template <class Sample>
