@@ -25,15 +25,15 @@
 #include <thread>
 #include <vector>
 
-#include "child_process.hpp"
 #include "realtime/quantile.hpp"
 #include "server_bus.hpp"
+#include "server_child.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using tsmh::haptics::test::Bus;
-using tsmh::haptics::test::ChildProcess;
+using tsmh::haptics::test::Child;
 using tsmh::haptics::test::Seen;
 using tsmh::realtime::monotonic_now_ns;
 
@@ -96,14 +96,14 @@ struct Session {
                 kUrl, "--quiet"},
                dir / "server.log") {
     if (adapter)
-      console = std::make_unique<ChildProcess>(
+      console = std::make_unique<Child>(
           std::vector<std::string>{TSMH_MASTER_ADAPTER, "--lcm-url", kUrl, "--prefix", prefix},
           dir / "adapter.log");
   }
   Bus bus;
-  ChildProcess slave;
-  ChildProcess server;
-  std::unique_ptr<ChildProcess> console;
+  Child slave;
+  Child server;
+  std::unique_ptr<Child> console;
 };
 
 int run(const std::string& only, int runs) {

@@ -1,11 +1,14 @@
 #pragma once
-// A child process of an end-to-end test (haptic-server, virtual-slave):
-// stdout and stderr into a file, killed (SIGKILL) if still running when the
-// test is done with it.
+// A child process of an end-to-end test or benchmark (haptic-server,
+// virtual-slave, external-master-adapter): stdout and stderr into a file,
+// core dumps off (a test that ends it with SIGSEGV must not fill the disk),
+// the default signal dispositions and mask of a shell; killed (SIGKILL) if
+// still running when the test is done with it.
 
 #include <fcntl.h>
 #include <sched.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -45,6 +48,8 @@ class Child {
         CPU_SET(cpu, &set);
         sched_setaffinity(0, sizeof set, &set);
       }
+      const rlimit no_core{0, 0};
+      setrlimit(RLIMIT_CORE, &no_core);
       // The test blocks nothing, but be explicit: the child starts with the
       // default dispositions, as from a shell.
       sigset_t none;
@@ -99,6 +104,16 @@ class Child {
     }
     return WEXITSTATUS(status_);
   }
+  /// Waits up to `timeout`; true when the process has ended (status() then
+  /// says how: exit code or signal).
+  bool wait_for_end(std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (running() && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    return exited_;
+  }
+  /// The waitpid() status, once the process has ended.
+  int status() const { return status_; }
   std::string log() const {
     std::ifstream in(log_);
     std::stringstream ss;

@@ -39,6 +39,7 @@
 #include "session_answer.hpp"
 #include "slave_samples.hpp"
 #include "test_link_key.hpp"
+#include "wait_until.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -64,14 +65,10 @@ std::string unique_prefix() {
   return "H" + std::to_string(getpid()) + "_" + std::to_string(++n) + "_";
 }
 
+// Polled every 2ms.
 template <class Pred>
 bool wait_until(Pred done, std::chrono::milliseconds timeout) {
-  const auto deadline = Clock::now() + timeout;
-  while (!done()) {
-    if (Clock::now() > deadline) return false;
-    std::this_thread::sleep_for(2ms);
-  }
-  return true;
+  return test::wait_until(done, timeout, 2ms);
 }
 
 // Encodes `m`; with a signer, appends its MAC trailer (the right key).

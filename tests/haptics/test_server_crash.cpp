@@ -35,8 +35,9 @@
 #include "bridge/crash_stop.hpp"
 #include "bridge/link_auth.hpp"
 #include "bridge/stop_signals.hpp"
-#include "child_process.hpp"
 #include "server_bus.hpp"
+#include "server_child.hpp"
+#include "wait_until.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -52,15 +53,7 @@ std::string url() {
 
 constexpr double kSlaveCommandTimeoutS = 5.0;
 
-template <class Pred>
-bool wait_until(Pred done, std::chrono::milliseconds timeout) {
-  const auto deadline = Clock::now() + timeout;
-  while (!done()) {
-    if (Clock::now() > deadline) return false;
-    std::this_thread::sleep_for(1ms);
-  }
-  return true;
-}
+using test::wait_until;
 
 class ServerCrash : public ::testing::TestWithParam<int> {
  protected:
@@ -111,11 +104,11 @@ TEST_P(ServerCrash, ZeroTorqueAndSlaveHoldBeforeTheProcessEndsAsTheKernelEndsIt)
   prefix += std::to_string(sig);
   prefix += "_";
   test::Bus bus(url(), prefix);
-  test::ChildProcess slave(
+  test::Child slave(
       {TSMH_VIRTUAL_SLAVE, "--lcm-url", url(), "--prefix", prefix, "--command-timeout",
        std::to_string(kSlaveCommandTimeoutS), "--rt-priority", "0"},
       dir_ / "slave.log");
-  test::ChildProcess server(
+  test::Child server(
       {server_binary(), "--config", write_config(prefix).string(), "--lcm-url", url()},
       dir_ / "server.log");
   ASSERT_TRUE(wait_until([&] { return rendering(bus.seen()); }, 10s))
@@ -125,8 +118,8 @@ TEST_P(ServerCrash, ZeroTorqueAndSlaveHoldBeforeTheProcessEndsAsTheKernelEndsIt)
   std::this_thread::sleep_for(500ms);
   ASSERT_TRUE(rendering(bus.seen())) << server.log();
   server.signal(sig);
-  ASSERT_TRUE(server.wait(5s)) << "still running after " << bridge::signal_name(sig) << "\n"
-                               << server.log();
+  ASSERT_TRUE(server.wait_for_end(5s)) << "still running after " << bridge::signal_name(sig) << "\n"
+                                       << server.log();
   ASSERT_TRUE(WIFSIGNALED(server.status())) << "exit code " << WEXITSTATUS(server.status()) << "\n"
                                             << server.log();
   EXPECT_EQ(WTERMSIG(server.status()), sig) << server.log();

@@ -31,13 +31,14 @@
 #include "bridge/codec.hpp"
 #include "bridge/receiver.hpp"
 #include "bridge/stop_signals.hpp"
-#include "server_child.hpp"
 #include "realtime/clock.hpp"
 #include "realtime/latest_value.hpp"
 #include "scratch_dir_fixture.hpp"
+#include "server_child.hpp"
 #include "session_answer.hpp"
 #include "slave_samples.hpp"
 #include "test_link_key.hpp"
+#include "wait_until.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -113,15 +114,7 @@ class ForceListener {
   std::thread thread_;
 };
 
-template <class Pred>
-bool wait_until(Pred done, std::chrono::milliseconds timeout) {
-  const auto deadline = Clock::now() + timeout;
-  while (!done()) {
-    if (Clock::now() > deadline) return false;
-    std::this_thread::sleep_for(1ms);
-  }
-  return true;
-}
+using test::wait_until;
 
 /// The test's side of the wire: master console and slave, both publishing at
 /// ~1 kHz from one thread until stopped; listens to what the server sends.

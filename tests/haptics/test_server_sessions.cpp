@@ -27,6 +27,7 @@
 #include "scratch_dir_fixture.hpp"
 #include "server_child.hpp"
 #include "test_link_key.hpp"
+#include "wait_until.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -138,14 +139,10 @@ std::optional<tsmh::haptic_status_t> last_status(Tap& tap, const std::string& ch
   return out;
 }
 
+// Polled every 5ms.
 template <class Pred>
 bool wait_until(Pred done, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(5ms);
-  }
-  return true;
+  return test::wait_until(done, timeout, 5ms);
 }
 
 class ServerSessions : public test::ScratchDirTest {
