@@ -22,7 +22,7 @@ void check_count(std::span<const double> v, std::size_t n, const char* model) {
 
 }  // namespace
 
-DahlModel::DahlModel(Params p) : p_(p) {
+DahlModel::DahlModel(Params p) : BaselineModel(p) {
   require(std::isfinite(p_.sigma0) && p_.sigma0 > 0.0, "params.sigma0", "must be > 0");
   require(std::isfinite(p_.fc) && p_.fc > 0.0, "params.fc", "must be > 0");
 }
@@ -44,7 +44,7 @@ double DahlModel::step(const Motion& m, double dt) noexcept {
   return f_;
 }
 
-LuGreModel::LuGreModel(Params p) : p_(p) {
+LuGreModel::LuGreModel(Params p) : BaselineModel(p) {
   require(std::isfinite(p_.sigma0) && p_.sigma0 > 0.0, "params.sigma0", "must be > 0");
   require(std::isfinite(p_.sigma1) && p_.sigma1 >= 0.0, "params.sigma1", "must be >= 0");
   require(std::isfinite(p_.sigma2) && p_.sigma2 >= 0.0, "params.sigma2", "must be >= 0");
@@ -82,7 +82,7 @@ double LuGreModel::step(const Motion& m, double dt) noexcept {
   return f_;
 }
 
-CoulombCapstanModel::CoulombCapstanModel(Params p) : p_(p) {
+CoulombCapstanModel::CoulombCapstanModel(Params p) : BaselineModel(p) {
   require(std::isfinite(p_.f0) && p_.f0 >= 0.0, "params.f0", "must be >= 0");
   require(std::isfinite(p_.capstan) && p_.capstan >= 0.0 && p_.capstan < 1.0, "params.capstan",
           "must be in [0, 1)");

@@ -7,6 +7,23 @@
 
 namespace tsmh::estimator {
 
+/// What the baselines share: their parameters, the friction they gave last,
+/// and copying themselves. `Derived` is the model, `P` its parameters.
+template <class Derived, class P>
+class BaselineModel : public FrictionModel {
+ public:
+  using Params = P;
+  double friction() const noexcept override { return f_; }
+  std::unique_ptr<FrictionModel> clone() const override {
+    return std::make_unique<Derived>(static_cast<const Derived&>(*this));
+  }
+
+ protected:
+  explicit BaselineModel(Params p) : p_(p) {}
+  Params p_;
+  double f_ = 0.0;
+};
+
 /// Dahl: dF/dt = sigma0 (xd - |xd| F / Fc). Integrated exactly for the
 /// velocity held over each interval (F relaxes exponentially towards sgn(xd) Fc).
 struct DahlParams {
@@ -14,23 +31,14 @@ struct DahlParams {
   double fc = 9.2;        ///< N, Coulomb level
 };
 
-class DahlModel final : public FrictionModel {
+class DahlModel final : public BaselineModel<DahlModel, DahlParams> {
  public:
-  using Params = DahlParams;
   explicit DahlModel(Params p = {});
   std::string kind() const override { return "dahl"; }
   std::vector<Parameter> parameters() const override;
   void set_values(std::span<const double> values) override;
   void reset() noexcept override { f_ = 0.0; }
   double step(const Motion& m, double dt) noexcept override;
-  double friction() const noexcept override { return f_; }
-  std::unique_ptr<FrictionModel> clone() const override {
-    return std::make_unique<DahlModel>(*this);
-  }
-
- private:
-  Params p_;
-  double f_ = 0.0;
 };
 
 /// LuGre: dz/dt = v - sigma0 |v| z / g(v), g(v) = Fc + (Fs - Fc) e^-(v/vs)^2,
@@ -45,9 +53,8 @@ struct LuGreParams {
   double vs = 0.2;        ///< rad/s, Stribeck velocity
 };
 
-class LuGreModel final : public FrictionModel {
+class LuGreModel final : public BaselineModel<LuGreModel, LuGreParams> {
  public:
-  using Params = LuGreParams;
   explicit LuGreModel(Params p = {});
   std::string kind() const override { return "lugre"; }
   std::vector<Parameter> parameters() const override;
@@ -57,15 +64,9 @@ class LuGreModel final : public FrictionModel {
     f_ = 0.0;
   }
   double step(const Motion& m, double dt) noexcept override;
-  double friction() const noexcept override { return f_; }
-  std::unique_ptr<FrictionModel> clone() const override {
-    return std::make_unique<LuGreModel>(*this);
-  }
 
  private:
-  Params p_;
   double z_ = 0.0;
-  double f_ = 0.0;
 };
 
 /// Kaneko's Coulomb model of a tendon-sheath pair with the capstan law: in
@@ -79,23 +80,14 @@ struct CoulombCapstanParams {
   double v_eps = 0.02;   ///< rad/s, width of the regularised sign
 };
 
-class CoulombCapstanModel final : public FrictionModel {
+class CoulombCapstanModel final : public BaselineModel<CoulombCapstanModel, CoulombCapstanParams> {
  public:
-  using Params = CoulombCapstanParams;
   explicit CoulombCapstanModel(Params p = {});
   std::string kind() const override { return "coulomb_capstan"; }
   std::vector<Parameter> parameters() const override;
   void set_values(std::span<const double> values) override;
   void reset() noexcept override { f_ = 0.0; }
   double step(const Motion& m, double dt) noexcept override;
-  double friction() const noexcept override { return f_; }
-  std::unique_ptr<FrictionModel> clone() const override {
-    return std::make_unique<CoulombCapstanModel>(*this);
-  }
-
- private:
-  Params p_;
-  double f_ = 0.0;
 };
 
 }  // namespace tsmh::estimator
