@@ -133,14 +133,6 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
                   "auto: xd_in/xdd_in when present, else the causal estimator haptic-server "
                   "runs (differentiator: always that; exact: xd_in/xdd_in)")
       ->transform(CLI::CheckedTransformer(sources, CLI::ignore_case));
-  std::map<std::string, estimator::SignMode> signs;
-  for (const char* name : {"smooth", "smooth-fast", "hard"})
-    signs[name] = *estimator::sign_mode_from_name(name);
-  cmd->add_option("--sign", opts->estimator.sign,
-                  "sgn(xdd) of the causal estimator: smooth (haptic-server's default), "
-                  "smooth-fast (without the slow acceleration channel) or hard (the paper's "
-                  "-1/0/+1 switch)")
-      ->transform(CLI::CheckedTransformer(signs, CLI::ignore_case));
   // The numeric estimator settings, named, ranged and explained as in
   // haptic-server's joints: entries (the YAML key in brackets).
   for (const auto& s : estimator::numeric_settings()) {

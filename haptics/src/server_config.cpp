@@ -176,9 +176,6 @@ void parse_joint(FieldReader& j, std::size_t i, const std::filesystem::path& bas
     jc.params = resolve(base_dir, jc.params);
   jc.radius_m = in_range(j, "radius_m", 0.01, 0.0, 1.0, true);
   auto& est = jc.estimator;
-  const auto sign = estimator::sign_mode_from_name(j.get_string("sign", "smooth"));
-  if (!sign) j.fail("sign", "must be " + std::string(estimator::kSignModeNames));
-  est.sign = *sign;
   for (const auto& s : estimator::numeric_settings()) {
     const double v = j.get_double(s.key, est.*s.field);
     const std::string problem = s.problem(v);

@@ -36,6 +36,7 @@
 #include "realtime/quantile.hpp"
 #include "scoring.hpp"
 #include "sources.hpp"
+#include "variants.hpp"
 
 namespace {
 
@@ -92,8 +93,24 @@ struct Results {
 };
 
 // `shown`: the set's name in the progress lines (a sealed seed is not shown).
-void run_set(const Set& set, const std::vector<std::string>& models, bool gap,
-             const std::string& shown, Results& out) {
+// A model's row name under an estimator variant ("deployed": the name alone).
+std::string variant_row(const std::string& model, const std::string& variant) {
+  return variant == "deployed" ? model : model + " [" + variant + "]";
+}
+
+// Each model followed by its variants' rows.
+std::vector<std::string> with_variants(const std::vector<std::string>& models,
+                                       const std::vector<std::string>& variants) {
+  std::vector<std::string> out;
+  for (const auto& m : models)
+    for (const auto& v : variants)
+      out.push_back(variant_row(m, v));
+  return out;
+}
+
+void run_set(const Set& set, const std::vector<std::string>& models,
+             const std::vector<std::string>& variants, bool gap, const std::string& shown,
+             Results& out) {
   const double floor = friction_sensor_floor(set.calibration);
   const auto add_online = [&](const std::string& model, const Scored& s, const OnlineScore& sc) {
     out.online.push_back({set.source, model, s.kind, set.seed, sc});
@@ -106,7 +123,10 @@ void run_set(const Set& set, const std::vector<std::string>& models, bool gap,
   if (set.source == "paper") {
     const estimator::TsmFrictionModel truth(estimator::paper_spec());
     for (const auto& t : set.tests)
-      add_online(kTruth, t, score_online(truth, t));
+      for (const auto& v : variants)
+        add_online(
+            variant_row(kTruth, v), t,
+            score_online(truth, t, estimator_variant(v)->diff, estimator_variant(v)->hindsight));
   }
   if (gap) {
     const auto base = estimator::load_model("paper");
@@ -153,7 +173,10 @@ void run_set(const Set& set, const std::vector<std::string>& models, bool gap,
                  set.source.c_str(), shown.c_str(), name.c_str(), run.validation.rmse, floor,
                  run.validation.rmse / floor, run.verdict.grade.c_str(), secs);
     for (const auto& t : set.tests)
-      add_online(name, t, score_online(*run.fit.model, t));
+      for (const auto& v : variants)
+        add_online(variant_row(name, v), t,
+                   score_online(*run.fit.model, t, estimator_variant(v)->diff,
+                                estimator_variant(v)->hindsight));
   }
 }
 
@@ -173,6 +196,7 @@ const char* source_title(const std::string& s) {
 // Markdown for one source: the fit table, then online per kind.
 std::string markdown(const std::string& source, const Results& r,
                      const std::vector<std::string>& models,
+                     const std::vector<std::string>& variants,
                      const std::vector<std::uint64_t>& seeds, bool sealed) {
   std::ostringstream md;
   const auto which = [&](std::uint64_t seed) {
@@ -259,9 +283,13 @@ std::string markdown(const std::string& source, const Results& r,
   if (has_contact) md << " --- | --- |";
   md << "\n";
   std::vector<std::string> all_models = {kNaive};
-  if (source == "paper") all_models.push_back(kTruth);
+  if (source == "paper") {
+    const auto truths = with_variants({kTruth}, variants);
+    all_models.insert(all_models.end(), truths.begin(), truths.end());
+  }
   if (!gaps.empty()) all_models.push_back(kGap);
-  all_models.insert(all_models.end(), models.begin(), models.end());
+  const auto rows = with_variants(models, variants);
+  all_models.insert(all_models.end(), rows.begin(), rows.end());
   for (const auto& kind : source_kinds(source)) {
     for (const auto& m : all_models) {
       std::vector<const OnlineRecord*> o;
@@ -358,6 +386,7 @@ int main(int argc, char** argv) {
       "Accuracy of every friction model on independent physics, the paper's model and the virtual "
       "slave"};
   std::string sources_arg = "world,paper,slave", models_arg, kinds_arg, seed_list, sealed, md_path;
+  std::string variants_arg = "deployed";
   std::vector<std::string> params;
   int seeds = 5;
   std::uint64_t first_seed = 1;
@@ -384,6 +413,13 @@ int main(int argc, char** argv) {
   app.add_flag("--gap", gap,
                "Also run tsm gap's workflow (from the paper preset) on each calibration "
                "recording and its final model online (minutes per set)");
+  std::string variant_list;
+  for (const auto& v : variant_names())
+    variant_list += (variant_list.empty() ? "" : ", ") + v;
+  app.add_option("--variants", variants_arg,
+                 "Comma-separated estimator variants each fitted model runs online under, "
+                 "for measuring what a correction does (default: deployed): " +
+                     variant_list);
   app.add_flag("--check", do_check, "Assert the structural checks (exit 1 when one fails)");
   CLI11_PARSE(app, argc, argv);
 
@@ -420,6 +456,13 @@ int main(int argc, char** argv) {
   models.insert(models.end(), params.begin(), params.end());
   const auto sources = split(sources_arg);
   const auto kinds_filter = split(kinds_arg);
+  const auto variants = split(variants_arg);
+  for (const auto& v : variants)
+    if (!estimator_variant(v)) {
+      std::fprintf(stderr, "model_accuracy: --variants: unknown variant '%s' (%s)\n", v.c_str(),
+                   variant_list.c_str());
+      return 2;
+    }
 
   Results results;
   const auto t0 = std::chrono::steady_clock::now();
@@ -451,7 +494,7 @@ int main(int argc, char** argv) {
         Job& job = jobs_list[j];
         try {
           const Set set = make_set(job.source, seed_values[job.index], job.kinds, duration);
-          run_set(set, models, gap,
+          run_set(set, models, variants, gap,
                   is_sealed ? "#" + std::to_string(job.index + 1)
                             : std::to_string(seed_values[job.index]),
                   job.results);
@@ -481,7 +524,7 @@ int main(int argc, char** argv) {
 
   std::string md;
   for (const auto& source : sources)
-    md += markdown(source, results, models, seed_values, is_sealed);
+    md += markdown(source, results, models, variants, seed_values, is_sealed);
   std::printf("%s", md.c_str());
   std::fprintf(stderr, "model_accuracy: %zu fits, %zu online runs in %.0f s\n", results.fits.size(),
                results.online.size(), wall);

@@ -54,13 +54,14 @@ OnlineScore score_estimate(const Scored& s, const std::vector<double>& tip_est) 
 
 }  // namespace
 
-OnlineScore score_online(const estimator::FrictionModel& model, const Scored& s) {
+OnlineScore score_online(const estimator::FrictionModel& model, const Scored& s,
+                         const estimator::DifferentiatorConfig& diff,
+                         const estimator::HindsightConfig& hindsight) {
   const auto& rec = s.rec;
   // haptic-server's defaults: DifferentiatorConfig{} (its per-joint
   // settings default to these) and the free-tip start.
-  estimator::DistalTorqueEstimator est(model.clone(), rec.radius_m,
-                                       estimator::DifferentiatorConfig{},
-                                       estimator::StartState::kFreeTip);
+  estimator::DistalTorqueEstimator est(model.clone(), rec.radius_m, diff,
+                                       estimator::StartState::kFreeTip, hindsight);
   const bool tensions = !rec.T1.empty() && !rec.T3.empty();
   std::vector<double> tip(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {

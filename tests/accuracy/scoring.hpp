@@ -7,6 +7,8 @@
 #include <functional>
 #include <vector>
 
+#include "estimator/corrections.hpp"
+#include "estimator/differentiator.hpp"
 #include "estimator/friction_model.hpp"
 #include "sources.hpp"
 
@@ -33,9 +35,12 @@ struct OnlineScore {
 inline constexpr double kWarmUpS = 1.0;
 
 /// The deployed DistalTorqueEstimator (DifferentiatorConfig and start state
-/// as haptic-server's defaults), fed the tensions where the recording has
-/// them (update_tensions, as the server is) and tau_in otherwise.
-OnlineScore score_online(const estimator::FrictionModel& model, const Scored& s);
+/// as haptic-server's defaults, unless `diff` says otherwise: a variant the
+/// judge compares), fed the tensions where the recording has them
+/// (update_tensions, as the server is) and tau_in otherwise.
+OnlineScore score_online(const estimator::FrictionModel& model, const Scored& s,
+                         const estimator::DifferentiatorConfig& diff = {},
+                         const estimator::HindsightConfig& hindsight = {});
 /// The naive estimate (tau_in taken as the tip torque) scored alike.
 OnlineScore score_naive(const Scored& s);
 

@@ -38,9 +38,10 @@ Samples encoder_samples(std::size_t n) {
 
 // One estimator step per iteration over the samples, repeated with a time
 // offset so that time keeps increasing.
-void run_estimator(benchmark::State& state, const Samples& s, const DifferentiatorConfig& diff = {},
+void run_estimator(benchmark::State& state, const Samples& s, const HindsightConfig& hindsight = {},
                    const TsmModelSpec& spec = paper_spec()) {
-  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(spec), 0.01, diff);
+  DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(spec), 0.01, {},
+                            StartState::kFreeTip, hindsight);
   std::size_t i = 0;
   double t_offset = 0.0;
   for (auto _ : state) {
@@ -64,12 +65,10 @@ BENCHMARK(BM_EstimatorStep)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);
 
-// The same without the hindsight correction (haptic-server's
-// `hindsight_lag: 0`): what the correction costs, beside the figure above.
+// The same without the hindsight correction: what the correction costs,
+// beside the figure above.
 void BM_EstimatorStepWithoutHindsight(benchmark::State& state) {
-  DifferentiatorConfig diff;
-  diff.hindsight_lag = 0.0;
-  run_estimator(state, encoder_samples(1 << 16), diff);
+  run_estimator(state, encoder_samples(1 << 16), {.lag = 0.0});
 }
 BENCHMARK(BM_EstimatorStepWithoutHindsight)
     ->Repetitions(15)

@@ -108,8 +108,8 @@ std::vector<double> offline_friction(const FrictionModel& truth, const Recording
 }
 
 Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
-             const DifferentiatorConfig& diff, double resolution, double tremor, double tremor_hz,
-             double drift, const std::string& dump_path) {
+             const DifferentiatorConfig& diff, const HindsightConfig& hindsight, double resolution,
+             double tremor, double tremor_hz, double drift, const std::string& dump_path) {
   const TsmFrictionModel truth(paper_spec());
   SyntheticConfig sc;
   sc.motion = c.kind;
@@ -147,7 +147,7 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
   // The recordings start at rest with the true friction state at zero, so
   // the estimators start there too (the server's default tares the state
   // from the proximal torque instead: StartState::kFreeTip).
-  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::kZero);
+  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::kZero, hindsight);
   DistalTorqueEstimator exact(truth.clone(), rec.radius_m, diff, StartState::kZero);
   // An oracle that knows the exact velocity and acceleration but, like any
   // estimator from this encoder, cannot tell the sign of an acceleration
@@ -264,6 +264,7 @@ int main(int argc, char** argv) {
                  "added, which changes no encoder sample (0: off)")
       ->check(CLI::Range(0.0, 1e-9));
   DifferentiatorConfig diff{};
+  HindsightConfig hindsight{};
   app.add_option("--encoder-quantum", diff.quantum,
                  "Encoder resolution of x_in, rad: the recordings' and the differentiator's")
       ->check(CLI::Validator(
@@ -279,33 +280,18 @@ int main(int argc, char** argv) {
                  "Fine acceleration channel crackle PSD (0: off; smooth sign)");
   app.add_option("--fine-consistency", diff.fine_consistency,
                  "smooth sign: the fine channel decides within this many fast sd of it");
-  app.add_option("--hindsight-lag", diff.hindsight_lag,
+  app.add_option("--hindsight-lag", hindsight.lag,
                  "Hindsight correction: lag, s (0: off; smooth sign with the fine channel)");
-  app.add_option("--hindsight-sure", diff.hindsight_sure, "... |xdd| where it starts to count");
-  app.add_option("--hindsight-certain", diff.hindsight_certain, "... |xdd| where it decides");
-  app.add_option("--hindsight-guard", diff.hindsight_guard,
-                 "... none within this long (s) of a manoeuvre");
-  app.add_option("--hindsight-ahead", diff.hindsight_ahead,
-                 "... after a correction, samples up to this much younger (s) in the same pass");
-  app.add_option("--settle-reversals", diff.settle_reversals,
-                 "... a still stretch the encoder leaves back the way it came: the samples at rest "
-                 "there get the new direction's sign (true/false)");
-  app.add_option("--settle-starts", diff.settle_starts,
-                 "... a move leaving a hold: once its counts span --settle-span, the samples at "
-                 "rest since its estimated start get its sign (true/false)");
-  app.add_option("--settle-stops", diff.settle_stops,
-                 "... a move running out into a hold: the samples still_time would put at rest "
-                 "before its estimated stop decelerate instead (true/false)");
-  app.add_option("--settle-turns", diff.settle_turns,
-                 "... a turn after a manoeuvre whose new way's counts speed up: the samples from "
-                 "the old way's last count get the new way's sign where the fine channel cannot "
-                 "correct them (true/false)");
-  app.add_option("--settle-span", diff.settle_span,
-                 "... the counts a start, stop or turn is judged from span this long, s");
-  app.add_option("--hindsight-sure-armed", diff.hindsight_sure_armed,
+  app.add_option("--hindsight-sure", hindsight.sure, "... |xdd| where it starts to count");
+  app.add_option("--hindsight-certain", hindsight.certain, "... |xdd| where it decides");
+  app.add_option("--hindsight-sure-armed", hindsight.sure_armed,
                  "... |xdd| where it starts to count shortly after a manoeuvre");
-  app.add_option("--hindsight-certain-armed", diff.hindsight_certain_armed,
+  app.add_option("--hindsight-certain-armed", hindsight.certain_armed,
                  "... |xdd| where it decides shortly after a manoeuvre");
+  app.add_option("--hindsight-guard", hindsight.guard,
+                 "... none within this long (s) of a manoeuvre");
+  app.add_option("--hindsight-ahead", hindsight.ahead,
+                 "... after a correction, samples up to this much younger (s) in the same pass");
   app.add_option("--slow-jerk-psd", diff.slow_jerk_psd,
                  "Slow acceleration channel jerk PSD (0: off, the fast channel alone)");
   app.add_option("--slow-consistency", diff.slow_consistency,
@@ -366,7 +352,7 @@ int main(int argc, char** argv) {
   for (const auto& c : cases) {
     for (int s = 0; s < seeds; ++s)
       rows.push_back(run_case(c, first_seed + static_cast<std::uint64_t>(s), jitter, drops, diff,
-                              resolution, tremor, tremor_hz, drift,
+                              hindsight, resolution, tremor, tremor_hz, drift,
                               rows.empty() ? dump : std::string{}));
   }
 

@@ -310,9 +310,11 @@ void Differentiator::start(double t, double x) noexcept {
 }
 
 inline double Differentiator::decide_sign(const Step& step, double dt) noexcept {
-  // At rest the true acceleration is exactly 0 and the model's state must
-  // not move; the acceleration estimate still rings for a while after a stop
-  // (the jerk ends abruptly), so an encoder that has not moved decides.
+  // Correction (rest, corrections.hpp): assumes a joint whose encoder has
+  // not changed for still_time has stopped. At rest the true acceleration
+  // is exactly 0 and the model's state must not move; the acceleration
+  // estimate still rings for a while after a stop (the jerk ends abruptly),
+  // so an encoder that has not moved decides.
   if (still_time_ > 0.0 && still_ >= still_time_) {
     in_band_ = 0.0;
     return 0.0;
@@ -344,12 +346,14 @@ inline double Differentiator::decide_sign(const Step& step, double dt) noexcept 
       const double slow = std::clamp(step.slow_xdd * step.slow_inv_width, -1.0, 1.0);
       sign = d * d * sign + (1.0 - d * d) * slow;
     }
-    // After a manoeuvre the acceleration channel could not follow, the motion
-    // is not the smooth kind its model describes: it may be a stroke at
-    // constant speed, where the true xdd is exactly 0 (and the channel rings
-    // for 0.1-0.2 s). The expected sign is then (1 - P(cruise)) times the
-    // sign given motion. On smooth motion the channel stays consistent and
-    // this never runs: its small accelerations keep their sign.
+    // Correction (cruise, corrections.hpp): assumes a stroke after a
+    // reversal runs at constant speed. After a manoeuvre the acceleration
+    // channel could not follow, the motion is not the smooth kind its model
+    // describes: it may be a stroke at constant speed, where the true xdd is
+    // exactly 0 (and the channel rings for 0.1-0.2 s). The expected sign is
+    // then (1 - P(cruise)) times the sign given motion. On smooth motion the
+    // channel stays consistent and this never runs: its small accelerations
+    // keep their sign.
     if (use_cruise_ && since_inconsistent_ < cfg_.cruise_armed_time)
       sign *= 1.0 - cruise_probability();
     return sign;

@@ -145,81 +145,6 @@ struct DifferentiatorConfig {
   double still_time = -1.0;
   /// A gap longer than this (s) restarts the filters at the new sample.
   double max_gap = 0.05;
-  /// Hindsight correction (DistalTorqueEstimator, smooth sign with the fine
-  /// channel and a model whose state can be saved): `hindsight_lag` s after
-  /// each sample, the fine channel, having seen what followed, knows that
-  /// sample's acceleration about ten times more finely than it did at once
-  /// (its state now, extrapolated back). Where that settles sgn(xdd)
-  /// differently from the sign the model was given, the model is stepped
-  /// again from that sample to now. Why: below |xd| = lambda a sign decided
-  /// late or wrongly moves the friction state the wrong way, and the error
-  /// lasts until the next saturation (0.3 s and more); the correction ends it
-  /// after hindsight_lag. 0: off; at most 0.1 s (the history holds 127
-  /// samples: at higher rates the lag is shorter).
-  /// The sign from hindsight counts with weight clamp((|xdd| - sure) /
-  /// (certain - sure), 0, 1) (rad/s^2), the rest is the causal sign; within
-  /// cruise_armed_time of a manoeuvre (the acceleration channel's cruise_nis
-  /// test) the `_armed` pair, since the true xdd may be exactly 0 there, and
-  /// within hindsight_guard (s) of one none at all: the fine channel's
-  /// polynomial model rings after a jerk step. A sample after which the
-  /// encoder has not changed for still_time is at rest (sign and speed 0).
-  /// Measured in docs/friction-model.md.
-  double hindsight_lag = 0.05;
-  double hindsight_sure = 0.02;
-  double hindsight_certain = 0.05;
-  double hindsight_sure_armed = 0.05;
-  double hindsight_certain_armed = 0.15;
-  double hindsight_guard = 0.3;
-  /// When a sample's sign is corrected, the samples up to this much younger
-  /// (s) are looked at again in the same pass, a little before their
-  /// hindsight_lag, so that the few corrections around one zero crossing of
-  /// the acceleration (1-5 samples apart) step the model again to now once
-  /// instead of once each. 0: each at its lag.
-  double hindsight_ahead = 0.005;
-  /// Hindsight correction: when the encoder moves again after standing
-  /// still, back the way it came (after two counts the other way), the
-  /// samples of that stretch the estimator had at rest (sign 0) get the new
-  /// direction's sign and the model is stepped again to now: the joint
-  /// reversed there, too slowly for the encoder to show (velocity below one
-  /// count per still_time), and eq. (4) drove the state with lambda
-  /// sgn(xdd) meanwhile. Only for a stretch the history still holds.
-  /// docs/friction-model.md, "Corrections". false: off.
-  bool settle_reversals = true;
-  /// Hindsight correction: a move that leaves a hold. From rest the
-  /// acceleration has the move's sign from its first instant, while the
-  /// first encoder count comes tens of ms later (about 100 ms for a slow
-  /// start), and eq. (4) drives the true state with lambda sgn(xdd) all
-  /// that time. Once the move's counts (the same way) span settle_span, its
-  /// start is estimated from their timing: from rest at constant jerk (as
-  /// a hand starts a reach) the velocity grows as the square of the time
-  /// since the start, so the square root of each interval's mean velocity,
-  /// extrapolated back to zero, gives it. The samples at rest since then
-  /// get the move's sign. docs/friction-model.md,
-  /// "Corrections". false: off.
-  bool settle_starts = true;
-  /// Hindsight correction: a move that runs out into a hold. Its last
-  /// count comes 10-90 ms before it stops; meanwhile it decelerates, and
-  /// after still_time without a count the estimator declares rest. From the
-  /// last counts' timing (the same way, over settle_span, slowing down) the
-  /// stop is estimated as a start is (settle_starts); the samples the
-  /// still_time rule would put at rest before that stop are taken as
-  /// decelerating instead. false: off.
-  bool settle_stops = true;
-  /// Hindsight correction: a turn after a manoeuvre (settle_turns). When the
-  /// encoder turns (a run of counts one way, then the other) and the new
-  /// way's counts speed up over settle_span, the joint decelerated into the
-  /// turn and accelerated out of it: the acceleration had the new way's sign
-  /// from the old way's last count on. Samples there that the fine channel
-  /// cannot correct (within hindsight_guard after a manoeuvre) get that sign.
-  bool settle_turns = true;
-  /// settle_starts / settle_stops / settle_turns: the counts a start, stop
-  /// or turn is judged from span this long, s (at least three counts, at
-  /// most 16): the line
-  /// through the square roots of their intervals' mean velocities, fitted
-  /// by weighted least squares. Longer averages out the sample clock's
-  /// quantisation of the count times (+-0.5 ms each); a start is settled
-  /// only once its counts span this long.
-  double settle_span = 0.05;
   /// true: the full Kalman recursion every sample (covariance propagated for
   /// the actual interval). false: each channel's steady-state gain for the
   /// actual interval, from a table made at construction (interpolated in
@@ -229,16 +154,10 @@ struct DifferentiatorConfig {
   bool exact_covariance = false;
 };
 
-/// The largest values of the per-joint settings a user may change, shared by
-/// haptic-server's keys and `tsm simulate`'s options so that both accept the
-/// same configurations (each is >= 0, encoder_quantum > 0).
+/// The range of the differentiator setting a user may change (the encoder's
+/// resolution), shared by haptic-server's key and `tsm simulate`'s option so
+/// that both accept the same configurations.
 struct DifferentiatorLimits {
-  /// s; at 1 kHz the window's ring (127 samples) holds all of it.
-  static constexpr double kCruiseWindow = 0.12;
-  /// (rad/s^5)^2/Hz
-  static constexpr double kFinePsd = 1e9;
-  /// s; at 1 kHz the estimator's history (127 samples) holds all of it.
-  static constexpr double kHindsightLag = 0.1;
   /// rad
   static constexpr double kEncoderQuantum = 0.1;
   /// What is wrong with `q` as an encoder quantum, rad, for a command line's

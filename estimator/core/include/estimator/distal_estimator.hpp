@@ -5,11 +5,11 @@
 //   F      = friction model         (eqs. 4-12), driven by the differentiated angle
 //   tau_out_est = tau_in - R F      (eq. 3)
 
-#include <array>
 #include <cstddef>
 #include <limits>
 #include <memory>
 
+#include "estimator/corrections.hpp"
 #include "estimator/differentiator.hpp"
 #include "estimator/friction_model.hpp"
 
@@ -46,10 +46,12 @@ enum class StartState {
 class DistalTorqueEstimator {
  public:
   /// `model` is owned (only its real-time face is used); radius_m > 0
-  /// (throws std::invalid_argument otherwise).
+  /// (throws std::invalid_argument otherwise). `hindsight`: the hindsight
+  /// correction's settings (corrections.hpp), deployed as they are.
   DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> model, double radius_m,
                         const DifferentiatorConfig& diff = {},
-                        StartState start = StartState::kFreeTip);
+                        StartState start = StartState::kFreeTip,
+                        const HindsightConfig& hindsight = {});
 
   /// One sample with the proximal torque given; `tension` (N) is the mean of
   /// the two proximal tensions when known (models with tension copies use
@@ -67,13 +69,13 @@ class DistalTorqueEstimator {
 
   void reset() noexcept;
   double radius() const { return radius_; }
-  /// Whether the hindsight correction runs (DifferentiatorConfig::
-  /// hindsight_lag > 0, the smooth sign with the fine channel, and a model
-  /// whose state can be saved and that reads the sign of the acceleration).
-  bool hindsight() const { return hindsight_; }
+  /// Whether the hindsight correction runs (HindsightConfig::lag > 0, the
+  /// smooth sign with the fine channel, and a model whose state can be saved
+  /// and that reads the sign of the acceleration).
+  bool hindsight() const { return hindsight_.enabled(); }
   /// Samples the hindsight correction stepped the model again for (the
   /// corrected sample and every later one), since construction.
-  std::size_t hindsight_resteps() const { return resteps_; }
+  std::size_t hindsight_resteps() const { return hindsight_.resteps(); }
   const FrictionDynamics& model() const { return *model_; }
   /// The model's level scales (FrictionDynamics::set_level_scales): false when
   /// the model has none. Never allocates or throws.
@@ -82,92 +84,13 @@ class DistalTorqueEstimator {
   }
 
  private:
-  Estimate finish(double t, double x, double xd, double xdd, double acc_sign, double tau_in,
-                  double tension) noexcept;
-  void look_back(double t) noexcept;
-  // Steps sample j again with the motion m from the state before it (on the
-  // corrected path when `dirty`): true when that changed its friction, so
-  // that the samples after it must be stepped again. Kept unless the change
-  // is too small to matter and the path is not dirty.
-  bool step_again(std::size_t j, const Motion& m, bool dirty) noexcept;
-  // Steps every sample after `from` to the newest again, from the state the
-  // model holds (from's): the model then holds the corrected newest state.
-  void catch_up(std::size_t from) noexcept;
-  // Steps the sample `back` samples old and every younger one again.
-  void step_again_from(std::size_t back) noexcept;
-  // Empties the history and what is read from it (reset, a restart).
-  void forget_history() noexcept;
-  void settle_reversal() noexcept;
-  // Records a change of the encoder reading at t, to x_in (before the
-  // sample joins the history): true when a move from rest has shown enough
-  // counts to tell when it started (settle_start() is then due).
-  bool record_crossing(double t, double x_in) noexcept;
-  void settle_start() noexcept;
-  void settle_turn() noexcept;
-  // When the last changes went the same way and slowed down (a move
-  // running out), the time it stops (settle_stops), else NaN.
-  double estimated_stop() const noexcept;
-  // The encoder reading's changes in the current run (in a row the same
-  // way), each taken halfway between the samples before and at it; the
-  // newest kCrossings of them.
-  static constexpr std::size_t kCrossings = 16;
-  struct Crossings {
-    std::array<double, kCrossings> t{};
-    std::size_t newest = 0;
-    std::size_t run = 0;      // changes in the run (0: none since the (re)start)
-    double direction = 0.0;   // the run's: +1 or -1
-    bool start_open = false;  // a run from rest whose start is still to settle
-    bool turn_open = false;   // a run from a turn, still to settle
-    double turn_from = 0.0;   // ... the old way's last change
-    double at(std::size_t back) const { return t[(newest + kCrossings - back) % kCrossings]; }
-    // The newest n (<= kCrossings) times, oldest first.
-    std::array<double, kCrossings> oldest_first(std::size_t n) const {
-      std::array<double, kCrossings> out{};
-      for (std::size_t k = 0; k < n; ++k)
-        out[k] = at(n - 1 - k);
-      return out;
-    }
-  };
-  Crossings crossings_;
-  // estimated_stop() for the current still stretch, once looked up.
-  double stop_ = 0.0;
-  bool stop_known_ = false;
-  // The last four distinct encoder readings, newest first, and how many
-  // samples since repeated the newest (settle_reversal).
-  std::array<double, 4> counts_{};
-  std::size_t counts_seen_ = 0, repeats_ = 0;
-
-  // The hindsight correction's history: the last samples as the model was
-  // stepped with them, newest at newest_; the oldest `pending_` of the newest
-  // are not yet past hindsight_lag. The sample before the oldest pending one
-  // is kept too: its state is where a correction steps again from.
-  struct Sample {
-    Motion m;  // its interval: m.t less the previous sample's
-    double friction = 0.0;
-    bool settled = false;  // its sign set by settle_reversal() or settle_start()
-    DynamicsState state;
-  };
-  // 256 ms at 1 kHz: a slow start is settled up to about 150 ms after the
-  // move began (settle_start(), once its counts span settle_span).
-  static constexpr std::size_t kHistory = 256;
-  // settle_reversal() looks at still stretches of at most this many
-  // samples; a longer one is a hold (settle_start()).
-  static constexpr std::size_t kReversalSpan = 128;
-  std::array<Sample, kHistory> history_{};
-  std::size_t newest_ = 0, size_ = 0, pending_ = 0;
-  // The history's index of the sample `back` samples older than the newest.
-  std::size_t index_back(std::size_t back) const noexcept {
-    return (newest_ + kHistory - back) % kHistory;
-  }
-  Sample& sample_back(std::size_t back) noexcept { return history_[index_back(back)]; }
-  bool hindsight_ = false;
-  double inv_span_ = 0.0, inv_span_armed_ = 0.0;  // 1 / (certain - sure)
-  std::size_t resteps_ = 0;
+  Estimate finish(const Motion& m, double xdd, double tau_in) noexcept;
 
   std::unique_ptr<FrictionDynamics> model_;
   double radius_;
   Differentiator diff_;
   StartState start_;
+  HindsightCorrection hindsight_;
   bool started_ = false;
   double t_prev_ = 0.0;
 };

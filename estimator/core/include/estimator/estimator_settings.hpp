@@ -1,10 +1,12 @@
 #pragma once
-// The settings of one joint's online estimator that a user chooses: the sign
-// mode, the four numeric differentiator knobs and the start state. One table
-// names each numeric setting (its YAML key in haptic-server's `joints:`, its
-// flag on `tsm simulate`), its range and its meaning, so that both programs
-// read the same settings under the same limits and say the same thing about
-// a bad value.
+// The settings of one joint's online estimator that a user chooses: what the
+// installation is (the encoder's resolution) and how a session starts. The
+// rest of the estimator (the differentiator's channels, its sign and the
+// corrections) is deployed as it is; the accuracy harnesses vary it. One
+// table names each numeric setting (its YAML key in haptic-server's
+// `joints:`, its flag on `tsm simulate`), its range and its meaning, so that
+// both programs read the same settings under the same limits and say the
+// same thing about a bad value.
 
 #include <array>
 #include <optional>
@@ -17,15 +19,6 @@
 namespace tsmh::estimator {
 
 struct EstimatorSettings {
-  /// sgn(xdd) as the model sees it: the smoothed expected sign (default), its
-  /// fast variant, or the paper's -1/0/+1 switch (docs/friction-model.md).
-  SignMode sign = SignMode::kSmooth;
-  /// Smooth sign: the window of the differentiator's cruise hypothesis, s (0: off).
-  double cruise_window = DifferentiatorConfig{}.cruise_window;
-  /// Smooth sign: crackle spectral density of the fine acceleration channel (0: off).
-  double fine_psd = DifferentiatorConfig{}.fine_psd;
-  /// Smooth sign with the fine channel: lag of the hindsight correction, s (0: off).
-  double hindsight_lag = DifferentiatorConfig{}.hindsight_lag;
   /// Resolution of the motor angle x_in as the slave reports it, rad (the
   /// encoder's count through any gearing): the differentiator's measurement
   /// noise, quantum^2/12, and its rest time.
@@ -33,7 +26,7 @@ struct EstimatorSettings {
   /// The estimator's friction state at the first sample.
   StartState start_state = StartState::kFreeTip;
 
-  /// The differentiator these settings configure (the rest at its defaults).
+  /// The differentiator these settings configure (the rest as deployed).
   DifferentiatorConfig differentiator() const;
 };
 
@@ -51,11 +44,10 @@ struct NumericSetting {
   std::string problem(double v) const;
 };
 
-/// The four numeric settings, in the order the programs list them.
-const std::array<NumericSetting, 4>& numeric_settings();
+/// The numeric settings, in the order the programs list them.
+const std::array<NumericSetting, 1>& numeric_settings();
 
-/// The words a user writes for the sign mode and the start state.
-inline constexpr std::string_view kSignModeNames = "smooth, smooth-fast or hard";
+/// The words a user writes for the start state.
 inline constexpr std::string_view kStartStateNames = "free_tip or zero";
 std::optional<StartState> start_state_from_name(std::string_view name);
 
