@@ -265,6 +265,7 @@ FitData synthetic(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
   std::normal_distribution<double> g(0.0, noise);
   TsmModelSpec plain = truth;
   plain.slip.load_copies = false;
+  plain.slip.drive_copies = false;
   TsmFrictionModel model(plain);
   model.reset();
   for (std::size_t k = 0; k < n; ++k) {
@@ -276,10 +277,13 @@ FitData synthetic(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
     m.tension = 20.0 + 6.0 * std::sin(0.13 * t + 0.5);
     const double distal = 25.0 * std::sin(0.21 * t) * std::sin(0.05 * t + 0.3);
     const double a = model.step(m, dt);
-    double slope = 0.0;
-    for (std::size_t i = 0; i < kMaxSlipBasis; ++i)
+    double slope = 0.0, drive_slope = 0.0;
+    for (std::size_t i = 0; i < kMaxSlipBasis; ++i) {
       slope += model.slip_basis().phi[i] * truth.slip.load_weight[i];
-    const double f = a + slope * std::fabs(distal);
+      drive_slope += model.slip_basis().phi[i] * truth.slip.drive_weight[i];
+    }
+    // F = a + B |D| + C u with u = F + D (a truth has load or drive copies).
+    const double f = (a + slope * std::fabs(distal) + drive_slope * distal) / (1.0 - drive_slope);
     m.drive = f + distal;
     d.motion.push_back(m);
     d.measured.push_back(f + g(rng));
@@ -340,15 +344,69 @@ TEST(DistributedSlip, LeastSquaresRecoversKnownWeightsAndCopies) {
   }
 }
 
+// Two sheaths' capstans: each tendon's friction scales with its own
+// tension, T1 = T + u/2 and T3 = T - u/2, so the friction has tension
+// copies and drive copies (per N of u), of different sizes per direction.
+TsmModelSpec capstan_truth() {
+  TsmModelSpec s = known_truth();
+  s.slip.load_copies = false;
+  s.slip.load_weight.fill(0.0);
+  s.slip.drive_copies = true;
+  for (std::size_t i = 0; i < 10; ++i)
+    s.slip.drive_weight[i] = 0.012 * s.slip.weight[i];
+  s.slip.drive_weight[kSlidingIndex + 0] = 0.05;
+  s.slip.drive_weight[kSlidingIndex + 1] = -0.04;
+  return s;
+}
+
+TEST(DistributedSlip, LeastSquaresRecoversDriveCopies) {
+  const TsmModelSpec truth = capstan_truth();
+  const FitData d = synthetic(truth, 0.05, 13);
+  EXPECT_TRUE(copies_in_data(d).drive);
+  TsmModelSpec s = truth;
+  s.slip.weight.fill(1.0);
+  s.slip.tension_weight.fill(0.0);
+  s.slip.drive_weight.fill(0.0);
+  const double mse = solve_slip_weights(s, d);
+  EXPECT_NEAR(std::sqrt(mse), 0.05, 0.005);
+  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
+    const std::size_t i = truth.slip.basis_index(k);
+    EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
+    EXPECT_NEAR(s.slip.drive_weight[i], truth.slip.drive_weight[i], 0.003) << slip_basis_name(i);
+  }
+}
+
+TEST(DistributedSlip, DriveCopiesRoundTripThroughTheParamsFile) {
+  const TsmModelSpec truth = capstan_truth();
+  const TsmFrictionModel model(truth);
+  const auto back = parse_model(model_to_yaml(model), "round trip");
+  const auto* tsm = dynamic_cast<const TsmFrictionModel*>(back.get());
+  ASSERT_NE(tsm, nullptr);
+  EXPECT_TRUE(tsm->spec().slip.drive_copies);
+  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
+    const std::size_t i = truth.slip.basis_index(k);
+    EXPECT_DOUBLE_EQ(tsm->spec().slip.drive_weight[i], truth.slip.drive_weight[i]);
+  }
+  // The same friction for the same motion, tension and drive.
+  Motion m;
+  m.x = 0.1, m.xd = 0.2, m.tension = 24.0, m.drive = -7.0;
+  TsmFrictionModel a(truth), b(tsm->spec());
+  a.reset(), b.reset();
+  EXPECT_DOUBLE_EQ(a.step(m, 1e-3), b.step(m, 1e-3));
+  TsmModelSpec bad = truth;
+  bad.slip.drive_weight[0] = 1.5;
+  EXPECT_THROW(validate(bad), std::invalid_argument);
+}
+
 TEST(DistributedSlip, SeparableFitFindsTheSpreadFromTheCatalogStart) {
-  const TsmModelSpec truth = known_truth();
+  const TsmModelSpec truth = capstan_truth();
   const FitData d = synthetic(truth, 0.05, 12);
   FitOptions o;
   const auto r = identify(TsmFrictionModel(distributed_spec()), d, o);
   const auto* fitted = dynamic_cast<const TsmFrictionModel*>(r.model.get());
   ASSERT_NE(fitted, nullptr);
   EXPECT_TRUE(fitted->spec().slip.tension_copies);
-  EXPECT_TRUE(fitted->spec().slip.load_copies);
+  EXPECT_TRUE(fitted->spec().slip.drive_copies);
   // Within 10 % of the noise floor on train, and on validation too.
   EXPECT_LT(r.train_rmse, 1.1 * 0.05);
   double sse = 0.0, n = 0.0;

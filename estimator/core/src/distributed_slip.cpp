@@ -61,6 +61,8 @@ void validate(const DistributedSlipSpec& s) {
       bad("weights." + name, "must be >= 0 (a negative break force is not passive)");
     if (!std::isfinite(s.tension_weight[idx]))
       bad("tension_weights." + name, "must be a finite number");
+    if (!std::isfinite(s.drive_weight[idx]) || std::fabs(s.drive_weight[idx]) > kMaxDriveSlope)
+      bad("drive_weights." + name, "must be a finite number within +-1");
     if (!std::isfinite(s.load_weight[idx]) || std::fabs(s.load_weight[idx]) > kMaxLoadSlope)
       bad("load_weights." + name, "must be a finite number within +-0.9");
   }
@@ -75,6 +77,7 @@ SlipKernel::SlipKernel(const DistributedSlipSpec& spec) : spec_(spec) {
   // Entries beyond the copies in use are zero, so the sums below need no flags.
   if (!spec_.tension_copies) spec_.tension_weight.fill(0.0);
   if (!spec_.load_copies) spec_.load_weight.fill(0.0);
+  if (!spec_.drive_copies) spec_.drive_weight.fill(0.0);
 }
 
 void SlipKernel::advance(SlipState& s, double x, double xd, SlipBasis& out) const noexcept {
@@ -100,15 +103,18 @@ double SlipKernel::friction(const SlipBasis& b, double tension, double drive, do
                             double& level) const noexcept {
   const double dt = std::isfinite(tension) ? tension - spec_.tension_ref : 0.0;
   const std::size_t n = static_cast<std::size_t>(spec_.elements);
+  // The drive copies scale like the tension copies (per N of u); without a
+  // measured drive they add nothing.
+  const double u = std::isfinite(drive) ? drive : 0.0;
   double elements = 0.0, capacity = 0.0, sliding = 0.0, slope = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double w = weight(i, dt);
+    const double w = weight(i, dt) + u * spec_.drive_weight[i];
     elements += b.phi[i] * w;
     capacity += w;
     slope += b.phi[i] * spec_.load_weight[i];
   }
   for (std::size_t i = kSlidingIndex; i < kMaxSlipBasis; ++i) {
-    sliding += b.phi[i] * weight(i, dt);
+    sliding += b.phi[i] * (weight(i, dt) + u * spec_.drive_weight[i]);
     slope += b.phi[i] * spec_.load_weight[i];
   }
   const double a = elements + sliding + extra;

@@ -60,10 +60,11 @@ void read_weights(const YAML::Node& node, const DistributedSlipSpec& s, const st
 
 DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin) {
   if (!node.IsMap()) fail(origin, "distributed_slip", "must be a map");
-  reject_unknown_keys(node,
-                      {"elements", "width_min", "width_max", "smoothing", "stribeck_speed",
-                       "weights", "tension_ref", "tension_weights", "load_weights"},
-                      origin, "distributed_slip");
+  reject_unknown_keys(
+      node,
+      {"elements", "width_min", "width_max", "smoothing", "stribeck_speed", "weights",
+       "tension_ref", "tension_weights", "load_weights", "drive_weights"},
+      origin, "distributed_slip");
   DistributedSlipSpec s;
   s.enabled = true;
   const double elements = number(node["elements"], origin, "distributed_slip.elements");
@@ -89,6 +90,10 @@ DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin
     s.load_copies = true;
     read_weights(node["load_weights"], s, origin, "load_weights", s.load_weight);
   }
+  if (node["drive_weights"]) {
+    s.drive_copies = true;
+    read_weights(node["drive_weights"], s, origin, "drive_weights", s.drive_weight);
+  }
   return s;
 }
 
@@ -113,6 +118,7 @@ void emit_slip(YAML::Emitter& out, const DistributedSlipSpec& s) {
     emit_weights(out, "tension_weights", s, s.tension_weight);
   }
   if (s.load_copies) emit_weights(out, "load_weights", s, s.load_weight);
+  if (s.drive_copies) emit_weights(out, "drive_weights", s, s.drive_weight);
   out << YAML::EndMap;
 }
 

@@ -207,11 +207,19 @@ void append_slip_parameters(const DistributedSlipSpec& s, const IsFixed& is_fixe
           kMaxLoadSlope, false, "1");
     }
   }
+  if (s.drive_copies) {
+    for (std::size_t k = 0; k < s.basis_count(); ++k) {
+      const std::size_t i = s.basis_index(k);
+      add(std::string("drive_weights.") + slip_basis_name(i), s.drive_weight[i], -kMaxDriveSlope,
+          kMaxDriveSlope, false, "1");
+    }
+  }
 }
 
 std::size_t slip_parameter_count(const DistributedSlipSpec& s) {
   if (!s.enabled) return 0;
-  return 6 + s.basis_count() * (1 + (s.tension_copies ? 1 : 0) + (s.load_copies ? 1 : 0));
+  return 6 + s.basis_count() * (1 + (s.tension_copies ? 1 : 0) + (s.load_copies ? 1 : 0) +
+                                (s.drive_copies ? 1 : 0));
 }
 
 // Reads append_slip_parameters()'s values back, from v[i] on.
@@ -237,6 +245,10 @@ void read_slip_parameters(DistributedSlipSpec& s, std::span<const double> v, std
   if (s.load_copies) {
     for (std::size_t k = 0; k < s.basis_count(); ++k)
       s.load_weight[s.basis_index(k)] = v[i++];
+  }
+  if (s.drive_copies) {
+    for (std::size_t k = 0; k < s.basis_count(); ++k)
+      s.drive_weight[s.basis_index(k)] = v[i++];
   }
 }
 

@@ -24,6 +24,9 @@ std::string data_that_helps(const std::string& name) {
   if (has("distributed_slip.load_weights"))
     return "contact at several known loads (a tip sensor or a calibrated load): free motion "
            "carries no distal load";
+  if (has("distributed_slip.drive_weights"))
+    return "tip loads of both signs (pressing on tissue, pulling on a grasp) with a tip sensor: "
+           "which tendon carries the load is what they weigh";
   if (has("distributed_slip.tension_weights")) return "the same motion at several pretensions";
   if (has("distributed_slip")) return "reversals of many sizes, small (a few mrad) to large";
   if (has("load")) return "the same motion at several loads";

@@ -89,7 +89,7 @@ std::vector<double> nonnegative_least_squares(const std::vector<double>& gram,
 }
 
 CopiesInData copies_in_data(const FitData& data) {
-  double n = 0.0, st = 0.0, stt = 0.0, sl = 0.0, sll = 0.0;
+  double n = 0.0, st = 0.0, stt = 0.0, sl = 0.0, sll = 0.0, sd = 0.0, sdd = 0.0;
   bool tension = true;
   for (std::size_t i = 0; i < data.size(); ++i) {
     if (data.role[i] != SampleRole::kTrain) continue;
@@ -97,13 +97,15 @@ CopiesInData copies_in_data(const FitData& data) {
     const double load = std::isfinite(m.drive) ? std::fabs(m.drive - data.measured[i]) : 0.0;
     if (!std::isfinite(m.tension)) tension = false;
     const double t = std::isfinite(m.tension) ? m.tension : 0.0;
+    const double distal = std::isfinite(m.drive) ? m.drive - data.measured[i] : 0.0;
     n += 1.0, st += t, stt += t * t, sl += load, sll += load * load;
+    sd += distal, sdd += distal * distal;
   }
   if (n < 2.0) return {};
-  const auto sd = [&](double s, double ss) {
+  const auto spread = [&](double s, double ss) {
     return std::sqrt(std::max(0.0, ss / n - (s / n) * (s / n)));
   };
-  return {tension && sd(st, stt) > 0.2, sd(sl, sll) > 0.5};
+  return {tension && spread(st, stt) > 0.2, spread(sl, sll) > 0.5, spread(sd, sdd) > 0.5};
 }
 
 namespace {
@@ -133,7 +135,8 @@ LinearSystem build_system(const DistributedSlipSpec& spec, const FitData& data,
   DistributedSlipSpec unit = spec;  // the basis does not depend on the weights
   const SlipKernel kernel(unit);
   const std::size_t k = spec.basis_count();
-  const std::size_t copies = 1 + (spec.tension_copies ? 1 : 0) + (spec.load_copies ? 1 : 0);
+  const std::size_t copies =
+      1 + (spec.tension_copies ? 1 : 0) + (spec.load_copies ? 1 : 0) + (spec.drive_copies ? 1 : 0);
   LinearSystem sys;
   sys.columns = k * copies;
   const auto p = static_cast<Eigen::Index>(sys.columns);
@@ -162,15 +165,14 @@ LinearSystem build_system(const DistributedSlipSpec& spec, const FitData& data,
     const double y = data.measured[i] - (extra.empty() ? 0.0 : extra[i]);
     const double dt = std::isfinite(m.tension) ? m.tension - spec.tension_ref : 0.0;
     const double load = std::isfinite(m.drive) ? std::fabs(m.drive - data.measured[i]) : 0.0;
+    const double drive = std::isfinite(m.drive) ? m.drive : 0.0;
     for (std::size_t c = 0; c < k; ++c) {
       const double phi = basis.phi[spec.basis_index(c)];
       std::size_t col = c;
       rows(filled, static_cast<Eigen::Index>(col)) = phi;
-      if (spec.tension_copies) {
-        col += k;
-        rows(filled, static_cast<Eigen::Index>(col)) = phi * dt;
-      }
-      if (spec.load_copies) rows(filled, static_cast<Eigen::Index>(col + k)) = phi * load;
+      if (spec.tension_copies) rows(filled, static_cast<Eigen::Index>(col += k)) = phi * dt;
+      if (spec.load_copies) rows(filled, static_cast<Eigen::Index>(col += k)) = phi * load;
+      if (spec.drive_copies) rows(filled, static_cast<Eigen::Index>(col += k)) = phi * drive;
     }
     ys(filled) = y;
     sys.yy += y * y;
@@ -200,7 +202,9 @@ double apply_solution(DistributedSlipSpec& spec, const LinearSystem& sys,
     spec.weight[idx] = x[col];
     if (spec.tension_copies) spec.tension_weight[idx] = x[col += k];
     if (spec.load_copies)
-      spec.load_weight[idx] = std::clamp(x[col + k], -kMaxLoadSlope, kMaxLoadSlope);
+      spec.load_weight[idx] = std::clamp(x[col += k], -kMaxLoadSlope, kMaxLoadSlope);
+    if (spec.drive_copies)
+      spec.drive_weight[idx] = std::clamp(x[col += k], -kMaxDriveSlope, kMaxDriveSlope);
   }
   // mse = (y'y - 2 x'h + x'Gx) / n
   const auto p = static_cast<Eigen::Index>(sys.columns);
@@ -345,27 +349,39 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
   FitResult r;
   // The copies the data can determine are solved; the others keep their values.
   CopiesInData copies = copies_in_data(data);
-  if (!o.slip_copies_from_data) {
+  if (o.slip_copies_from_data) {
+    // Per-tendon tension (the tension and drive copies) is what a sheath's
+    // capstan makes the friction proportional to; the load copies' |D| is
+    // a symmetric stand-in for it that ignores which tendon carries the
+    // load, so they are added only when the start has them.
+    copies.load = copies.load && start.slip.load_copies;
+  } else {
     // Only the copies the start already has, where the data can determine them.
     copies.tension = copies.tension && start.slip.tension_copies;
     copies.load = copies.load && start.slip.load_copies;
+    copies.drive = copies.drive && start.slip.drive_copies;
   }
   if (copies.tension && !start.slip.tension_copies) {
     start.slip.tension_copies = true;
     start.slip.tension_ref = std::round(mean_tension(data) * 10.0) / 10.0;
   }
   if (copies.load) start.slip.load_copies = true;
+  if (copies.drive) start.slip.drive_copies = true;
   if (start.slip.tension_copies && !copies.tension)
     r.notes.push_back("tension copies kept as given: the mean tension does not vary in the data");
   if (start.slip.load_copies && !copies.load)
     r.notes.push_back(
         "load copies kept as given: the distal load does not vary in the data (free motion)");
-  const bool solve_tension = copies.tension, solve_load = copies.load;
+  if (start.slip.drive_copies && !copies.drive)
+    r.notes.push_back(
+        "drive copies kept as given: the distal load does not vary in the data (free motion)");
+  const bool solve_tension = copies.tension, solve_load = copies.load, solve_drive = copies.drive;
   // Copies the data cannot determine are held: switched off for the solve,
   // restored afterwards (their friction is small where the data was taken).
   const DistributedSlipSpec held = start.slip;
   start.slip.tension_copies = solve_tension;
   start.slip.load_copies = solve_load;
+  start.slip.drive_copies = solve_drive;
 
   Search search;
   search.data = &data;
@@ -412,7 +428,8 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     search.to_spec(v, s);
     const double mse = solve_into(s, data, 1);
     const double params = static_cast<double>(s.slip.basis_count()) *
-                              (1.0 + (solve_tension ? 1.0 : 0.0) + (solve_load ? 1.0 : 0.0)) +
+                              (1.0 + (solve_tension ? 1.0 : 0.0) + (solve_load ? 1.0 : 0.0) +
+                               (solve_drive ? 1.0 : 0.0)) +
                           static_cast<double>(search.size());
     const double bic = n_train * std::log(std::max(mse, 1e-300)) + params * std::log(n_train);
     char line[200];
@@ -431,6 +448,10 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
   if (!solve_load && held.load_copies) {
     best_spec.slip.load_copies = true;
     best_spec.slip.load_weight = held.load_weight;
+  }
+  if (!solve_drive && held.drive_copies) {
+    best_spec.slip.drive_copies = true;
+    best_spec.slip.drive_weight = held.drive_weight;
   }
   r.model = std::make_unique<TsmFrictionModel>(best_spec);
   for (const auto& p : r.model->parameters())

@@ -21,13 +21,25 @@
 //
 // The basis phi_k (elements, then the four sliding functions) enters the
 // friction linearly:
-//   F = sum_k phi_k (w_k + t_k (T - T_ref) + l_k |D|)
+//   F = sum_k phi_k (w_k + t_k (T - T_ref) + d_k u + l_k |D|)
 // T: the mean of the two proximal tensions (T1 + T3) / 2: the pretension the
 // pair carries. It does not contain the tip load (a tip torque raises one
 // tension and lowers the other) and it contains only the difference of the
 // two sheaths' frictions, not their sum, so a tension copy cannot read the
 // friction itself from its input (unlike |tau_in| / R, which is the friction
 // in free motion).
+// u: the signed proximal drive tau_in / R = T1 - T3 (measured online, as T).
+// With the tension copies it makes each tendon's friction scale with its own
+// tension: T1 = T + u/2, T3 = T - u/2, and a sheath's capstan gives, while
+// it slides, F_j = c_j T_j with c_j = 1 - e^(-mu_j wrap_j) for the tendon
+// pulled and e^(mu_j wrap_j) - 1 for the one released. Two sheaths bent
+// differently have different c_j, so the friction depends on which tendon
+// carries the load, not only on its size; a slack tendon (T_j -> 0) takes
+// its sheath's friction with it. The proximal tensions are what the sheath's
+// friction is proportional to, so the relation is explicit (no solve), and
+// u's noise enters only through the small d_k. In free motion u is the
+// friction itself (D = 0): the d_k then only rescale the w_k, so free-motion
+// data cannot tell them apart; data with tip loads of both signs can.
 // D: the distal load tau_out / R = tau_in / R - F, the capstan effect of the
 // load the tendon transmits to the tip. It contains F, so the model solves
 // F = A + B |u - F| exactly (u = tau_in / R): with |B| < 1 the right side's
@@ -54,6 +66,10 @@ inline constexpr std::size_t kMaxSlipBasis = kMaxSlipElements + kSlidingFunction
 /// Bound on |dF/d|D|| the model uses, so that the distal load equation keeps
 /// one solution (the load weights are clamped to it at run time).
 inline constexpr double kMaxLoadSlope = 0.9;
+/// Bound on each drive weight |d_k|: a sheath's capstan share of its
+/// tendon's tension, 1 - e^(-mu wrap) or e^(mu wrap) - 1, stays below 1 for
+/// wraps up to mu wrap = ln 2.
+inline constexpr double kMaxDriveSlope = 1.0;
 
 struct DistributedSlipSpec {
   bool enabled = false;
@@ -65,12 +81,14 @@ struct DistributedSlipSpec {
   double tension_ref = 20.0;    ///< N, the mean tension at which the tension copies add 0
   bool tension_copies = false;  ///< the t_k are part of the model
   bool load_copies = false;     ///< the l_k are part of the model
+  bool drive_copies = false;    ///< the d_k are part of the model
   /// Weights per basis function, N: elements 0 .. elements-1, then the sliding
   /// functions at kSlidingIndex + {0: coulomb +, 1: coulomb -, 2: stribeck,
   /// 3: viscous (N s/rad)}. Unused entries are 0.
   std::array<double, kMaxSlipBasis> weight{};
   std::array<double, kMaxSlipBasis> tension_weight{};  ///< per N of (T - T_ref)
   std::array<double, kMaxSlipBasis> load_weight{};     ///< per N of |D|
+  std::array<double, kMaxSlipBasis> drive_weight{};    ///< per N of u (signed)
 
   /// The indices of the basis functions in use, in order (elements, sliding).
   std::size_t basis_count() const { return static_cast<std::size_t>(elements) + kSlidingFunctions; }
@@ -114,7 +132,8 @@ class SlipKernel {
   void advance(SlipState& s, double x, double xd, SlipBasis& out) const noexcept;
   /// The friction A + B |D| of a basis, solved for the distal load (see the
   /// header): `extra` is friction the rest of the model adds (Bouc-Wen);
-  /// `tension` NaN or `drive` NaN turn the respective copies off.
+  /// `tension` NaN or `drive` NaN turn the respective copies off (the
+  /// drive copies and the load copies both need `drive`).
   /// `level` receives the sliding level at this basis: the elements'
   /// saturation plus the magnitude of the sliding functions' friction, N.
   double friction(const SlipBasis& b, double tension, double drive, double extra,

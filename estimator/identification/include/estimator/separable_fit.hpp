@@ -1,8 +1,8 @@
 #pragma once
 // Identification of a model with distributed slip (distributed_slip.hpp),
 // global by construction where the model is linear: its friction is linear in
-// the element weights, the sliding coefficients and their tension and load
-// copies, so for given nonlinear values (the elements' spread, the velocity
+// the element weights, the sliding coefficients and their tension, drive and
+// load copies, so for given nonlinear values (the elements' spread, the velocity
 // smoothing, the Stribeck speed, a Bouc-Wen part's parameters) the best
 // weights are one least-squares problem, solved exactly (normal equations,
 // a small ridge, nonnegative break forces by an active-set NNLS). Only the
@@ -35,10 +35,13 @@ std::vector<double> nonnegative_least_squares(const std::vector<double>& gram,
 
 /// Which copies the data can determine: tension copies when the mean
 /// tension varies (its standard deviation on train samples above 0.2 N),
-/// load copies when the measured distal load does (above 0.5 N).
+/// load copies when the measured distal load does (above 0.5 N), drive
+/// copies when the signed distal load does (above 0.5 N: tip loads, which
+/// free motion lacks).
 struct CopiesInData {
   bool tension = false;
   bool load = false;
+  bool drive = false;
 };
 CopiesInData copies_in_data(const FitData& data);
 
