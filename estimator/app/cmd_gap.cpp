@@ -91,6 +91,7 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   std::vector<std::string> not_plotted;
   for (std::size_t k = 0; k < g.effects.size() && plot_error.empty(); ++k) {
     const auto& e = g.effects[k];
+    if (e.shape.empty()) continue;  // a structure's copies: their sizes are its parameters
     if (estimator::shape_is_flat(e.shape)) {
       not_plotted.push_back(e.name +
                             ": no shape plot, the friction it adds is zero at every one "
@@ -101,10 +102,13 @@ void run_gap_command(const GapCliOptions& o, const Context& ctx) {
                             e.variable + ")");
       continue;
     }
-    const std::string unit = e.variable == "x"      ? "x (rad)"
-                             : e.variable == "load" ? "load |tau_in|/R (N)"
-                             : e.variable == "t"    ? "t (s)"
-                                                    : "|xd| (rad/s)";
+    const std::string unit = e.variable == "x"               ? "x (rad)"
+                             : e.variable == "load"          ? "load |tau_in|/R (N)"
+                             : e.variable == "distal_load"   ? "distal load tau_out/R (N)"
+                             : e.variable == "tension"       ? "tension (N)"
+                             : e.variable == "element_width" ? "element width (rad)"
+                             : e.variable == "t"             ? "t (s)"
+                                                             : "|xd| (rad/s)";
     const auto r = estimator::plot_xy(
         dir.staging(), "gap_effect" + std::to_string(k + 1) + "_" + e.name, e.shape, unit,
         "added friction (N)", e.name + " (" + e.form + "): friction added vs " + unit);
@@ -176,9 +180,12 @@ void add_gap_command(CLI::App& app, Context& ctx) {
   cmd->add_option("--max-effects", opts->max_effects, "Most effects to add (default 4)")
       ->check(CLI::Range(0, 16));
   cmd->add_option("--candidates", opts->candidates,
-                  "Candidate effects to try (default: all but coulomb): viscous, load_dependent, "
-                  "position_dependent, time_varying, direction_asymmetry, stribeck, "
-                  "acceleration_dependence, reversal_offset")
+                  "Candidate effects to try (default: all but coulomb and the |tau_in|/R load "
+                  "forms): viscous, load_dependent, position_dependent, time_varying, "
+                  "tension_dependent, hysteresis_elements, direction_asymmetry, stribeck, "
+                  "acceleration_dependence, reversal_offset, and the structural "
+                  "distributed_slip (with its tension copies when tension_dependent is named "
+                  "too), load_copies, tension_copies; a family brings all its forms")
       ->delimiter(',');
   cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
       ->check(CLI::Range(0, 64));

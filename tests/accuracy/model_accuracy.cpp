@@ -138,7 +138,7 @@ void run_set(const Set& set, const std::vector<std::string>& models,
     std::string named;
     for (const auto& e : g.effects) {
       named += (named.empty() ? "" : "; ") + e.name + " (" + e.form + ", " + e.variable + ")";
-      if (e.form == "distributed_slip") {
+      if (e.name == "distributed_slip") {
         // The element spread the workflow found.
         std::map<std::string, double> p(e.parameters.begin(), e.parameters.end());
         char spread[120];

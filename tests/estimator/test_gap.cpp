@@ -54,6 +54,25 @@ GapResult gap(const Recording& rec, const std::string& base = "paper") {
   return find_model_gaps(rec, *load_model(base), base);
 }
 
+// The level terms only, without the structural candidates (distributed
+// slip and its copies): the virtual slave's sheath is a chain of segments
+// that slip one after the other, pulled by two tendons, so with them on the
+// workflow names the chain's distributed slip and the tendons' tension
+// first, and the elements' sliding functions (Coulomb, Stribeck, viscous)
+// take a switched-on drag with them. The tests of the slave's switchable
+// effects are about those level effects.
+GapResult level_gap(const Recording& rec, const std::string& base) {
+  GapOptions o;
+  for (const auto& info : term_catalog()) {
+    const std::string name(info.name);
+    // The |tau_in| / R forms stay off, as by default (docs/model-gap.md).
+    if (info.kind == TermKind::kCoulomb || name == "load_dependent" || name == "load_saturating")
+      continue;
+    o.candidates.push_back(name);
+  }
+  return find_model_gaps(rec, *load_model(base), base, o);
+}
+
 // The floor: the base model's validation gap on the world without the effect.
 double floor_of(const Recording& control, const std::string& base = "paper") {
   return run_fit(control, *load_model(base), base).validation.rmse;
@@ -237,14 +256,19 @@ TEST(GapVirtualSlave, HysteresisMemoryOfTheChain) {
   const auto g = gap(virtual_slave("memory", "--effect capstan=0"));
   record(g, g.gap_base.rmse);
   ASSERT_FALSE(g.effects.empty());
-  EXPECT_EQ(g.effects.front().name, "hysteresis_elements");
+  // Either form of the memory: two parallel hysteresis states, or the
+  // elasto-slide elements of distributed slip (its segments slip one after
+  // the other), which the workflow may put in place of the paper's state.
+  EXPECT_TRUE(g.effects.front().name == "hysteresis_elements" ||
+              g.effects.front().name == "distributed_slip")
+      << g.effects.front().name;
   EXPECT_LT(g.gap_final.rmse, 0.8 * g.gap_base.rmse);
 }
 
 TEST(GapVirtualSlave, NothingHiddenNothingFound) {
   // The plant's load dependence (capstan) switched off: the paper's model
   // with memory describes the rest without a missing term.
-  const auto g = gap(virtual_slave("none", "--effect capstan=0"), kChainBase);
+  const auto g = level_gap(virtual_slave("none", "--effect capstan=0"), kChainBase);
   record(g, g.gap_base.rmse);
   EXPECT_TRUE(g.effects.empty()) << ::testing::PrintToString(names(g));
 }
@@ -254,7 +278,7 @@ TEST(GapVirtualSlave, HiddenViscousDrag) {
   // (the compensation's dead-zone jumps reach 9 rad/s, where the plant's
   // node drag no longer looks like a sliding-level term).
   const std::string plain = "--no-compensation --effect capstan=0";
-  const auto g = gap(virtual_slave("visc", plain + " --effect viscous=2"), kChainBase);
+  const auto g = level_gap(virtual_slave("visc", plain + " --effect viscous=2"), kChainBase);
   const double floor = floor_of(virtual_slave("visc_ctl", plain), kChainBase);
   record(g, floor);
   EXPECT_EQ(names(g), std::vector<std::string>{"viscous"});
@@ -262,7 +286,8 @@ TEST(GapVirtualSlave, HiddenViscousDrag) {
 }
 
 TEST(GapVirtualSlave, HiddenPositionDependence) {
-  const auto g = gap(virtual_slave("pos", "--effect capstan=0 --effect position=0.3"), kChainBase);
+  const auto g =
+      level_gap(virtual_slave("pos", "--effect capstan=0 --effect position=0.3"), kChainBase);
   const double floor = floor_of(virtual_slave("pos_ctl", "--effect capstan=0"), kChainBase);
   record(g, floor);
   EXPECT_EQ(names(g), std::vector<std::string>{"position_dependent"});
@@ -270,8 +295,8 @@ TEST(GapVirtualSlave, HiddenPositionDependence) {
 }
 
 TEST(GapVirtualSlave, SheathReroutedMidRun) {
-  const auto g =
-      gap(virtual_slave("time", "--effect capstan=0 --reroute-at 20 --reroute-wrap 4.5"));
+  const auto g = level_gap(
+      virtual_slave("time", "--effect capstan=0 --reroute-at 20 --reroute-wrap 4.5"), "paper");
   const double floor = floor_of(virtual_slave("time_ctl", "--effect capstan=0"));
   record(g, floor);
   ASSERT_EQ(names(g), std::vector<std::string>{"time_varying"});
@@ -296,7 +321,7 @@ TEST(GapVirtualSlave, LoadDependenceOfTheCapstanEffect) {
   const auto without =
       concatenate(session("l_free0", "--tissue none --effect capstan=0"),
                   session("l_hard0", "--tissue hard --surface 0.3 --effect capstan=0"));
-  const auto g = gap(with);
+  const auto g = level_gap(with, "paper");
   const double floor = floor_of(without);
   record(g, floor);
   // One contact position: with flexible position forms (a bump where the
@@ -332,7 +357,7 @@ TEST(GapVirtualSlave, PalpationReportsTheLoadPositionConfound) {
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   const Recording rec = read_recording_csv(out);
   fs::remove(out);
-  const auto g = gap(rec);
+  const auto g = level_gap(rec, "paper");
   record(g, g.noise);
   ASSERT_FALSE(g.effects.empty());
   ASSERT_FALSE(g.confounds.empty());
@@ -348,8 +373,8 @@ TEST(GapVirtualSlave, TwoHiddenEffectsAreBothNamed) {
   // memory, three names. (From paper_memory, load_dependent imitates the
   // viscous drag first: in free motion |tau_in| / R is the friction, which
   // grows with speed; docs/model-gap.md.)
-  const auto g =
-      gap(virtual_slave("two", "--effect capstan=0 --effect viscous=2 --effect position=0.3"));
+  const auto g = level_gap(
+      virtual_slave("two", "--effect capstan=0 --effect viscous=2 --effect position=0.3"), "paper");
   const double floor = floor_of(virtual_slave("two_ctl", "--effect capstan=0"));
   record(g, floor);
   // The chain's memory may come as hysteresis_elements, distributed_slip

@@ -558,14 +558,24 @@ CandidateTrial score_trial(const FitData& d, std::span<const double> f_cur,
 // than add a level term. distributed_slip adds a family of elasto-slide
 // elements (distributed_slip.hpp) beside the current hysteresis; on a model
 // with distributed slip, the load and tension dependences are its copies:
-// every basis function scaled by the distal load or the mean tension
+// every basis function scaled by the distal load or the tendons' tension
 // (per element multiplicative, the capstan form), identified exactly.
-enum class Structural { kDistributedSlip, kLoadCopies, kTensionCopies };
+// A sheath's slip and its tension dependence come together: the break force
+// of every stuck segment is mu times its local tension, so on a sheath whose
+// tension changes a lot (a large wrap, tip loads) the elements alone explain
+// little and the copies alone have nothing to scale. Distributed slip is
+// therefore also tried with its tension copies at once (the break force
+// follows the tension; a tip load acts on it through the tendons'
+// tensions); when the pair wins, both effects are named, with what the
+// elements alone gave. The load copies come after, on a model with slip.
+enum class Structural { kDistributedSlip, kSlipWithTension, kLoadCopies, kTensionCopies };
 
 const char* structural_name(Structural s) {
   switch (s) {
     case Structural::kDistributedSlip:
       return "distributed_slip";
+    case Structural::kSlipWithTension:
+      return "distributed_slip+tension_copies";
     case Structural::kLoadCopies:
       return "load_copies";
     case Structural::kTensionCopies:
@@ -574,6 +584,14 @@ const char* structural_name(Structural s) {
   return "";
 }
 
+// The copies a pair adds (the distributed slip itself: none).
+std::optional<Structural> copies_of(Structural s) {
+  if (s == Structural::kSlipWithTension) return Structural::kTensionCopies;
+  return std::nullopt;
+}
+
+// A pair's family is its copies' (the effect it adds beyond the elements),
+// so that it meets the load and tension level terms as a rival.
 const char* structural_family(Structural s) {
   switch (s) {
     case Structural::kDistributedSlip:
@@ -581,16 +599,22 @@ const char* structural_family(Structural s) {
     case Structural::kLoadCopies:
       return "load_dependent";
     case Structural::kTensionCopies:
+    case Structural::kSlipWithTension:
       return "tension_dependent";
   }
   return "";
 }
 
 std::optional<Structural> structural_from_name(const std::string& name) {
-  for (Structural s :
-       {Structural::kDistributedSlip, Structural::kLoadCopies, Structural::kTensionCopies})
+  for (Structural s : {Structural::kDistributedSlip, Structural::kSlipWithTension,
+                       Structural::kLoadCopies, Structural::kTensionCopies})
     if (name == structural_name(s)) return s;
   return std::nullopt;
+}
+
+// Whether a trial adds distributed slip (alone or with copies).
+bool adds_slip(const std::string& name) {
+  return name.rfind("distributed_slip", 0) == 0;
 }
 
 // The families the model already has, level terms and structure.
@@ -605,16 +629,23 @@ bool family_present(const TsmModelSpec& spec, std::string_view family) {
 // The structural candidates the current model and the data allow.
 std::vector<Structural> structural_candidates(const TsmModelSpec& spec, const FitData& d,
                                               const GapOptions& o) {
-  const auto wanted = [&](Structural s) {
-    if (o.candidates.empty()) return true;
+  const auto named = [&](Structural s) {
     return std::any_of(o.candidates.begin(), o.candidates.end(), [&](const std::string& c) {
       return c == structural_name(s) || c == structural_family(s);
     });
+  };
+  const auto wanted = [&](Structural s) {
+    if (o.candidates.empty()) return true;
+    if (const auto c = copies_of(s)) return named(Structural::kDistributedSlip) && named(*c);
+    return named(s);
   };
   std::vector<Structural> out;
   const CopiesInData copies = copies_in_data(d);
   if (!spec.slip.enabled) {
     if (wanted(Structural::kDistributedSlip)) out.push_back(Structural::kDistributedSlip);
+    if (copies.tension && !family_present(spec, "tension_dependent") &&
+        wanted(Structural::kSlipWithTension))
+      out.push_back(Structural::kSlipWithTension);
     return out;
   }
   if (copies.load && !family_present(spec, "load_dependent") && wanted(Structural::kLoadCopies))
@@ -628,11 +659,17 @@ std::vector<Structural> structural_candidates(const TsmModelSpec& spec, const Fi
 // The structural candidate added to `current` and identified: the linear
 // block exactly, the elements' spread by grid and BOBYQA, their number by
 // BIC (separable_fit.hpp); the current model's own parameters from where
-// they are.
+// they are. A pair on a model that already has distributed slip adds only
+// its copies. With `may_replace` (no effect named yet: the model is the
+// base) distributed slip is also tried instead of the base's hysteresis,
+// the elements and their sliding functions alone: the base's Bouc-Wen state
+// fitted to a sheath whose slip spreads is a compromise the elements can
+// only add to (their break forces are not negative), and the search moves
+// its parameters only locally. The better train fit of the two counts.
 CandidateTrial refit_structural(const FitData& d, const TsmFrictionModel& current,
                                 std::span<const double> f_cur, const ErrorMetrics& gap_cur,
                                 double noise, Structural which, const GapOptions& o,
-                                std::uint64_t seed) {
+                                std::uint64_t seed, bool may_replace = false) {
   TsmModelSpec spec = current.spec();
   FitOptions fo = o.base_fit;
   fo.progress = nullptr;
@@ -640,26 +677,44 @@ CandidateTrial refit_structural(const FitData& d, const TsmFrictionModel& curren
   fo.threads = 1;
   fo.slip_copies_from_data = false;
   fo.global_stage = false;
-  switch (which) {
-    case Structural::kDistributedSlip:
-      spec.slip = default_distributed_slip();
-      fo.global_stage = true;  // the spread and the element count are searched
-      break;
-    case Structural::kLoadCopies:
-      spec.slip.load_copies = true;
-      spec.slip.load_weight = {};
-      break;
-    case Structural::kTensionCopies:
-      spec.slip.tension_copies = true;
-      spec.slip.tension_weight = {};
-      spec.slip.tension_ref = std::round(mean_tension(d) * 10.0) / 10.0;
-      break;
+  const bool adds_elements =
+      which == Structural::kDistributedSlip || (copies_of(which) && !spec.slip.enabled);
+  if (adds_elements) {
+    spec.slip = default_distributed_slip();
+    fo.global_stage = true;  // the spread and the element count are searched
   }
-  const FitResult fit = identify(TsmFrictionModel(spec), d, fo);
+  if (which == Structural::kLoadCopies) {
+    spec.slip.load_copies = true;
+    spec.slip.load_weight = {};
+  }
+  // Each tendon's own tension, T1 = T + u/2 and T3 = T - u/2 (T the mean,
+  // u = tau_in / R): the mean tension's copies and, where the drive varies
+  // apart from the friction (tip loads), the drive's, so that each sheath's
+  // friction scales with its own tendon (distributed_slip.hpp).
+  if (which == Structural::kTensionCopies || which == Structural::kSlipWithTension) {
+    spec.slip.tension_copies = true;
+    spec.slip.tension_weight = {};
+    spec.slip.tension_ref = std::round(mean_tension(d) * 10.0) / 10.0;
+    if (copies_in_data(d).drive) {
+      spec.slip.drive_copies = true;
+      spec.slip.drive_weight = {};
+    }
+  }
+  FitResult fit = identify(TsmFrictionModel(spec), d, fo);
+  long evaluations = fit.evaluations;
+  bool replaced = false;
+  if (adds_elements && may_replace && !spec.terms.empty()) {
+    TsmModelSpec alone = spec;
+    alone.terms.clear();
+    FitResult r = identify(TsmFrictionModel(alone), d, fo);
+    evaluations += r.evaluations;
+    if (r.train_rmse < fit.train_rmse) fit = std::move(r), replaced = true;
+  }
   CandidateTrial t = score_trial(d, f_cur, gap_cur, noise, fit, o);
   t.name = structural_name(which);
   t.family = structural_family(which);
-  t.evaluations = fit.evaluations;
+  t.evaluations = evaluations;
+  t.replaces_hysteresis = replaced;
   return t;
 }
 
@@ -753,7 +808,7 @@ void run_trials(GapResult& g, const GapState& cur, const std::vector<TermKind>& 
         try {
           CandidateTrial& t = round.trials[ci];
           t = refit_structural(d, *cur.model, cur.f, cur.gap, g.noise, structural[ci], o,
-                               o.base_fit.seed + 53 * (ci + 1));
+                               o.base_fit.seed + 53 * (ci + 1), g.effects.empty());
           t.bic = bic(t.train_mse, n_eff, t.free_parameters);
           t.delta_bic = t.bic - bic_cur;
         } catch (...) {
@@ -819,6 +874,8 @@ void check_rivals(GapResult& g, const CandidateTrial& win, const GapOptions& o, 
   std::map<std::string, const CandidateTrial*> rivals;
   for (const auto& t : round.trials) {
     if (t.family == win.family || !t.qualifies || t.gain < o.confound_ratio * win.gain) continue;
+    // Distributed slip alone and a pair with it are one model growing, not rivals.
+    if (adds_slip(t.name) && adds_slip(win.name)) continue;
     if (!rivals.count(t.family) || rivals[t.family]->gain < t.gain) rivals[t.family] = &t;
   }
   for (const auto& [family, r] : rivals) {
@@ -832,6 +889,8 @@ void check_rivals(GapResult& g, const CandidateTrial& win, const GapOptions& o, 
       back = refit_candidate(d, f_r, gap_r, g.noise, pw, o, o.base_fit.seed + 977);
     } else if (win.name == "distributed_slip" && with_rival.spec().slip.enabled) {
       continue;  // the rival is a copy of distributed slip: nothing to add it to
+    } else if (!kind && family_present(with_rival.spec(), win.family)) {
+      continue;  // the rival already has the winner's copies
     } else {
       back = refit_structural(d, with_rival, f_r, gap_r, g.noise, *structural_from_name(win.name),
                               o, o.base_fit.seed + 977);
@@ -935,11 +994,16 @@ EffectFound describe_structural(const TsmFrictionModel& model, Structural which)
       const bool load = which == Structural::kLoadCopies;
       const auto& w = load ? s.load_weight : s.tension_weight;
       e.variable = load ? "distal_load" : "tension";
+      const bool per_tendon = !load && s.drive_copies;
       e.meaning = load ? "capstan effect on the distal load: every slip element's break force and "
                          "the sliding friction scale with the load the tendons carry to the tip, "
                          "D = tau_out / R"
-                       : "the friction scales with the tension the tendons carry: every slip "
-                         "element and the sliding friction scale with (T1 + T3) / 2";
+                  : per_tendon
+                      ? "each sheath's friction scales with the tension its own tendon carries "
+                        "(the capstan effect per tendon): every slip element and the sliding "
+                        "friction scale with T1 and T3 apart"
+                      : "the friction scales with the tension the tendons carry: every slip "
+                        "element and the sliding friction scale with (T1 + T3) / 2";
       double sum = 0.0, base = 0.0;
       for (std::size_t k = 0; k < s.basis_count(); ++k) {
         const std::size_t i = s.basis_index(k);
@@ -953,14 +1017,46 @@ EffectFound describe_structural(const TsmFrictionModel& model, Structural which)
                 (load ? "" : " (reference " + num(s.tension_ref, 3) + " N)");
       add(load ? "distributed_slip.load_growth_per_N" : "distributed_slip.tension_growth_per_N",
           per_n);
+      if (per_tendon) {
+        // Sliding (every element saturated, the Coulomb function of the
+        // direction at one), the friction's magnitude per N of each tendon's
+        // tension: T = (T1 + T3) / 2 and u = T1 - T3 give t/2 + d per N of T1
+        // and t/2 - d per N of T3. A sheath's capstan makes these about
+        // 1 - e^(-mu wrap) for the tendon pulled and e^(mu wrap) - 1 for the
+        // one released.
+        const auto per = [&](std::size_t coulomb, double sign) {
+          double growth = 0.0;
+          for (std::size_t k = 0; k < s.basis_count(); ++k) {
+            const std::size_t i = s.basis_index(k);
+            if (i < kSlidingIndex || i == coulomb)
+              growth += 0.5 * s.tension_weight[i] + sign * s.drive_weight[i];
+          }
+          return growth;
+        };
+        const std::size_t pos = kSlidingIndex, neg = kSlidingIndex + 1;
+        add("tension_dependent.sliding_positive_per_N_T1", per(pos, 1.0));
+        add("tension_dependent.sliding_positive_per_N_T3", per(pos, -1.0));
+        add("tension_dependent.sliding_negative_per_N_T1", per(neg, 1.0));
+        add("tension_dependent.sliding_negative_per_N_T3", per(neg, -1.0));
+        e.where =
+            "where the tendons' tensions change (tip loads raise one and lower the other; "
+            "sheaths bent unequally give them unequal frictions); sliding, the friction's "
+            "magnitude grows by " +
+            num(per(pos, 1.0), 3) + " N per N of T1 and " + num(per(pos, -1.0), 3) +
+            " N per N of T3 moving positive, " + num(per(neg, 1.0), 3) + " and " +
+            num(per(neg, -1.0), 3) + " moving negative";
+      }
       break;
     }
+    case Structural::kSlipWithTension:
+      break;  // described as its two effects (accept_effect)
   }
   return e;
 }
 
 // The winner joins the model: polished, described, and the new current state.
-void accept_effect(GapResult& g, GapState& cur, const CandidateTrial& win, const GapOptions& o,
+void accept_effect(GapResult& g, GapState& cur, const CandidateTrial& win,
+                   const std::vector<CandidateTrial>& round_trials, const GapOptions& o,
                    const Say& say) {
   const FitData& d = g.data;
   auto next_model = std::make_unique<TsmFrictionModel>(win.fitted);
@@ -971,12 +1067,50 @@ void accept_effect(GapResult& g, GapState& cur, const CandidateTrial& win, const
   if (o.reidentify && term) polish(g, *next_model, win, o, say, f, gap_after);
   auto regimes_after = regime_errors(d, f, SampleRole::kValidation);
   if (!term) {
-    EffectFound e = describe_structural(*next_model, *structural_from_name(win.name));
+    const Structural which = *structural_from_name(win.name);
+    const std::optional<Structural> copies = copies_of(which);
     const std::string fell = where_it_fell(cur.regimes, regimes_after);
-    if (!fell.empty()) e.where += "; residual fell most at " + fell;
-    e.gap_after = gap_after;
-    e.gain = 1.0 - gap_after.rmse / cur.gap.rmse;
-    g.effects.push_back(std::move(e));
+    const double gain = 1.0 - gap_after.rmse / cur.gap.rmse;
+    const std::string instead =
+        win.replaces_hysteresis
+            ? "; it replaces the base's Bouc-Wen hysteresis (the elements alone fitted better "
+              "than beside it)"
+            : "";
+    if (copies) {
+      // A pair: the elements and their copies, named as two effects. The
+      // elements' line gives what they did alone in this round, the copies'
+      // line what the pair did.
+      const auto alone =
+          std::find_if(round_trials.begin(), round_trials.end(), [](const CandidateTrial& t) {
+            return t.name == structural_name(Structural::kDistributedSlip);
+          });
+      EffectFound slip = describe_structural(*next_model, Structural::kDistributedSlip);
+      EffectFound copy = describe_structural(*next_model, *copies);
+      slip.form = copy.form = win.name;
+      const std::string alone_text =
+          alone == round_trials.end() ? std::string("distributed slip alone was not tried")
+                                      : "the elements alone shrank it by " + pct(alone->gain) +
+                                            (alone->qualifies ? "" : " (not enough to be named)");
+      slip.where += instead + "; named together with " + copy.name +
+                    " (a stuck segment's break force is mu "
+                    "times its local tension): " +
+                    alone_text + ", with " + copy.name + " by " + pct(gain);
+      copy.where += "; named together with distributed_slip (" + alone_text + ")";
+      if (!fell.empty()) copy.where += "; residual fell most at " + fell;
+      slip.gap_after = alone == round_trials.end() ? gap_after : alone->validation;
+      slip.gain = 1.0 - slip.gap_after.rmse / cur.gap.rmse;
+      copy.gap_after = gap_after;
+      copy.gain = 1.0 - gap_after.rmse / slip.gap_after.rmse;
+      g.effects.push_back(std::move(slip));
+      g.effects.push_back(std::move(copy));
+    } else {
+      EffectFound e = describe_structural(*next_model, which);
+      if (which == Structural::kDistributedSlip) e.where += instead;
+      if (!fell.empty()) e.where += "; residual fell most at " + fell;
+      e.gap_after = gap_after;
+      e.gain = gain;
+      g.effects.push_back(std::move(e));
+    }
     say("found " + win.name + ": validation RMSE " + num(cur.gap.rmse) + " -> " +
         num(gap_after.rmse) + " N");
     cur = {std::move(next_model), std::move(f), gap_after, std::move(regimes_after)};
@@ -1014,11 +1148,21 @@ void accept_effect(GapResult& g, GapState& cur, const CandidateTrial& win, const
 // effect still adds after the rival, the rival only correlated with it; its
 // "where" says so.
 void find_confounds(GapResult& g, const GapOptions& o) {
-  std::size_t effect_index = 0;
   for (const auto& round : g.rounds) {
     if (round.accepted < 0) continue;
     const auto& win = round.trials[static_cast<std::size_t>(round.accepted)];
     for (const auto& rc : round.rivals) {
+      // The effect this round named that the rival competes with (a family
+      // is named once): a pair's copies for a load or tension rival, its
+      // elements for any other (a hysteresis, a position term).
+      const bool pair = adds_slip(win.name) && win.name != "distributed_slip";
+      const std::string named_family =
+          pair && rc.family != "load_dependent" && rc.family != "tension_dependent"
+              ? std::string("distributed_slip")
+              : win.family;
+      const auto named_effect =
+          std::find_if(g.effects.begin(), g.effects.end(),
+                       [&](const EffectFound& e) { return e.name == named_family; });
       const bool named_later =
           std::any_of(g.effects.begin(), g.effects.end(),
                       [&](const EffectFound& e) { return e.name == rc.family; });
@@ -1026,16 +1170,16 @@ void find_confounds(GapResult& g, const GapOptions& o) {
       // The named effect must keep most of its own shrink on top of the
       // rival to count as told apart from it.
       if (rc.winner_still_qualifies && rc.winner_gain_after >= o.confound_extra * win.gain) {
-        if (effect_index < g.effects.size())
-          g.effects[effect_index].where += "; " + rc.family + " alone also shrank the gap (" +
-                                           pct(rc.gain) + "), but " + win.family +
-                                           " still shrinks it by " + pct(rc.winner_gain_after) +
-                                           " on top of it, and not the reverse: " + rc.family +
-                                           " only correlates with it in this data";
+        if (named_effect != g.effects.end())
+          named_effect->where += "; " + rc.family + " alone also shrank the gap (" + pct(rc.gain) +
+                                 "), but " + named_family + " still shrinks it by " +
+                                 pct(rc.winner_gain_after) +
+                                 " on top of it, and not the reverse: " + rc.family +
+                                 " only correlates with it in this data";
         continue;
       }
       Confound c;
-      c.named = win.family;
+      c.named = named_family;
       c.rival = rc.family;
       c.named_gain = win.gain;
       c.rival_gain = rc.gain;
@@ -1049,11 +1193,9 @@ void find_confounds(GapResult& g, const GapOptions& o) {
                   " fitted slightly better, but the data cannot tell them apart; to separate "
                   "them, record " +
                   c.experiment;
-      if (effect_index < g.effects.size())
-        g.effects[effect_index].confounded_with.push_back(rc.family);
+      if (named_effect != g.effects.end()) named_effect->confounded_with.push_back(rc.family);
       g.confounds.push_back(std::move(c));
     }
-    ++effect_index;
   }
 }
 
@@ -1139,7 +1281,7 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
     CandidateTrial& win = round.trials.front();
     win.accepted = true;
     check_rivals(g, win, o, say, round);
-    accept_effect(g, cur, win, o, say);
+    accept_effect(g, cur, win, round.trials, o, say);
     g.rounds.push_back(std::move(round));
   }
 
@@ -1380,10 +1522,23 @@ std::string gap_summary_text(const GapResult& g, const GapOptions& o) {
   if (g.effects.empty()) s << "No missing effect found: " << g.stop_reason << ".\n";
   for (std::size_t k = 0; k < g.effects.size(); ++k) {
     const auto& e = g.effects[k];
-    s << "Effect " << k + 1 << ": " << e.name << " (form " << e.form << ") -- " << e.meaning
-      << ".\n  Where: " << e.where << ".\n  Why: adding it shrinks the validation gap by "
-      << pct(e.gain) << " (the acceptance margin is " << pct(o.margin) << "); now "
-      << metrics(e.gap_after) << ".\n  Fitted (the final model, as in params.yaml):";
+    s << "Effect " << k + 1 << ": ";
+    // Confounded: both names on the line, neither first with confidence.
+    if (e.confounded_with.empty()) {
+      s << e.name;
+    } else {
+      s << e.name;
+      for (const auto& c : e.confounded_with)
+        s << " or " << c;
+      s << " (CONFOUNDED: this recording cannot tell " << e.name;
+      for (const auto& c : e.confounded_with)
+        s << " from " << c;
+      s << "; see the warning below)";
+    }
+    s << " (form " << e.form << ") -- " << e.meaning << ".\n  Where: " << e.where
+      << ".\n  Why: adding it shrinks the validation gap by " << pct(e.gain)
+      << " (the acceptance margin is " << pct(o.margin) << "); now " << metrics(e.gap_after)
+      << ".\n  Fitted (the final model, as in params.yaml):";
     // The values of the final model, refitted after every later effect: the
     // ones params.yaml holds, not those of the round that found the effect.
     for (const auto& [name, value] : e.parameters)

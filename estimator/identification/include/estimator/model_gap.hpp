@@ -113,6 +113,9 @@ struct CandidateTrial {
   double z = 0.0;             ///< significance of the reduction (see GapOptions::min_z)
   double excess_share = 0.0;  ///< share of the MSE above the noise floor it removed
   bool skipped = false;       ///< not refitted: its first-order share was below min_explained
+  /// Distributed slip tried instead of the base's Bouc-Wen hysteresis (its
+  /// elements and sliding functions alone) and kept: it fitted better.
+  bool replaces_hysteresis = false;
   std::size_t free_parameters = 0;
   bool qualifies = false;
   bool accepted = false;

@@ -1,0 +1,106 @@
+// The model-gap workflow (`tsm gap`) on the independent physics world
+// (tests/physics_world): two tendons as chains of elastic nodes through
+// sheaths bent unequally, Coulomb friction at each node bounded by mu times
+// its normal force, tissue and grasp loads at the tip. Its slip spreads along
+// the sheath and each sheath's friction follows its own tendon's tension;
+// neither is in the paper's model. From the paper's model the workflow must
+// name distributed slip (with the element spread the data chose) and the
+// tension dependence on the tendons' own tensions (never on |tau_in| / R,
+// which contains the friction), and end within 1.3x the sensor floor: the
+// RMS of the measured friction less the true one, which the world knows.
+// The recording is the calibration run of model_accuracy's world source
+// (motion seed = 1000 x world seed); development seeds only.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "estimator/model_gap.hpp"
+#include "estimator/model_io.hpp"
+#include "physics_world/recorder.hpp"
+
+namespace tsmh::estimator {
+namespace {
+
+constexpr double kFloorRatio = 1.3;
+
+struct WorldRun {
+  Recording rec;
+  double floor = 0.0;  // N, RMS of measured less true friction
+};
+
+WorldRun calibration_run(std::uint64_t world_seed) {
+  physics_world::RunConfig run;
+  run.kind = physics_world::MotionKind::kMultisine;
+  run.motion_seed = world_seed * 1000;
+  physics_world::WorldRecording w =
+      physics_world::record(physics_world::random_world(world_seed), run);
+  WorldRun out{std::move(w.recording), 0.0};
+  // As a user's recording: no exact derivatives.
+  out.rec.xd_in.clear();
+  out.rec.xdd_in.clear();
+  double sum = 0.0;
+  for (std::size_t i = 0; i < out.rec.size(); ++i) {
+    const double measured = (out.rec.tau_in[i] - out.rec.tau_out[i]) / out.rec.radius_m;
+    sum += (measured - w.friction_true[i]) * (measured - w.friction_true[i]);
+  }
+  out.floor = std::sqrt(sum / static_cast<double>(out.rec.size()));
+  return out;
+}
+
+void record(const GapResult& g, double floor) {
+  ::testing::Test::RecordProperty("gap_base_rmse", std::to_string(g.gap_base.rmse));
+  ::testing::Test::RecordProperty("gap_final_rmse", std::to_string(g.gap_final.rmse));
+  ::testing::Test::RecordProperty("sensor_floor", std::to_string(floor));
+  ::testing::Test::RecordProperty("ratio", std::to_string(g.gap_final.rmse / floor));
+  std::string found;
+  for (const auto& e : g.effects)
+    found += e.name + "(" + e.form + ") ";
+  ::testing::Test::RecordProperty("effects", found);
+}
+
+const EffectFound* effect(const GapResult& g, const std::string& name) {
+  for (const auto& e : g.effects)
+    if (e.name == name) return &e;
+  return nullptr;
+}
+
+void expect_slip_and_tension(std::uint64_t world_seed) {
+  const WorldRun w = calibration_run(world_seed);
+  const GapResult g = find_model_gaps(w.rec, *load_model("paper"), "paper");
+  record(g, w.floor);
+  std::string found;
+  for (const auto& e : g.effects)
+    found += e.name + " (" + e.form + ") ";
+
+  const EffectFound* slip = effect(g, "distributed_slip");
+  ASSERT_NE(slip, nullptr) << "named: " << found;
+  // The element spread it found is reported.
+  std::map<std::string, double> p(slip->parameters.begin(), slip->parameters.end());
+  EXPECT_GE(p["distributed_slip.elements"], 1.0);
+  EXPECT_GT(p["distributed_slip.width_max"], p["distributed_slip.width_min"]);
+  EXPECT_NE(slip->where.find("elements with widths"), std::string::npos) << slip->where;
+
+  // The tension dependence, multiplicative on each tendon's tension.
+  const EffectFound* tension = effect(g, "tension_dependent");
+  ASSERT_NE(tension, nullptr) << "named: " << found;
+  EXPECT_EQ(tension->variable, "tension");
+  std::map<std::string, double> t(tension->parameters.begin(), tension->parameters.end());
+  EXPECT_TRUE(t.count("tension_dependent.sliding_positive_per_N_T1")) << tension->where;
+  // Never the |tau_in| / R forms, which contain the friction itself.
+  for (const auto& e : g.effects) {
+    EXPECT_NE(e.form, "load_dependent") << found;
+    EXPECT_NE(e.form, "load_saturating") << found;
+  }
+  EXPECT_LE(g.gap_final.rmse, kFloorRatio * w.floor)
+      << "gap " << g.gap_base.rmse << " -> " << g.gap_final.rmse << " N, sensor floor " << w.floor
+      << " N (ratio " << g.gap_final.rmse / w.floor << "); named: " << found;
+}
+
+TEST(GapPhysicsWorld, NamesDistributedSlipAndTensionSeed6) {
+  expect_slip_and_tension(6);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
