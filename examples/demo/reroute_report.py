@@ -201,7 +201,7 @@ if control:
         print(f"   recalibrated / the same window never re-routed: {rr['recalibrated_over_control']:.2f} "
               f"(target <= 1.2: {verdict}){contact}")
 if refit:
-    print(f"   the same windows with a lab re-identification (tsm fit with a tip load cell on the new routing):")
+    print(f"   the same windows with a lab re-identification (the bench identification with a tip load cell on the new routing):")
     print(f"                                                   before window {fmt(refit['before'])}")
     if "recalibrated" in refit:
         print(f"                                                   recalibrated window {fmt(refit['recalibrated'])}")
