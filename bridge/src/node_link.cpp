@@ -68,4 +68,13 @@ int start_node_link(const char* program, const NodeLinkOptions& options, NodeLin
   return 0;
 }
 
+void print_session_fault(const char* program, const char* peer, const SessionFault& fault,
+                         const char* consequence) {
+  std::fprintf(stderr,
+               "%s: FAULT: another %s session on the link (sender %016llx naming %016llx: a "
+               "second keyed %s, a restarted one or a replay)%s\n",
+               program, peer, static_cast<unsigned long long>(fault.sender_id),
+               static_cast<unsigned long long>(fault.names), peer, consequence);
+}
+
 }  // namespace tsmh::bridge

@@ -316,14 +316,10 @@ int main(int argc, char** argv) {
       inbox.link.rejected() > 0 ? " (the last: " : "", inbox.link.last_rejection(),
       inbox.link.rejected() > 0 ? ")" : "", static_cast<long long>(inbox.link.unauthentic()));
   if (session_over) {
-    const auto f = session->fault();
-    std::fprintf(stderr,
-                 "external-master-adapter: FAULT: another server session on the link (sender "
-                 "%016llx naming %016llx: a second keyed server, a restarted one or a replay); "
-                 "torque zero, exit 4 (%lld such forces)\n",
-                 static_cast<unsigned long long>(f.sender_id),
-                 static_cast<unsigned long long>(f.names),
-                 static_cast<long long>(inbox.link.other_session()));
+    tsmh::bridge::print_session_fault(
+        "external-master-adapter", "server", session->fault(),
+        ("; torque zero, exit 4 (" + std::to_string(inbox.link.other_session()) + " such forces)")
+            .c_str());
     return 4;
   }
   return 0;

@@ -270,14 +270,10 @@ int main(int argc, char** argv) {
       static_cast<long long>(inbox.link.rejected()),
       static_cast<long long>(inbox.link.unauthentic()));
   if (session_over) {
-    const auto f = session->fault();
-    std::fprintf(stderr,
-                 "slave-node-skeleton: FAULT: another master session on the link (sender %016llx "
-                 "naming %016llx: a second keyed master, a restarted one or a replay); holding, "
-                 "exit 4 (%lld such commands)\n",
-                 static_cast<unsigned long long>(f.sender_id),
-                 static_cast<unsigned long long>(f.names),
-                 static_cast<long long>(inbox.link.other_session()));
+    tsmh::bridge::print_session_fault(
+        "slave-node-skeleton", "master", session->fault(),
+        ("; holding, exit 4 (" + std::to_string(inbox.link.other_session()) + " such commands)")
+            .c_str());
     return 4;
   }
   return 0;

@@ -17,6 +17,7 @@
 #include "estimator/model_io.hpp"
 #include "estimator/synthetic.hpp"
 #include "estimator/tsm_model.hpp"
+#include "gap_record.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -65,14 +66,7 @@ std::set<std::string> names(const GapResult& g) {
 }
 
 void record(const GapResult& g, double floor) {
-  ::testing::Test::RecordProperty("gap_base_rmse", std::to_string(g.gap_base.rmse));
-  ::testing::Test::RecordProperty("gap_final_rmse", std::to_string(g.gap_final.rmse));
-  ::testing::Test::RecordProperty("sensor_floor", std::to_string(floor));
-  ::testing::Test::RecordProperty("ratio", std::to_string(g.gap_final.rmse / floor));
-  std::string found;
-  for (const auto& e : g.effects)
-    found += e.name + "(" + e.form + ") ";
-  ::testing::Test::RecordProperty("effects", found);
+  record_gap_against_floor(g, floor);
   std::string rounds;
   for (const auto& r : g.rounds) {
     rounds += "[";

@@ -18,6 +18,7 @@
 
 #include "estimator/model_gap.hpp"
 #include "estimator/model_io.hpp"
+#include "gap_record.hpp"
 #include "physics_world/recorder.hpp"
 
 namespace tsmh::estimator {
@@ -49,17 +50,6 @@ WorldRun calibration_run(std::uint64_t world_seed) {
   return out;
 }
 
-void record(const GapResult& g, double floor) {
-  ::testing::Test::RecordProperty("gap_base_rmse", std::to_string(g.gap_base.rmse));
-  ::testing::Test::RecordProperty("gap_final_rmse", std::to_string(g.gap_final.rmse));
-  ::testing::Test::RecordProperty("sensor_floor", std::to_string(floor));
-  ::testing::Test::RecordProperty("ratio", std::to_string(g.gap_final.rmse / floor));
-  std::string found;
-  for (const auto& e : g.effects)
-    found += e.name + "(" + e.form + ") ";
-  ::testing::Test::RecordProperty("effects", found);
-}
-
 const EffectFound* effect(const GapResult& g, const std::string& name) {
   for (const auto& e : g.effects)
     if (e.name == name) return &e;
@@ -69,7 +59,7 @@ const EffectFound* effect(const GapResult& g, const std::string& name) {
 void expect_slip_and_tension(std::uint64_t world_seed) {
   const WorldRun w = calibration_run(world_seed);
   const GapResult g = find_model_gaps(w.rec, *load_model("paper"), "paper");
-  record(g, w.floor);
+  record_gap_against_floor(g, w.floor);
   std::string found;
   for (const auto& e : g.effects)
     found += e.name + " (" + e.form + ") ";

@@ -67,6 +67,12 @@ int resolve_node_link(const char* program, const NodeLinkOptions& options, Bridg
 /// its socket cannot be confined.
 int start_node_link(const char* program, const NodeLinkOptions& options, NodeLink& out);
 
+/// Prints "<program>: FAULT: another <peer> session on the link (sender X
+/// naming Y: ...)<consequence>" to stderr: the one report of a session ended
+/// by a second key holder, the same words in every node.
+void print_session_fault(const char* program, const char* peer, const SessionFault& fault,
+                         const char* consequence);
+
 /// Sends one of our messages (lcm-gen's type) on `channel`: encoded, signed
 /// with the link's key when it has one, published. `bytes` is the caller's
 /// buffer, kept between calls so that only the first call allocates.

@@ -173,15 +173,9 @@ class SessionLog {
         std::fprintf(stderr, "virtual-slave: session: following master %016llx\n",
                      static_cast<unsigned long long>(session_->peer()));
     }
-    if (now != state && now == bridge::SessionState::kFault) {
-      const auto f = session_->fault();
-      std::fprintf(stderr,
-                   "virtual-slave: FAULT: another master session on the link (sender %016llx "
-                   "naming %016llx: a second keyed master, a restarted one or a replay): "
-                   "holding, exiting in 2 s\n",
-                   static_cast<unsigned long long>(f.sender_id),
-                   static_cast<unsigned long long>(f.names));
-    }
+    if (now != state && now == bridge::SessionState::kFault)
+      bridge::print_session_fault("virtual-slave", "master", session_->fault(),
+                                  ": holding, exiting in 2 s");
     binds = b;
     state = now;
   }
