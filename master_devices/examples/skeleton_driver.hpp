@@ -6,7 +6,10 @@
 //
 // Shape: the vendor's calls run on the driver's own I/O thread; the 1 kHz
 // loop only touches two LatestValue cells (readings in, commands out), so
-// nothing in read()/write_torque() blocks, allocates or locks.
+// nothing in read()/write_torque() blocks, allocates or locks. DriverBase
+// (driver_base.hpp) holds those cells and what every driver shares: the
+// latched fault, the enable request, status(), last_error(), write_torque(),
+// and the torque limits (torque_to_send).
 
 #include <algorithm>
 #include <atomic>
@@ -18,7 +21,7 @@
 
 #include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
-#include "master_devices/device.hpp"
+#include "master_devices/driver_base.hpp"
 #include "master_devices/registry.hpp"
 #include "realtime/latest_value.hpp"
 #include "realtime/pacing.hpp"
@@ -76,11 +79,11 @@ class VendorLink {
   long samples_ = 0;
 };
 
-class SkeletonDevice final : public Device {
+class SkeletonDevice final : public DriverBase {
  public:
   SkeletonDevice(Settings s, std::shared_ptr<VendorLink> link,
                  std::shared_ptr<const Clock> clock = monotonic_clock())
-      : s_(s), link_(std::move(link)), clock_(std::move(clock)) {
+      : DriverBase(std::move(clock)), s_(s), link_(std::move(link)) {
     // STEP 3. The spec: everything the server's limits and scaling read.
     spec_.model = "skeleton";
     spec_.driver = "skeleton";
@@ -96,17 +99,16 @@ class SkeletonDevice final : public Device {
   }
   ~SkeletonDevice() override { close(); }
 
-  const DeviceSpec& spec() const override { return spec_; }
-
   // STEP 4. open(): connect (throw DeviceError naming the cause), then start
   // the I/O thread. Torque starts disabled.
   void open() override {
     if (running_.load()) return;
     if (!link_->plugged.load())
       throw DeviceError("skeleton: no device found (plugged in? permissions?)");
-    enabled_.store(false);
+    unlatch_fault();  // also disables
+    link_up_.store(true);
+    opened_.store(true);
     running_.store(true);
-    status_.store(DeviceStatus::kOk);
     io_ = std::thread([this] { io_loop(); });
   }
 
@@ -114,92 +116,41 @@ class SkeletonDevice final : public Device {
     if (!running_.exchange(false)) return;
     io_.join();
     link_->write_torques({});  // zero torque on the way out
-    status_.store(DeviceStatus::kClosed);
+    opened_.store(false);
   }
 
-  std::string last_error() const override {
-    std::lock_guard<std::mutex> lock(error_mutex_);  // setup path only: a lock is fine here
-    return error_;
-  }
-
-  // STEP 5. Faults latch until clear_fault(), which fails while the cause persists.
+  // STEP 5. Faults latch (DriverBase::latch_fault, raise_fault) until
+  // clear_fault(), which fails while the cause persists.
   bool clear_fault() override {
-    if (status_.load() != DeviceStatus::kFault) return true;
+    if (fault() == FaultCode::kNone) return true;
     if (!link_->plugged.load()) return false;
-    fault_.store(FaultCode::kNone);
-    enabled_.store(false);  // back disabled
-    status_.store(DeviceStatus::kOk);
+    unlatch_fault();  // back disabled
     return true;
   }
 
-  // STEP 6. read(): the newest sample from the cell, and the shared rules
+  // STEP 6. read(): the newest reading from the cell with the shared rules
   // (stale -> DISCONNECTED, not OK -> disabled with nothing commanded).
   DeviceReading read(std::int64_t now_ns) noexcept override {
-    Sample sample;
-    const bool fresh = samples_reader_.fetch(sample);
-    DeviceReading r;
-    r.t_ns = sample.t_ns;
-    r.sequence = sample.sequence;
-    r.dof = spec_.dof;
-    r.q = sample.q;
-    r.qd = sample.qd;
-    r.buttons = sample.buttons;
-    r.tau_commanded = commanded_;
-    r.status = status_.load();
-    if (r.status == DeviceStatus::kOk && !sample.connected) r.status = DeviceStatus::kDisconnected;
-    r.fault = fault_.load();
-    r.enabled = enabled_.load();
-    r.fresh = fresh;
-    apply_reading_rules(r, now_ns, static_cast<std::int64_t>(s_.stale_timeout_ms * 1e6), true);
-    last_status_ = r.status;
-    return r;
+    return newest_reading(now_ns, static_cast<std::int64_t>(s_.stale_timeout_ms * 1e6));
   }
 
-  // STEP 7. write_torque(): NaN -> 0, clamp to the peak, zero unless OK and
-  // enabled; stamped with the clock so the I/O thread can time it out.
-  void write_torque(const JointArray& tau) noexcept override {
-    Command c;
-    const bool drive = last_status_ == DeviceStatus::kOk && enabled_.load();
-    for (int j = 0; j < s_.dof; ++j) {
-      const auto i = static_cast<std::size_t>(j);
-      const double t = std::isfinite(tau[i]) ? tau[i] : 0.0;
-      c.tau[i] = drive ? std::clamp(t, -s_.peak_torque_nm, s_.peak_torque_nm) : 0.0;
-    }
-    c.t_ns = clock_->now_ns();
-    commanded_ = c.tau;
-    commands_.store(c);
-  }
-
-  void set_enabled(bool on) noexcept override { enabled_.store(on); }
-  void raise_fault(FaultCode code) noexcept override {
-    fault_.store(code);
-    status_.store(DeviceStatus::kFault);
-    enabled_.store(false);
-  }
-  DeviceStatus status() const noexcept override { return status_.load(); }
+  // STEP 7. write_torque() is DriverBase's: it stamps the command with the
+  // clock. The I/O thread limits it with torque_to_send() (NaN -> 0, clamp to
+  // spec().peak_torque_nm, zero unless OK, enabled and on time).
 
  private:
-  struct Sample {
-    std::int64_t t_ns = 0;
-    std::uint64_t sequence = 0;
-    JointArray q{}, qd{};
-    Buttons buttons;
-    bool connected = false;
-  };
-  struct Command {
-    JointArray tau{};
-    std::int64_t t_ns = 0;
-  };
-
   // STEP 8. The I/O thread: paced on absolute deadlines, it reads the vendor,
-  // publishes the sample, and sends the newest command, or zero when the
+  // publishes the reading, and sends the newest command, or zero when the
   // command is older than command_timeout_ms (the loop died) or the device
   // is not OK.
   void io_loop() {
     realtime::LatestValueReader<Command> commands(commands_);
     const auto period_ns = static_cast<std::int64_t>(1e9 / s_.rate_hz);
     realtime::Pacer pace(period_ns, realtime::monotonic_now_ns() + period_ns);
-    Sample s;
+    DeviceReading s;
+    s.dof = spec_.dof;
+    s.enabled = true;  // the host's request decides (apply_reading_rules)
+    s.status = DeviceStatus::kOk;
     JointArray q_prev{};
     while (running_.load()) {
       pace.wait_through_signals();
@@ -217,36 +168,25 @@ class SkeletonDevice final : public Device {
         s.buttons = b;
         s.t_ns = now;
         ++s.sequence;
-      } else if (s.connected) {
-        enabled_.store(false);  // a device that comes back comes back disabled
-        std::lock_guard<std::mutex> lock(error_mutex_);
-        error_ = "skeleton: device unplugged";
+      } else if (link_up_.load()) {
+        set_enabled(false);  // a device that comes back comes back disabled
+        set_error("skeleton: device unplugged");
       }
-      s.connected = ok;
-      samples_.store(s);
+      link_up_.store(ok);  // down: status() is DISCONNECTED
       Command c;
       commands.fetch(c);
-      const bool timely = now - c.t_ns <= static_cast<std::int64_t>(s_.command_timeout_ms * 1e6);
-      if (ok)
-        link_->write_torques(timely && status_.load() == DeviceStatus::kOk ? c.tau : JointArray{});
+      const Torque torque =
+          torque_to_send(c, now, static_cast<std::int64_t>(s_.command_timeout_ms * 1e6));
+      s.tau_commanded = torque.tau;
+      readings_.store(s);
+      if (ok) link_->write_torques(torque.tau);
     }
   }
 
   Settings s_;
   std::shared_ptr<VendorLink> link_;
-  std::shared_ptr<const Clock> clock_;
-  DeviceSpec spec_;
-  realtime::LatestValue<Sample> samples_;
-  realtime::LatestValueReader<Sample> samples_reader_{samples_};
-  realtime::LatestValue<Command> commands_;
-  JointArray commanded_{};                            // loop thread only
-  DeviceStatus last_status_ = DeviceStatus::kClosed;  // loop thread only
-  std::atomic<DeviceStatus> status_{DeviceStatus::kClosed};
-  std::atomic<FaultCode> fault_{FaultCode::kNone};
-  std::atomic<bool> enabled_{false}, running_{false};
+  std::atomic<bool> running_{false};
   std::thread io_;
-  mutable std::mutex error_mutex_;
-  std::string error_;
 };
 
 // STEP 9. Register it by name where the registry is built (haptic-server's

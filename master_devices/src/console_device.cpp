@@ -59,17 +59,17 @@ ConsoleSettings parse_console_settings(config::FieldReader& r) {
 ConsoleDevice::ConsoleDevice(std::string driver, DeviceProfile profile, ConsoleSettings settings,
                              std::shared_ptr<TransportProvider> provider,
                              std::shared_ptr<const Clock> clock)
-    : driver_(std::move(driver)),
+    : DriverBase(std::move(clock)),
+      driver_(std::move(driver)),
       profile_(std::move(profile)),
       settings_(std::move(settings)),
       provider_(std::move(provider)),
-      clock_(clock ? std::move(clock) : monotonic_clock()),
-      spec_(spec_from_profile(profile_, driver_)),
-      fresh_bound_ns_(
-          settings_.stale_timeout_ms > 0
-              ? settings_.stale_timeout_ms * 1'000'000LL
-              : std::llround(settings_.stale_periods * 1e9 / std::max(1.0, spec_.nominal_rate_hz))),
       device_clock_(settings_.clock_tolerance_ppm) {
+  spec_ = spec_from_profile(profile_, driver_);
+  fresh_bound_ns_ =
+      settings_.stale_timeout_ms > 0
+          ? settings_.stale_timeout_ms * 1'000'000LL
+          : std::llround(settings_.stale_periods * 1e9 / std::max(1.0, spec_.nominal_rate_hz));
   if (profile_.joints.size() > protocol::kJoints) {
     throw DeviceError(profile_.source + ": profile '" + profile_.name + "' has " +
                       std::to_string(profile_.joints.size()) +
@@ -184,7 +184,7 @@ void ConsoleDevice::connect() {
   }
 
   // A new session: the device comes back disabled, the I/O state starts over.
-  enable_requested_ = false;
+  set_enabled(false);
   have_previous_ = false;
   device_clock_.reset();
   bad_in_a_row_ = 0;
@@ -233,7 +233,7 @@ void ConsoleDevice::open() {
 void ConsoleDevice::close() noexcept {
   if (!opened_.exchange(false)) return;
   // Ask for one last zero-torque, disabled output report before stopping.
-  enable_requested_ = false;
+  set_enabled(false);
   const std::uint64_t sent = n_sent_.load();
   for (int i = 0; i < 100 && link_up_ && n_sent_.load() < sent + 2; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -361,23 +361,17 @@ void ConsoleDevice::on_input_report(std::span<const std::uint8_t> report,
 void ConsoleDevice::send_output(std::int64_t t_ns, double dt_s, bool allow_torque) noexcept {
   Command cmd;
   command_reader_.fetch(cmd);
-  const bool fresh_command =
-      cmd.valid && t_ns - cmd.t_ns <= settings_.command_timeout_ms * 1'000'000LL;
-  const bool drive =
-      allow_torque && enable_requested_ && fault_ == FaultCode::kNone && fresh_command;
+  const Torque torque =
+      torque_to_send(cmd, t_ns, settings_.command_timeout_ms * 1'000'000LL, allow_torque);
 
   protocol::OutputReport out;
   out.sequence = output_sequence_++;
-  out.enable = drive;
+  out.enable = torque.drive;
   out.clear_fault = clear_device_fault_.exchange(false);
   last_sent_ = {};
   for (std::size_t j = 0; j < profile_.joints.size(); ++j) {
     const JointProfile& jp = profile_.joints[j];
-    const double tau =
-        drive && std::isfinite(cmd.tau[j])
-            ? std::clamp(cmd.tau[j], -spec_.peak_torque_nm[j], spec_.peak_torque_nm[j])
-            : 0.0;
-    const double amps = limiters_[j].limit(torque_to_current_a(jp, tau), dt_s);
+    const double amps = limiters_[j].limit(torque_to_current_a(jp, torque.tau[j]), dt_s);
     out.current_ma[j] = to_milliamps(amps);
     last_sent_[j] = current_to_torque_nm(jp, out.current_ma[j] * 1e-3);
   }
@@ -404,66 +398,29 @@ void ConsoleDevice::on_link_lost(const char* why) noexcept {
 // ---- real-time path ----
 
 DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
-  DeviceReading r;
-  r.fresh = reading_reader_.fetch(r);
-  r.status = status();
-  r.fault = fault_.load();
-  apply_reading_rules(r, now_ns, fresh_bound_ns_.load(std::memory_order_relaxed),
-                      enable_requested_);
-  return r;
-}
-
-void ConsoleDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.store(Command{tau_nm, clock_->now_ns(), true});
-}
-
-void ConsoleDevice::set_enabled(bool on) noexcept {
-  enable_requested_ = on;
-}
-
-void ConsoleDevice::raise_fault(FaultCode code) noexcept {
-  FaultCode expected = FaultCode::kNone;
-  fault_.compare_exchange_strong(expected, code);
-  enable_requested_ = false;
-}
-
-DeviceStatus ConsoleDevice::status() const noexcept {
-  if (!opened_) return DeviceStatus::kClosed;
-  if (fault_ != FaultCode::kNone) return DeviceStatus::kFault;
-  if (!link_up_) return DeviceStatus::kDisconnected;
-  return DeviceStatus::kOk;
+  return newest_reading(now_ns, fresh_bound_ns_.load(std::memory_order_relaxed));
 }
 
 // ---- faults and errors ----
 
 void ConsoleDevice::latch_fault(FaultCode code, const char* text) noexcept {
-  FaultCode expected = FaultCode::kNone;
-  if (fault_.compare_exchange_strong(expected, code)) {
-    enable_requested_ = false;
-    set_error_fixed(text);
-  }
+  if (DriverBase::latch_fault(code)) set_error_fixed(text);
 }
 
 bool ConsoleDevice::clear_fault() {
-  const FaultCode f = fault_.load();
+  const FaultCode f = fault();
   if (f == FaultCode::kNone) return true;
   if (f == FaultCode::kDeviceReported) {
     // Ask the firmware to clear, then see whether it stays clear.
     clear_device_fault_ = true;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  enable_requested_ = false;
-  fault_ = FaultCode::kNone;
+  unlatch_fault();
   // A cause that persists re-latches on the next reports.
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  if (fault_ != FaultCode::kNone) return false;
+  if (fault() != FaultCode::kNone) return false;
   set_error("");
   return true;
-}
-
-void ConsoleDevice::set_error(const std::string& text) {
-  std::lock_guard lock(error_mutex_);
-  error_ = text;
 }
 
 void ConsoleDevice::set_error_fixed(const char* text) noexcept {
@@ -476,12 +433,6 @@ void ConsoleDevice::set_error_fixed(const char* text) noexcept {
   for (std::string_view part : parts) {
     error_.append(part.substr(0, kErrorCapacity - 1 - std::min(error_.size(), kErrorCapacity - 1)));
   }
-}
-
-std::string ConsoleDevice::last_error() const {
-  std::lock_guard lock(error_mutex_);
-  if (error_.empty() && fault_ == FaultCode::kHostRequested) return "fault raised by the host";
-  return error_;
 }
 
 ConsoleStats ConsoleDevice::stats() const {

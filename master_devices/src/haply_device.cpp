@@ -106,7 +106,7 @@ HaplySettings parse_haply_settings(config::FieldReader& r, const DriverContext& 
 }
 
 HaplyDevice::HaplyDevice(HaplySettings s, std::shared_ptr<const Clock> clock)
-    : s_(std::move(s)), clock_(std::move(clock)) {
+    : DriverBase(std::move(clock)), s_(std::move(s)) {
   if (const std::string e = haply::validate(s_.board); !e.empty())
     throw DeviceError("haply: board wiring: " + e);
   spec_.model = s_.profile.name;
@@ -127,16 +127,6 @@ HaplyDevice::HaplyDevice(HaplySettings s, std::shared_ptr<const Clock> clock)
 
 HaplyDevice::~HaplyDevice() {
   close();
-}
-
-void HaplyDevice::set_error(std::string e) {
-  std::lock_guard<std::mutex> lock(error_mutex_);
-  error_ = std::move(e);
-}
-
-std::string HaplyDevice::last_error() const {
-  std::lock_guard<std::mutex> lock(error_mutex_);
-  return error_;
 }
 
 void HaplyDevice::handshake(SerialPort& port) {
@@ -188,11 +178,14 @@ void HaplyDevice::handshake(SerialPort& port) {
                         "rest when the board was set up (its encoders count from there: hold it "
                         "at rest, unplug and replug, start again)");
     const std::int64_t now = clock_->now_ns();
-    sample_ = Sample{};
+    sample_ = DeviceReading{};
     sample_.t_ns = now;
     sample_.sequence = 1;
+    sample_.dof = 2;
     sample_.q = q;
-    samples_.store(sample_);
+    sample_.enabled = true;  // the host's request decides (apply_reading_rules)
+    sample_.status = DeviceStatus::kOk;
+    readings_.store(sample_);
     last_reply_ns_ = now;
     bad_replies_ = 0;
     return;
@@ -233,11 +226,10 @@ void HaplyDevice::open() {
     throw DeviceError(std::string("haply: ") + e.what());
   }
   handshake(port_);
-  enabled_.store(false);
-  fault_.store(FaultCode::kNone);
+  unlatch_fault();
   port_fd_.store(port_.fd());
   link_up_.store(true);
-  status_.store(DeviceStatus::kOk);
+  opened_.store(true);
   set_error("");
   running_.store(true);
   io_ = std::thread([this] { io_loop(); });
@@ -267,11 +259,11 @@ void HaplyDevice::close() noexcept {
     port_.close();
   }
   link_up_.store(false);
-  status_.store(DeviceStatus::kClosed);
+  opened_.store(false);
 }
 
 bool HaplyDevice::clear_fault() {
-  if (status_.load() != DeviceStatus::kFault) return true;
+  if (fault() == FaultCode::kNone) return true;
   if (!link_up_.load()) {
     // The I/O thread left the port alone when the link went down: reopen it here.
     try {
@@ -284,9 +276,9 @@ bool HaplyDevice::clear_fault() {
       return false;
     }
     link_up_.store(true);
-  } else if (fault_.load() == FaultCode::kWorkspace) {
-    Sample now;
-    realtime::LatestValueReader<Sample> reader(samples_);
+  } else if (fault() == FaultCode::kWorkspace) {
+    DeviceReading now;
+    realtime::LatestValueReader<DeviceReading> reader(readings_);
     reader.fetch(now);
     if (const std::string e = check_workspace(now.q); !e.empty()) {
       set_error("haply (" + s_.port + "): still faulted: " + e);
@@ -294,58 +286,20 @@ bool HaplyDevice::clear_fault() {
     }
   }
   bad_replies_ = 0;
-  fault_.store(FaultCode::kNone);
-  enabled_.store(false);
-  status_.store(DeviceStatus::kOk);
+  unlatch_fault();
   set_error("");
   return true;
 }
 
-void HaplyDevice::raise_fault(FaultCode code) noexcept {
-  fault_.store(code);
-  status_.store(DeviceStatus::kFault);
-  enabled_.store(false);
-}
-
 DeviceReading HaplyDevice::read(std::int64_t now_ns) noexcept {
-  Sample sample;
-  const bool fresh = samples_reader_.fetch(sample);
-  DeviceReading r;
-  r.t_ns = sample.t_ns;
-  r.sequence = sample.sequence;
-  r.dof = 2;
-  r.q = sample.q;
-  r.qd = sample.qd;
-  r.tau_commanded = commanded_;
-  r.status = status_.load();
-  r.fault = fault_.load();
-  r.enabled = enabled_.load();
-  r.fresh = fresh;
-  apply_reading_rules(r, now_ns, ms_to_ns(s_.watchdog_ms), true);
-  last_status_ = r.status;
-  return r;
-}
-
-void HaplyDevice::write_torque(const JointArray& tau) noexcept {
-  Command c;
-  const bool drive = last_status_ == DeviceStatus::kOk && enabled_.load();
-  for (std::size_t j = 0; j < 2; ++j) {
-    const double t = std::isfinite(tau[j]) ? tau[j] : 0.0;
-    const double peak = spec_.peak_torque_nm[j];
-    c.tau[j] = drive ? std::clamp(t, -peak, peak) : 0.0;
-  }
-  c.t_ns = clock_->now_ns();
-  commanded_ = c.tau;
-  commands_.store(c);
+  return newest_reading(now_ns, ms_to_ns(s_.watchdog_ms));
 }
 
 void HaplyDevice::link_lost(const std::string& why) {
   port_fd_.store(-1);
   port_.close();
   link_up_.store(false);
-  enabled_.store(false);
-  fault_.store(FaultCode::kLinkLost);
-  status_.store(DeviceStatus::kFault);
+  latch_fault(FaultCode::kLinkLost);
   set_error("haply (" + s_.port + "): " + why +
             ": unplugged? Torque is zero on this side; replug the board and clear the fault "
             "(the handshake runs again)");
@@ -356,10 +310,9 @@ bool HaplyDevice::exchange(realtime::LatestValueReader<Command>& commands) {
   commands.fetch(c);
   const std::int64_t sent = clock_->now_ns();
   const bool silent = sent - last_reply_ns_ > ms_to_ns(s_.watchdog_ms);
-  const bool timely = sent - c.t_ns <= ms_to_ns(s_.command_timeout_ms);
-  const bool drive = status_.load() == DeviceStatus::kOk && enabled_.load() && timely && !silent;
+  const Torque torque = torque_to_send(c, sent, ms_to_ns(s_.command_timeout_ms), !silent);
   std::uint8_t frame[haply::kMaxFrame];
-  const std::size_t n = haply::encode_state(s_.board, drive ? c.tau : JointArray{}, frame);
+  const std::size_t n = haply::encode_state(s_.board, torque.tau, frame);
   // A reply that came after its request timed out would be taken for the
   // next one's: requests and replies have no sequence number.
   port_.discard_input();
@@ -390,8 +343,7 @@ bool HaplyDevice::exchange(realtime::LatestValueReader<Command>& commands) {
     return true;  // silent: the next request carries zero torque once past the watchdog
   JointArray deg{};
   if (haply::decode_reply(s_.board, reply, have, deg) != haply::ReplyError::kNone) {
-    if (++bad_replies_ >= s_.max_bad_replies && status_.load() == DeviceStatus::kOk) {
-      raise_fault(FaultCode::kBadReports);
+    if (++bad_replies_ >= s_.max_bad_replies && latch_fault(FaultCode::kBadReports)) {
       set_error("haply (" + s_.port + "): " + std::to_string(bad_replies_) +
                 " malformed replies in a row");
     }
@@ -412,12 +364,13 @@ bool HaplyDevice::exchange(realtime::LatestValueReader<Command>& commands) {
   }
   sample_.t_ns = t;
   ++sample_.sequence;
-  samples_.store(sample_);
+  sample_.tau_commanded = torque.tau;
+  readings_.store(sample_);
   last_reply_ns_ = arrived;
-  if (status_.load() == DeviceStatus::kOk) {
+  if (fault() == FaultCode::kNone) {
     if (const std::string e = check_workspace(sample_.q); !e.empty()) {
-      raise_fault(FaultCode::kWorkspace);
-      set_error("haply (" + s_.port + "): " + e + " (encoders slipped, or a wrong board preset)");
+      if (latch_fault(FaultCode::kWorkspace))
+        set_error("haply (" + s_.port + "): " + e + " (encoders slipped, or a wrong board preset)");
     }
   }
   return true;

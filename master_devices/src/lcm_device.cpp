@@ -104,9 +104,7 @@ struct LcmDevice::Impl {
         case Verdict::kOtherSession: {
           // Another master holds the key: this session is over. Torque off
           // and a fault the loop sees (FAULT, the server ends).
-          FaultCode expected = FaultCode::kNone;
-          device.fault_.compare_exchange_strong(expected, FaultCode::kOtherSession);
-          device.enable_requested_ = false;
+          device.latch_fault(FaultCode::kOtherSession);
           return reject(auth_error);
         }
       }
@@ -157,20 +155,14 @@ struct LcmDevice::Impl {
       reject("buttons " + std::to_string(m.buttons) + " has undefined bits (0..3 defined)");
       return;
     }
-    if (m.status & 0x1) {
-      FaultCode expected = FaultCode::kNone;
-      if (device.fault_.compare_exchange_strong(expected, FaultCode::kDeviceReported)) {
-        device.enable_requested_ = false;
-        device.set_error(device.settings_.state_channel() +
-                         ": the external driver reports a fault");
-      }
-    }
+    if ((m.status & 0x1) && device.latch_fault(FaultCode::kDeviceReported))
+      device.set_error(device.settings_.state_channel() + ": the external driver reports a fault");
 
     // Answer with the newest torque (zero unless everything is well).
     Command cmd;
     device.command_reader_.fetch(cmd);
-    const bool drive = device.enable_requested_ && device.fault_ == FaultCode::kNone && cmd.valid &&
-                       now - cmd.t_ns <= device.settings_.command_timeout_ms * 1'000'000LL;
+    const Torque torque =
+        device.torque_to_send(cmd, now, device.settings_.command_timeout_ms * 1'000'000LL);
     DeviceReading r;
     r.t_ns = now;
     r.sequence = ++count;
@@ -178,21 +170,18 @@ struct LcmDevice::Impl {
     for (std::size_t j = 0; j < dof; ++j) {
       r.q[j] = m.q[j];
       r.qd[j] = m.qd[j];
-      const double peak = device.spec_.peak_torque_nm[j];
-      const double tau =
-          drive && std::isfinite(cmd.tau[j]) ? std::clamp(cmd.tau[j], -peak, peak) : 0.0;
-      r.tau_commanded[j] = tau;
-      force.torque[j] = tau;
+      r.tau_commanded[j] = torque.tau[j];
+      force.torque[j] = torque.tau[j];
     }
     r.buttons = Buttons{(m.buttons & 1) != 0, (m.buttons & 2) != 0, (m.buttons & 4) != 0,
                         (m.buttons & 8) != 0};
-    r.enabled = drive;
+    r.enabled = torque.drive;
     r.status = DeviceStatus::kOk;
     device.readings_.store(r);
 
     force.utime = now / 1000;
     force.seq = force_seq++;
-    force.enable = drive;
+    force.enable = torque.drive;
     publish_force();
   }
 };
@@ -202,22 +191,13 @@ LcmDevice::LcmDevice(LcmSettings settings, std::shared_ptr<const Clock> clock)
 
 LcmDevice::LcmDevice(LcmSettings settings, std::shared_ptr<lcm::LCM> lcm,
                      std::shared_ptr<const Clock> clock)
-    : settings_(std::move(settings)),
-      lcm_(std::move(lcm)),
-      clock_(clock ? std::move(clock) : monotonic_clock()) {
+    : DriverBase(std::move(clock)), settings_(std::move(settings)), lcm_(std::move(lcm)) {
   spec_.model = "lcm:" + settings_.state_channel();
   spec_.driver = "lcm";
   spec_.has_calibrate_button = true;  // MASTER_STATE buttons bit 3
   spec_.dof = static_cast<std::uint32_t>(settings_.dof);
   spec_.nominal_rate_hz = settings_.nominal_rate_hz;
-  for (std::size_t j = 0; j < settings_.dof; ++j) {
-    spec_.joint_names[j] = "joint" + std::to_string(j);
-    spec_.peak_torque_nm[j] = settings_.peak_torque_nm[j];
-    spec_.max_continuous_torque_nm[j] = settings_.continuous_torque_nm[j];
-    spec_.position_min_rad[j] = settings_.position_min_rad[j];
-    spec_.position_max_rad[j] = settings_.position_max_rad[j];
-    spec_.max_stiffness_nm_per_rad[j] = settings_.max_stiffness_nm_per_rad[j];
-  }
+  copy_joint_limits(settings_, spec_);
 }
 
 LcmDevice::~LcmDevice() {
@@ -250,8 +230,9 @@ void LcmDevice::open() {
   }
   impl_ = std::make_unique<Impl>(*this);
   impl_->subscription = lcm_->subscribe(settings_.state_channel(), &Impl::on_raw, impl_.get());
-  enable_requested_ = false;
+  set_enabled(false);
   stopping_ = false;
+  link_up_ = true;  // no link to lose: a silent adapter reads as stale
   opened_ = true;
   thread_ = std::thread([this] {
     while (!stopping_)
@@ -273,56 +254,19 @@ void LcmDevice::close() noexcept {
   impl_.reset();
 }
 
-std::string LcmDevice::last_error() const {
-  std::lock_guard lock(error_mutex_);
-  if (error_.empty() && fault_ == FaultCode::kHostRequested) return "fault raised by the host";
-  return error_;
-}
-
 std::string LcmDevice::last_rejection() const {
   std::lock_guard lock(error_mutex_);
   return last_rejection_;
 }
 
-void LcmDevice::set_error(const std::string& text) {
-  std::lock_guard lock(error_mutex_);
-  error_ = text;
-}
-
 bool LcmDevice::clear_fault() {
-  fault_ = FaultCode::kNone;
-  enable_requested_ = false;
+  unlatch_fault();
   set_error("");
   return true;
 }
 
 DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
-  DeviceReading r;
-  r.fresh = reading_reader_.fetch(r);
-  r.status = status();
-  r.fault = fault_.load();
-  apply_reading_rules(r, now_ns, settings_.stale_timeout_ms * 1'000'000LL, enable_requested_);
-  return r;
-}
-
-void LcmDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.store(Command{tau_nm, clock_->now_ns(), true});
-}
-
-void LcmDevice::set_enabled(bool on) noexcept {
-  enable_requested_ = on;
-}
-
-void LcmDevice::raise_fault(FaultCode code) noexcept {
-  FaultCode expected = FaultCode::kNone;
-  fault_.compare_exchange_strong(expected, code);
-  enable_requested_ = false;
-}
-
-DeviceStatus LcmDevice::status() const noexcept {
-  if (!opened_) return DeviceStatus::kClosed;
-  if (fault_ != FaultCode::kNone) return DeviceStatus::kFault;
-  return DeviceStatus::kOk;
+  return newest_reading(now_ns, settings_.stale_timeout_ms * 1'000'000LL);
 }
 
 void register_lcm_driver(DriverRegistry& registry, std::shared_ptr<const Clock> clock,

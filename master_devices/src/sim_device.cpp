@@ -65,22 +65,16 @@ SimSettings parse_sim_settings(config::FieldReader& r) {
 }
 
 SimDevice::SimDevice(SimSettings settings, std::shared_ptr<const Clock> clock)
-    : settings_(std::move(settings)),
-      clock_(clock ? std::move(clock) : monotonic_clock()),
+    : DriverBase(std::move(clock)),
+      settings_(std::move(settings)),
       operator_(settings_.scenario, settings_.dof, settings_.hand, settings_.handle) {
   spec_.model = "sim-" + std::string(scenario_name(settings_.scenario));
   spec_.driver = "sim";
   spec_.dof = static_cast<std::uint32_t>(settings_.dof);
   spec_.nominal_rate_hz = settings_.rate_hz;
-  for (std::size_t j = 0; j < settings_.dof; ++j) {
-    spec_.joint_names[j] = "joint" + std::to_string(j);
-    spec_.peak_torque_nm[j] = settings_.peak_torque_nm[j];
-    spec_.max_continuous_torque_nm[j] = settings_.continuous_torque_nm[j];
+  copy_joint_limits(settings_, spec_);
+  for (std::size_t j = 0; j < settings_.dof; ++j)
     spec_.encoder_resolution_rad[j] = settings_.encoder_resolution_rad;
-    spec_.position_min_rad[j] = settings_.position_min_rad[j];
-    spec_.position_max_rad[j] = settings_.position_max_rad[j];
-    spec_.max_stiffness_nm_per_rad[j] = settings_.max_stiffness_nm_per_rad[j];
-  }
 }
 
 SimDevice::~SimDevice() {
@@ -92,7 +86,8 @@ void SimDevice::open() {
   operator_.reset();
   count_ = 0;
   started_ = false;
-  enabled_ = false;
+  set_enabled(false);
+  link_up_ = true;  // a simulated hand never goes away
   opened_ = true;
   if (!settings_.simulated_time) {
     stopping_ = false;
@@ -107,47 +102,21 @@ void SimDevice::close() noexcept {
   if (thread_.joinable()) thread_.join();
 }
 
-std::string SimDevice::last_error() const {
-  switch (fault_.load()) {
-    case FaultCode::kNone:
-      return "";
-    case FaultCode::kHostRequested:
-      return "fault raised by the host";
-    default:
-      return std::string("fault: ") + std::string(to_string(fault_.load()));
-  }
-}
-
 bool SimDevice::clear_fault() {
-  fault_ = FaultCode::kNone;
-  enabled_ = false;
+  unlatch_fault();
   return true;
-}
-
-void SimDevice::raise_fault(FaultCode code) noexcept {
-  FaultCode expected = FaultCode::kNone;
-  fault_.compare_exchange_strong(expected, code);
-  enabled_ = false;
-}
-
-DeviceStatus SimDevice::status() const noexcept {
-  if (!opened_) return DeviceStatus::kClosed;
-  if (fault_ != FaultCode::kNone) return DeviceStatus::kFault;
-  return DeviceStatus::kOk;
 }
 
 void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
   Command cmd;
   command_reader_.fetch(cmd);
-  const bool fresh = cmd.valid && (settings_.simulated_time ||
-                                   t_ns - cmd.t_ns <= settings_.command_timeout_ms * 1'000'000LL);
-  const bool drive = enabled_ && fault_ == FaultCode::kNone && fresh;
-  JointArray tau{};
-  for (std::size_t j = 0; j < settings_.dof; ++j) {
-    const double peak = settings_.peak_torque_nm[j];
-    tau[j] = drive && std::isfinite(cmd.tau[j]) ? std::clamp(cmd.tau[j], -peak, peak) : 0.0;
-  }
-  operator_.step(dt_s, tau);
+  // In simulated time a command holds until the next: the loop and the world
+  // advance together, so no command can be late.
+  const Torque torque =
+      torque_to_send(cmd, t_ns,
+                     settings_.simulated_time ? std::numeric_limits<std::int64_t>::max()
+                                              : settings_.command_timeout_ms * 1'000'000LL);
+  operator_.step(dt_s, torque.tau);
   scenario_t_ = operator_.time_s();
 
   DeviceReading r;
@@ -160,13 +129,13 @@ void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
     r.q[j] = res > 0.0 ? res * std::floor(q / res + 0.5) : q;
     r.qd[j] = operator_.qd()[j];
   }
-  r.tau_commanded = tau;
+  r.tau_commanded = torque.tau;
   r.buttons = settings_.buttons;
   // The scenario's own button presses (the recalibration button of the
   // palpate scenario's sweep).
   if (intention_at(settings_.scenario, operator_.time_s(), settings_.dof).calibrate)
     r.buttons.calibrate = true;
-  r.enabled = drive;
+  r.enabled = true;  // the host's request decides (apply_reading_rules)
   r.status = DeviceStatus::kOk;
   readings_.store(r);
 }
@@ -196,21 +165,10 @@ DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
       last_t_ns_ = now_ns;
     }
   }
-  DeviceReading r;
-  r.fresh = reading_reader_.fetch(r);
-  r.status = status();
-  r.fault = fault_.load();
   // In simulated time the world was just advanced to now_ns: never stale.
-  const std::int64_t fresh_bound = settings_.simulated_time
-                                       ? std::numeric_limits<std::int64_t>::max()
-                                       : settings_.stale_timeout_ms * 1'000'000LL;
-  r.enabled = true;  // the host's request decides
-  apply_reading_rules(r, now_ns, fresh_bound, enabled_);
-  return r;
-}
-
-void SimDevice::write_torque(const JointArray& tau_nm) noexcept {
-  commands_.store(Command{tau_nm, settings_.simulated_time ? 0 : clock_->now_ns(), true});
+  return newest_reading(now_ns, settings_.simulated_time
+                                    ? std::numeric_limits<std::int64_t>::max()
+                                    : settings_.stale_timeout_ms * 1'000'000LL);
 }
 
 }  // namespace tsmh::master_devices

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <thread>
 
+#include "driver_rules.hpp"
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/console_device.hpp"
@@ -710,6 +711,20 @@ TEST(ConsoleDevice, FreshnessSettingsAreValidated) {
   EXPECT_NE(error_of("clock_tolerance_ppm: -1").find("device.settings.clock_tolerance_ppm"),
             std::string::npos);
   EXPECT_EQ(error_of("stale_periods: 3\nclock_tolerance_ppm: 1000"), "");
+}
+
+TEST(ConsoleDevice, KeepsTheSharedFaultRules) {
+  EmulatorBus::Options o = Rig::manual_options();
+  o.pacing = EmulatorBus::Pacing::kRealTime;  // clear_fault() waits for the firmware's reports
+  Rig rig(relaxed(), builtin_console_profile(), o);
+  rig.device->open();
+  testing::DriverProbe probe{*rig.device, [&] { return rig.now(); },
+                             [&] { return rig.applied_torque(0); },
+                             [] { std::this_thread::sleep_for(1ms); }};
+  ASSERT_TRUE(testing::within_steps(
+      probe, [&] { return rig.device->read(rig.now()).status == DeviceStatus::kOk; }));
+  testing::expect_shared_fault_rules(probe, 0.05);
+  rig.device->close();
 }
 
 }  // namespace

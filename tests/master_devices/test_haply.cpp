@@ -13,6 +13,7 @@
 #include <numbers>
 #include <random>
 
+#include "driver_rules.hpp"
 #include "master_devices/builtin_drivers.hpp"
 #include "master_devices/haply_board.hpp"
 #include "master_devices/haply_device.hpp"
@@ -409,6 +410,20 @@ TEST(HaplyDriver, UnplugIsAFaultWithAClearErrorAndNoTorque) {
   EXPECT_NE(err.find("unplugged?"), std::string::npos) << err;
   EXPECT_FALSE(dev->clear_fault()) << "the board is still gone";
   EXPECT_EQ(dev->status(), md::DeviceStatus::kFault);
+  dev->close();
+}
+
+TEST(HaplyDriver, KeepsTheSharedFaultRules) {
+  PtyBoard board;
+  board.with([](haply::BoardEmulator& b) { b.set_port_angles(kMidPorts); });
+  auto dev = make(settings_for(board));
+  dev->open();
+  fresh_reading(*dev);
+  md::testing::expect_shared_fault_rules(
+      {*dev, [] { return md::monotonic_clock()->now_ns(); },
+       [&] { return board.with([](haply::BoardEmulator& b) { return b.port_torques()[1]; }); },
+       [] { std::this_thread::sleep_for(std::chrono::milliseconds(1)); }},
+      0.05);
   dev->close();
 }
 

@@ -14,6 +14,7 @@
 #include <tsmh/master_state_t.hpp>
 #include <vector>
 
+#include "driver_rules.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/lcm_device.hpp"
 
@@ -398,6 +399,16 @@ TEST(LcmDevice, AHelloIsAnsweredButNotUsedAndAnotherSessionFaults) {
   EXPECT_EQ(r.fault, FaultCode::kOtherSession);
   EXPECT_DOUBLE_EQ(r.q[0], 0.1) << "another session's state is never used";
   EXPECT_NE(rig.device->last_error().find("another master session"), std::string::npos);
+}
+
+TEST(LcmDevice, KeepsTheSharedFaultRules) {
+  Rig rig;
+  rig.send_state(0.1, 0.2);
+  testing::expect_shared_fault_rules(
+      {*rig.device, [&] { return rig.now(); },
+       [&] { return rig.log.last().torque.empty() ? 0.0 : rig.log.last().torque[0]; },
+       [&] { rig.send_state(0.1, 0.2); }},
+      0.05);
 }
 
 }  // namespace

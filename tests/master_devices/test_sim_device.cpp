@@ -4,6 +4,7 @@
 #include <cmath>
 #include <thread>
 
+#include "driver_rules.hpp"
 #include "master_devices/clock.hpp"
 #include "master_devices/sim_device.hpp"
 
@@ -162,6 +163,17 @@ TEST(SimDevice, SettingsErrorsNameTheField) {
   EXPECT_NE(error_of("rate: 5\n").find("device.settings.rate: unknown key"), std::string::npos);
   EXPECT_EQ(error_of("time: simulated\nscenario: sine\nsine: {frequency_hz: 1}\ndead_man: false\n"),
             "(no error)");
+}
+
+TEST(SimDevice, KeepsTheSharedFaultRules) {
+  SimDevice dev(simulated());
+  dev.open();
+  std::int64_t t = 0;
+  dev.read(t);
+  testing::expect_shared_fault_rules(
+      {dev, [&] { return t; }, [&] { return dev.read(t).tau_commanded[0]; },
+       [&] { t += 1'000'000; }},
+      0.1);
 }
 
 }  // namespace

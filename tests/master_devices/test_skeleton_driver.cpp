@@ -8,6 +8,7 @@
 #include <chrono>
 #include <thread>
 
+#include "driver_rules.hpp"
 #include "skeleton_driver.hpp"
 
 namespace tsmh::master_devices::skeleton {
@@ -91,6 +92,16 @@ TEST(SkeletonDriver, UnplugIsDisconnectedWithZeroTorqueAndRecovers) {
   rig.link->plugged.store(true);
   EXPECT_TRUE(eventually([&] { return rig.read().status == DeviceStatus::kOk; }));
   EXPECT_FALSE(rig.read().enabled) << "back disabled after a reconnect";
+}
+
+TEST(SkeletonDriver, KeepsTheSharedFaultRules) {
+  Rig rig;
+  ASSERT_TRUE(eventually([&] { return rig.read().status == DeviceStatus::kOk; }));
+  testing::expect_shared_fault_rules(
+      {*rig.device, [&] { return rig.clock->now_ns(); },
+       [&] { return rig.link->last_torque[0].load(); },
+       [] { std::this_thread::sleep_for(std::chrono::milliseconds(1)); }},
+      0.05);
 }
 
 }  // namespace

@@ -32,8 +32,8 @@
 
 #include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
-#include "master_devices/device.hpp"
 #include "master_devices/device_clock.hpp"
+#include "master_devices/driver_base.hpp"
 #include "master_devices/joint_calibration.hpp"
 #include "master_devices/profile.hpp"
 #include "master_devices/protocol.hpp"
@@ -76,7 +76,7 @@ struct ConsoleStats {
   std::uint64_t reconnects = 0;
 };
 
-class ConsoleDevice final : public Device, private TransportListener {
+class ConsoleDevice final : public DriverBase, private TransportListener {
  public:
   /// `clock` stamps torque commands (their age is checked against each
   /// report's arrival): give it the clock the transport stamps arrivals with.
@@ -85,17 +85,10 @@ class ConsoleDevice final : public Device, private TransportListener {
                 std::shared_ptr<const Clock> clock = monotonic_clock());
   ~ConsoleDevice() override;
 
-  const DeviceSpec& spec() const override { return spec_; }
   void open() override;
   void close() noexcept override;
-  std::string last_error() const override;
   bool clear_fault() override;
-
   DeviceReading read(std::int64_t now_ns) noexcept override;
-  void write_torque(const JointArray& tau_nm) noexcept override;
-  void set_enabled(bool on) noexcept override;
-  void raise_fault(FaultCode code) noexcept override;
-  DeviceStatus status() const noexcept override;
 
   ConsoleStats stats() const;
   const DeviceProfile& profile() const { return profile_; }
@@ -106,12 +99,6 @@ class ConsoleDevice final : public Device, private TransportListener {
   std::int64_t freshness_bound_ns() const noexcept { return fresh_bound_ns_.load(); }
 
  private:
-  struct Command {
-    JointArray tau{};
-    std::int64_t t_ns = 0;
-    bool valid = false;
-  };
-
   // TransportListener (I/O context)
   void on_input_report(std::span<const std::uint8_t> report, std::int64_t t_ns) noexcept override;
   void on_link_lost(const char* why) noexcept override;
@@ -120,25 +107,14 @@ class ConsoleDevice final : public Device, private TransportListener {
   void supervise();
   void send_output(std::int64_t t_ns, double dt_s, bool allow_torque) noexcept;
   void latch_fault(FaultCode code, const char* text) noexcept;
-  void set_error(const std::string& text);
   void set_error_fixed(const char* text) noexcept;
 
   std::string driver_;
   DeviceProfile profile_;
   ConsoleSettings settings_;
   std::shared_ptr<TransportProvider> provider_;
-  std::shared_ptr<const Clock> clock_;  // the host's time (commands' stamps)
-  DeviceSpec spec_;
 
-  // Loop <-> I/O thread.
-  realtime::LatestValue<DeviceReading> readings_;                         // I/O thread -> loop
-  realtime::LatestValue<Command> commands_;                               // loop -> I/O thread
-  realtime::LatestValueReader<DeviceReading> reading_reader_{readings_};  // the loop's
-  realtime::LatestValueReader<Command> command_reader_{commands_};        // the I/O thread's
-  std::atomic<bool> enable_requested_{false};
-  std::atomic<bool> link_up_{false};
-  std::atomic<bool> opened_{false};
-  std::atomic<FaultCode> fault_{FaultCode::kNone};
+  realtime::LatestValueReader<Command> command_reader_{commands_};  // the I/O thread's
   std::atomic<bool> clear_device_fault_{false};
   std::atomic<std::int64_t> fresh_bound_ns_{0};
 
@@ -160,7 +136,7 @@ class ConsoleDevice final : public Device, private TransportListener {
       n_failed_{0}, n_disconnects_{0}, n_reconnects_{0};
 
   // Supervisor.
-  mutable std::mutex mutex_;  // guards the fields below and error_
+  mutable std::mutex mutex_;  // guards the fields below
   std::condition_variable wake_;
   bool link_lost_ = false;
   std::string loss_reason_;  // why the link went down, kept for reconnect errors
@@ -169,11 +145,8 @@ class ConsoleDevice final : public Device, private TransportListener {
   std::unique_ptr<Transport> transport_;
   std::string connected_path_;
   std::thread supervisor_;
-
-  // The I/O context may lock this (it is not the real-time loop); error_ has
-  // reserved capacity so recording an error there does not allocate.
-  mutable std::mutex error_mutex_;
-  std::string error_;
+  // error_ (DriverBase) has reserved capacity, so that the I/O context
+  // records an error without allocating.
 };
 
 }  // namespace tsmh::master_devices

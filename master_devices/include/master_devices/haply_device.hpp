@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "master_devices/clock.hpp"
-#include "master_devices/device.hpp"
+#include "master_devices/driver_base.hpp"
 #include "master_devices/haply_protocol.hpp"
 #include "master_devices/master_profile.hpp"
 #include "master_devices/registry.hpp"
@@ -64,26 +64,19 @@ HaplySettings parse_haply_settings(config::FieldReader& r, const DriverContext& 
 MasterProfile builtin_haply_profile(std::string_view name);
 std::string_view builtin_haply_profile_text(std::string_view name);
 
-class HaplyDevice final : public Device {
+class HaplyDevice final : public DriverBase {
  public:
   explicit HaplyDevice(HaplySettings s, std::shared_ptr<const Clock> clock = monotonic_clock());
   ~HaplyDevice() override;
 
-  const DeviceSpec& spec() const override { return spec_; }
   /// Opens the port, resets and sets up the board, and waits for its first
   /// reply; throws DeviceError naming the port and the cause.
   void open() override;
   /// Sends zero torque (and waits briefly for the board to take it), then
   /// releases the port.
   void close() noexcept override;
-  std::string last_error() const override;
   bool clear_fault() override;
-
   DeviceReading read(std::int64_t now_ns) noexcept override;
-  void write_torque(const JointArray& tau_nm) noexcept override;
-  void set_enabled(bool on) noexcept override { enabled_.store(on); }
-  void raise_fault(FaultCode code) noexcept override;
-  DeviceStatus status() const noexcept override { return status_.load(); }
 
   const HaplySettings& settings() const { return s_; }
 
@@ -97,16 +90,6 @@ class HaplyDevice final : public Device {
   std::size_t zero_torque_frame(std::uint8_t* out) const noexcept;
 
  private:
-  struct Sample {
-    std::int64_t t_ns = 0;
-    std::uint64_t sequence = 0;
-    JointArray q{}, qd{};
-  };
-  struct Command {
-    JointArray tau{};
-    std::int64_t t_ns = 0;
-  };
-
   /// Reset, setup, and state requests until the first valid reply; throws.
   void handshake(SerialPort& port);
   void io_loop();
@@ -116,28 +99,16 @@ class HaplyDevice final : public Device {
   /// Empty when the handle at motor angles `q` is within the workspace and
   /// its margin, else why not.
   std::string check_workspace(const JointArray& q) const;
-  void set_error(std::string e);
 
   HaplySettings s_;
-  std::shared_ptr<const Clock> clock_;
-  DeviceSpec spec_;
   SerialPort port_;  // the I/O thread's while link_up_; the setup path's otherwise
-  realtime::LatestValue<Sample> samples_;
-  realtime::LatestValueReader<Sample> samples_reader_{samples_};
-  realtime::LatestValue<Command> commands_;
-  JointArray commanded_{};                            // loop thread only
-  DeviceStatus last_status_ = DeviceStatus::kClosed;  // loop thread only
-  std::atomic<DeviceStatus> status_{DeviceStatus::kClosed};
-  std::atomic<FaultCode> fault_{FaultCode::kNone};
-  std::atomic<bool> enabled_{false}, running_{false}, link_up_{false};
+  std::atomic<bool> running_{false};
   std::atomic<int> port_fd_{-1};  // port_'s descriptor while the link is up
   // I/O thread only:
-  Sample sample_;
+  DeviceReading sample_;
   std::int64_t last_reply_ns_ = 0;
   int bad_replies_ = 0;
   std::thread io_;
-  mutable std::mutex error_mutex_;
-  std::string error_;
 };
 
 /// CDC-ACM serial ports in `sysfs_root` (/sys): candidates for the `haply`

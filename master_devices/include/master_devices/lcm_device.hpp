@@ -19,7 +19,7 @@
 
 #include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
-#include "master_devices/device.hpp"
+#include "master_devices/driver_base.hpp"
 #include "master_devices/lcm_message_auth.hpp"
 #include "master_devices/registry.hpp"
 #include "realtime/latest_value.hpp"
@@ -55,7 +55,7 @@ struct LcmSettings {
 
 LcmSettings parse_lcm_settings(config::FieldReader& r);
 
-class LcmDevice final : public Device {
+class LcmDevice final : public DriverBase {
  public:
   /// Uses its own LCM instance from settings.url. `clock` stamps each
   /// MASTER_STATE's arrival and each torque command.
@@ -66,17 +66,10 @@ class LcmDevice final : public Device {
             std::shared_ptr<const Clock> clock = monotonic_clock());
   ~LcmDevice() override;
 
-  const DeviceSpec& spec() const override { return spec_; }
   void open() override;
   void close() noexcept override;
-  std::string last_error() const override;
   bool clear_fault() override;
-
   DeviceReading read(std::int64_t now_ns) noexcept override;
-  void write_torque(const JointArray& tau_nm) noexcept override;
-  void set_enabled(bool on) noexcept override;
-  void raise_fault(FaultCode code) noexcept override;
-  DeviceStatus status() const noexcept override;
 
   /// MASTER_STATE dropped before use: not authentic, not decodable (size,
   /// type, joint count: lcmtypes/message_decoder.hpp) or not plausible.
@@ -90,32 +83,16 @@ class LcmDevice final : public Device {
 
  private:
   friend struct Impl;
-  struct Command {
-    JointArray tau{};
-    std::int64_t t_ns = 0;
-    bool valid = false;
-  };
-  void set_error(const std::string& text);
 
   LcmSettings settings_;
-  DeviceSpec spec_;
   std::shared_ptr<lcm::LCM> lcm_;
-  std::shared_ptr<const Clock> clock_;
   std::unique_ptr<Impl> impl_;
 
-  realtime::LatestValue<DeviceReading> readings_;                         // I/O thread -> loop
-  realtime::LatestValue<Command> commands_;                               // loop -> I/O thread
-  realtime::LatestValueReader<DeviceReading> reading_reader_{readings_};  // the loop's
-  realtime::LatestValueReader<Command> command_reader_{commands_};        // the I/O thread's
-  std::atomic<bool> enable_requested_{false};
-  std::atomic<bool> opened_{false};
-  std::atomic<FaultCode> fault_{FaultCode::kNone};
+  realtime::LatestValueReader<Command> command_reader_{commands_};  // the I/O thread's
   std::atomic<std::uint64_t> rejected_{0};
   std::atomic<bool> stopping_{false};
   std::thread thread_;
-  mutable std::mutex error_mutex_;
-  std::string error_;
-  std::string last_rejection_;
+  std::string last_rejection_;  // guarded by error_mutex_
 };
 
 /// Registers the `lcm` driver; its devices read `clock`, and authenticate

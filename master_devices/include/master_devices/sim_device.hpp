@@ -23,7 +23,7 @@
 
 #include "config/field_reader.hpp"
 #include "master_devices/clock.hpp"
-#include "master_devices/device.hpp"
+#include "master_devices/driver_base.hpp"
 #include "master_devices/simulated_operator.hpp"
 #include "realtime/latest_value.hpp"
 
@@ -50,22 +50,15 @@ struct SimSettings {
 /// Parses a `sim` settings map; every error names source and field.
 SimSettings parse_sim_settings(config::FieldReader& r);
 
-class SimDevice final : public Device {
+class SimDevice final : public DriverBase {
  public:
   explicit SimDevice(SimSettings settings, std::shared_ptr<const Clock> clock = monotonic_clock());
   ~SimDevice() override;
 
-  const DeviceSpec& spec() const override { return spec_; }
   void open() override;
   void close() noexcept override;
-  std::string last_error() const override;
   bool clear_fault() override;
-
   DeviceReading read(std::int64_t now_ns) noexcept override;
-  void write_torque(const JointArray& tau_nm) noexcept override;
-  void set_enabled(bool on) noexcept override { enabled_ = on; }
-  void raise_fault(FaultCode code) noexcept override;
-  DeviceStatus status() const noexcept override;
   bool simulated_time() const noexcept override { return settings_.simulated_time; }
 
   const SimSettings& settings() const { return settings_; }
@@ -73,26 +66,12 @@ class SimDevice final : public Device {
   double scenario_time_s() const { return scenario_t_.load(); }
 
  private:
-  struct Command {
-    JointArray tau{};
-    std::int64_t t_ns = 0;
-    bool valid = false;
-  };
-
   void advance(double dt_s, std::int64_t t_ns) noexcept;  // integrate + publish
   void run_real_time();
 
   SimSettings settings_;
-  std::shared_ptr<const Clock> clock_;  // real-time mode: stamps readings and commands
-  DeviceSpec spec_;
   SimulatedOperator operator_;
-  realtime::LatestValue<DeviceReading> readings_;                         // I/O thread -> loop
-  realtime::LatestValue<Command> commands_;                               // loop -> I/O thread
-  realtime::LatestValueReader<DeviceReading> reading_reader_{readings_};  // the loop's
-  realtime::LatestValueReader<Command> command_reader_{commands_};        // the I/O thread's
-  std::atomic<bool> enabled_{false};
-  std::atomic<bool> opened_{false};
-  std::atomic<FaultCode> fault_{FaultCode::kNone};
+  realtime::LatestValueReader<Command> command_reader_{commands_};  // the I/O thread's
   std::atomic<double> scenario_t_{0.0};
   std::uint64_t count_ = 0;
   std::int64_t last_t_ns_ = 0;  // simulated time: time the hand has been integrated to
