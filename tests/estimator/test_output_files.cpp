@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -22,6 +23,8 @@
 #include <vector>
 
 #include "estimator/atomic_file.hpp"
+#include "estimator/fit_data.hpp"
+#include "estimator/plotting.hpp"
 #include "estimator/recording.hpp"
 #include "estimator/synthetic.hpp"
 #include "estimator/table.hpp"
@@ -330,20 +333,52 @@ TEST_F(OutputFiles, FitPlotsPrintNamesAsWrittenAndScaleResidualsToScoredSamples)
                          (dir_ / "rep").string(), "--starts", "1"},
                         dir_ / "log");
   ASSERT_EQ(r.status, 0) << r.output;
-  const std::string gp = slurp(dir_ / "rep" / "fit_plots.gp");
-  std::size_t terminals = 0, plain = 0;
-  for (auto p = gp.find("set terminal"); p != std::string::npos;
-       p = gp.find("set terminal", p + 1)) {
-    ++terminals;
-    if (gp.substr(p, gp.find('\n', p) - p).find("noenhanced") != std::string::npos) ++plain;
+  for (const char* image : {"friction", "hysteresis", "residual"}) {
+    const std::string gp = slurp(dir_ / "rep" / ("fit_" + std::string(image) + ".gp"));
+    const auto p = gp.find("set terminal");
+    ASSERT_NE(p, std::string::npos) << image << ":\n" << gp;
+    EXPECT_NE(gp.substr(p, gp.find('\n', p) - p).find("noenhanced"), std::string::npos) << gp;
   }
-  EXPECT_GT(terminals, 0U);
-  EXPECT_EQ(plain, terminals) << gp;
-  const auto residual = gp.find("_residual");
-  ASSERT_NE(residual, std::string::npos) << gp;
-  EXPECT_NE(gp.find("set yrange [", residual), std::string::npos)
+  const std::string gp = slurp(dir_ / "rep" / "fit_residual.gp");
+  EXPECT_NE(gp.find("set yrange ["), std::string::npos)
       << "residual axis from the scored samples:\n"
       << gp;
+}
+
+// The residual is drawn from its envelope per pixel column, computed from
+// every sample: a one-sample spike that the plot data's stride (every 2nd
+// sample of 40 s) skips is still drawn, in a line of at most 2 points per
+// column instead of one per sample.
+TEST_F(OutputFiles, FitResidualPlotKeepsEverySpike) {
+  FitData d;
+  d.source = "spike";
+  for (int i = 0; i < 40000; ++i) {
+    Motion m;
+    m.t = 0.001 * i;
+    m.xd = std::sin(m.t);
+    d.motion.push_back(m);
+    d.measured.push_back(0.1 * std::sin(37.0 * m.t));
+    d.role.push_back(i < 500 ? SampleRole::kIgnored : SampleRole::kTrain);
+  }
+  d.measured[20001] += 5.0;  // odd: not in the plot data
+  const std::vector<double> model(d.size(), 0.0);
+  const PlotOutcome out = plot_friction(dir_, "fit", d, {{"model", model}}, "spike");
+  ASSERT_TRUE(out.error.empty()) << out.error;
+  EXPECT_EQ(out.files.size(), 3U);
+  EXPECT_EQ(slurp(dir_ / "fit_plot_data.csv").find("\n20.001,"), std::string::npos)
+      << "the spike's sample is in the plot data: the test shows nothing";
+  std::ifstream in(dir_ / "fit_residual_data.csv");
+  std::string line;
+  std::size_t rows = 0;
+  double largest = 0.0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    ++rows;
+    largest = std::max(largest, std::stod(line.substr(line.find(',') + 1)));
+  }
+  EXPECT_NEAR(largest, d.measured[20001], 1e-5);
+  EXPECT_GT(rows, 1400U);
+  EXPECT_LE(rows, 2U * 1400U);
 }
 
 }  // namespace

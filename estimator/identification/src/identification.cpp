@@ -5,10 +5,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <exception>
 #include <functional>
 #include <limits>
+#include <mutex>
 #include <nlopt.hpp>
 #include <optional>
 #include <random>
@@ -572,11 +574,16 @@ int worker_threads(const FitOptions& o) {
 
 // Runs job(0) .. job(total - 1) on up to `threads` workers; while they run,
 // calls on_wait() every progress interval (the caller's progress report).
+// Returns as soon as the last job ends, not at the next report: a stage that
+// ends just after a report would otherwise idle up to a whole interval.
 // The first exception a job threw is rethrown once all have finished.
 void run_on_workers(int total, int threads, SharedProgress& shared, double interval_s,
                     const std::function<void(int)>& job, const std::function<void()>& on_wait) {
   std::vector<std::exception_ptr> errors(static_cast<std::size_t>(total));
   std::atomic<int> next{0};
+  std::mutex m;
+  std::condition_variable ended;
+  int done = 0;  // guarded by m
   std::vector<std::thread> pool;
   for (int w = 0; w < std::min(threads, total); ++w) {
     pool.emplace_back([&] {
@@ -587,12 +594,20 @@ void run_on_workers(int total, int threads, SharedProgress& shared, double inter
           errors[static_cast<std::size_t>(s)] = std::current_exception();
         }
         shared.starts_done.fetch_add(1);
+        const std::lock_guard<std::mutex> lock(m);
+        ++done;
+        ended.notify_one();
       }
     });
   }
-  while (shared.starts_done.load() < total) {
-    std::this_thread::sleep_for(std::chrono::duration<double>(interval_s));
-    on_wait();
+  {
+    std::unique_lock<std::mutex> lock(m);
+    const auto interval = std::chrono::duration<double>(interval_s);
+    while (!ended.wait_for(lock, interval, [&] { return done >= total; })) {
+      lock.unlock();
+      on_wait();
+      lock.lock();
+    }
   }
   for (auto& t : pool)
     t.join();
@@ -747,35 +762,47 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
       [&] { report_progress(o, shared, "screening", shared.starts_done.load(), total, t_start); });
   const std::vector<int> chosen = choose_distinct(screened, o.starts);
 
-  // Polish: LM on the full-rate data, Jacobian columns over all workers.
-  std::vector<std::vector<double>> best_u;
+  // Polish: LM on the full-rate data. The candidates run side by side on
+  // the workers and the threads left over compute Jacobian columns: the
+  // candidates are independent and converge in similar numbers of
+  // iterations, so this keeps every core busy, where polishing them one
+  // after another left the cores idle during each iteration's trial steps.
+  // Each candidate's result does not depend on where it ran.
+  const int n_chosen = static_cast<int>(chosen.size());
+  const int polish_workers = std::max(1, std::min(threads, n_chosen));
+  const int column_threads = std::max(1, threads / polish_workers);
+  std::vector<std::vector<double>> best_u(chosen.size());
+  r.starts.resize(chosen.size());
+  shared.starts_done.store(0);
+  run_on_workers(
+      n_chosen, polish_workers, shared, o.progress_interval_s,
+      [&](int c) {
+        const auto k = static_cast<std::size_t>(c);
+        const auto& sc = screened[static_cast<std::size_t>(chosen[k])];
+        LmProblem p(initial, map, full, alpha, column_threads, shared, true);
+        p.set_reference(map.to_unit(starts[static_cast<std::size_t>(chosen[k])]));
+        const auto t0 = Clock::now();
+        const LmOutcome lo = levenberg_marquardt(p, sc.u, o.polish_iterations);
+        StartOutcome& out = r.starts[k];
+        out.index = chosen[k];
+        out.global_rmse = std::sqrt(sc.cost);
+        std::vector<double> vals;
+        map.to_values(lo.u, vals);
+        auto m = initial.clone();
+        m->set_values(vals);
+        const auto f = simulate_friction(*m, data.motion);
+        out.rmse = std::sqrt(weighted_mse(data.measured, f, full.weight));
+        out.evaluations = p.evaluations();
+        out.seconds = seconds_since(t0);
+        out.stop_reason = lo.stop + " after " + std::to_string(lo.iterations) + " iterations";
+        best_u[k] = lo.u;
+      },
+      [&] { report_progress(o, shared, "polish", shared.starts_done.load(), n_chosen, t_start); });
   long evaluations = 0;
   for (const auto& sc : screened)
     evaluations += sc.evaluations;
-  for (std::size_t c = 0; c < chosen.size(); ++c) {
-    const auto& sc = screened[static_cast<std::size_t>(chosen[c])];
-    LmProblem p(initial, map, full, alpha, threads, shared, true);
-    p.set_reference(map.to_unit(starts[static_cast<std::size_t>(chosen[c])]));
-    const auto t0 = Clock::now();
-    const LmOutcome lo = levenberg_marquardt(p, sc.u, o.polish_iterations);
-    StartOutcome out;
-    out.index = chosen[c];
-    out.global_rmse = std::sqrt(sc.cost);
-    std::vector<double> vals;
-    map.to_values(lo.u, vals);
-    auto m = initial.clone();
-    m->set_values(vals);
-    const auto f = simulate_friction(*m, data.motion);
-    out.rmse = std::sqrt(weighted_mse(data.measured, f, full.weight));
-    out.evaluations = p.evaluations();
-    out.seconds = seconds_since(t0);
-    out.stop_reason = lo.stop + " after " + std::to_string(lo.iterations) + " iterations";
-    evaluations += p.evaluations();
-    r.starts.push_back(out);
-    best_u.push_back(lo.u);
-    report_progress(o, shared, "polish", static_cast<int>(c + 1), static_cast<int>(chosen.size()),
-                    t_start);
-  }
+  for (const auto& out : r.starts)
+    evaluations += out.evaluations;
   int best = 0;
   for (std::size_t s = 1; s < r.starts.size(); ++s) {
     if (r.starts[s].rmse < r.starts[static_cast<std::size_t>(best)].rmse)
@@ -789,7 +816,6 @@ FitResult identify_lm(const FrictionModel& initial, const FitData& data, const F
   r.local_algorithm = "Levenberg-Marquardt (finite-difference Jacobian)";
   r.library = "own Levenberg-Marquardt (Eigen)";
   r.seconds = seconds_since(t_start);
-  const int n_chosen = static_cast<int>(chosen.size());
   report_progress(o, shared, "done", n_chosen, n_chosen, t_start);
   return r;
 }

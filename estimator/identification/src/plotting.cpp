@@ -21,10 +21,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Runs gnuplot with `args`, stdout and stderr to `log`. Returns the exit
-// status, or -1 when it could not be started.
-int spawn_gnuplot(const std::vector<std::string>& args, const fs::path& log,
-                  const fs::path& cwd = {}) {
+// Starts gnuplot with `args`, stdout and stderr to `log`. Returns its pid, or
+// -1 when it could not be started.
+pid_t start_gnuplot(const std::vector<std::string>& args, const fs::path& log,
+                    const fs::path& cwd = {}) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   // Scripts name their files relative to their own directory, so a copied
@@ -40,7 +40,12 @@ int spawn_gnuplot(const std::vector<std::string>& args, const fs::path& log,
   pid_t pid = 0;
   const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) return -1;
+  return rc == 0 ? pid : -1;
+}
+
+// The exit status of a started gnuplot, or -1 (not started, or killed).
+int wait_gnuplot(pid_t pid) {
+  if (pid < 0) return -1;
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {
     if (errno != EINTR) return -1;
@@ -96,27 +101,40 @@ std::vector<std::pair<double, double>> validation_spans(const FitData& d) {
 std::string plot_terminal() {
   const fs::path log = fs::temp_directory_path() /
                        ("tsm-gnuplot-probe-" + std::to_string(static_cast<long>(getpid())));
-  const int rc = spawn_gnuplot({"gnuplot", "-e", "set terminal pngcairo"}, log);
+  const int rc = wait_gnuplot(start_gnuplot({"gnuplot", "-e", "set terminal pngcairo"}, log));
   std::error_code ec;
   fs::remove(log, ec);
   return rc == 0 ? "pngcairo" : "svg";
 }
 
-std::string run_gnuplot(const fs::path& script) {
-  const fs::path abs = fs::absolute(script);
-  const fs::path log = fs::path(abs).replace_extension(".log");
-  const int rc = spawn_gnuplot({"gnuplot", abs.filename().string()}, log, abs.parent_path());
-  std::string err;
-  if (rc == -1) {
-    err = "gnuplot could not be started (install gnuplot-nox: scripts/deps.sh)";
-  } else if (rc != 0) {
-    std::string msg = read_text(log);
-    if (msg.size() > 400) msg = msg.substr(msg.size() - 400);
-    err = "gnuplot failed on " + script.filename().string() + ": " + msg;
+std::string run_gnuplot(const std::vector<fs::path>& scripts) {
+  // Side by side: each script draws its own image from files it only reads.
+  std::vector<std::pair<pid_t, fs::path>> running;
+  for (const auto& script : scripts) {
+    const fs::path abs = fs::absolute(script);
+    const fs::path log = fs::path(abs).replace_extension(".log");
+    running.emplace_back(
+        start_gnuplot({"gnuplot", abs.filename().string()}, log, abs.parent_path()), log);
   }
-  std::error_code ec;
-  fs::remove(log, ec);
+  std::string err;
+  for (std::size_t k = 0; k < running.size(); ++k) {
+    const auto& [pid, log] = running[k];
+    const int rc = wait_gnuplot(pid);
+    if (err.empty() && pid < 0) {
+      err = "gnuplot could not be started (install gnuplot-nox: scripts/deps.sh)";
+    } else if (err.empty() && rc != 0) {
+      std::string msg = read_text(log);
+      if (msg.size() > 400) msg = msg.substr(msg.size() - 400);
+      err = "gnuplot failed on " + scripts[k].filename().string() + ": " + msg;
+    }
+    std::error_code ec;
+    fs::remove(log, ec);
+  }
   return err;
+}
+
+std::string run_gnuplot(const fs::path& script) {
+  return run_gnuplot(std::vector<fs::path>{script});
 }
 
 namespace {
@@ -173,6 +191,44 @@ void check_images(const fs::path& dir, const std::vector<std::string>& images, s
       fs::remove(dir / name, ec);
 }
 
+// The residual measured - `friction` as the line a pixel-wide plot draws:
+// for each of `columns` equal time bins, its smallest and largest sample in
+// the order they occur. A line through them covers each column from its
+// minimum to its maximum, as the full line does, while cairo strokes 2 points
+// a column instead of ~30 overlapping full-height segments (a 40 s residual
+// took 0.7 s of gnuplot's CPU, more than the rest of the report).
+std::vector<std::pair<double, double>> residual_envelope(const FitData& d,
+                                                         std::span<const double> friction,
+                                                         std::size_t columns) {
+  std::vector<std::pair<double, double>> out;
+  if (d.size() == 0 || columns == 0) return out;
+  const double t0 = d.motion.front().t;
+  const double span = std::max(d.duration(), 1e-12);
+  std::size_t lo = 0, hi = 0, bin = 0;
+  bool open = false;
+  const auto residual = [&](std::size_t i) { return d.measured[i] - friction[i]; };
+  const auto flush = [&] {
+    if (!open) return;
+    out.push_back({d.motion[std::min(lo, hi)].t, residual(std::min(lo, hi))});
+    if (lo != hi) out.push_back({d.motion[std::max(lo, hi)].t, residual(std::max(lo, hi))});
+  };
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (!std::isfinite(residual(i))) continue;
+    const auto b = std::min(columns - 1, static_cast<std::size_t>(static_cast<double>(columns) *
+                                                                  (d.motion[i].t - t0) / span));
+    if (!open || b != bin) {
+      flush();
+      lo = hi = i;
+      bin = b;
+      open = true;
+    }
+    if (residual(i) < residual(lo)) lo = i;
+    if (residual(i) > residual(hi)) hi = i;
+  }
+  flush();
+  return out;
+}
+
 }  // namespace
 
 PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const FitData& data,
@@ -196,6 +252,19 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
       f << "\n";
     }
   });
+  // The residual plot's own data: each curve's residual envelope
+  // (residual_envelope), one gnuplot data set per curve (`index`).
+  constexpr int kResidualWidth = 1400;
+  const fs::path res_dat = dir / (prefix + "_residual_data.csv");
+  write_or_throw(res_dat, [&](std::ostream& f) {
+    f.precision(7);
+    for (std::size_t c = 0; c < curves.size(); ++c) {
+      f << (c ? "\n\n" : "") << "# t, measured - " << curves[c].title
+        << " (smallest and largest per pixel column)\n";
+      for (const auto& [t, r] : residual_envelope(data, curves[c].friction, kResidualWidth))
+        f << t << "," << r << "\n";
+    }
+  });
   std::ostringstream shade;
   for (const auto& [a, b] : validation_spans(data)) {
     shade << "set object rect from " << a << ", graph 0 to " << b
@@ -204,26 +273,27 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
   const std::string common = "set datafile separator ','\nset grid\nset key outside right top\n";
   const auto image = [&](const std::string& name) { return prefix + "_" + name + ext; };
 
-  std::ostringstream s;
-  s << common;
+  // One script per image, so the three gnuplots run side by side.
+  std::ostringstream friction, hysteresis, residual;
   // 1. friction over time
-  s << terminal_line(term, 1400, 600) << "set output " << quoted(image("friction"))
-    << "\nset title " << quoted(title + ": friction over time (validation blocks shaded)")
-    << "\nset xlabel 't (s)'\nset ylabel 'F (N)'\n"
-    << shade.str() << "plot " << quoted(dat.filename().string())
-    << " using 1:3 with lines lw 1 lc rgb '#999999' title 'measured'";
+  friction << common << terminal_line(term, 1400, 600) << "set output " << quoted(image("friction"))
+           << "\nset title " << quoted(title + ": friction over time (validation blocks shaded)")
+           << "\nset xlabel 't (s)'\nset ylabel 'F (N)'\n"
+           << shade.str() << "plot " << quoted(dat.filename().string())
+           << " using 1:3 with lines lw 1 lc rgb '#999999' title 'measured'";
   for (std::size_t c = 0; c < curves.size(); ++c)
-    s << ", '' using 1:" << 4 + c << " with lines lw 1.5 title " << quoted(curves[c].title);
-  s << "\nunset object\n";
+    friction << ", '' using 1:" << 4 + c << " with lines lw 1.5 title " << quoted(curves[c].title);
+  friction << "\n";
   // 2. hysteresis loops: friction vs velocity
-  s << terminal_line(term, 900, 700) << "set output " << quoted(image("hysteresis"))
-    << "\nset title " << quoted(title + ": friction vs velocity (hysteresis loops)")
-    << "\nset xlabel 'xd (rad/s)'\nset ylabel 'F (N)'\n"
-    << "plot " << quoted(dat.filename().string())
-    << " using 2:3 with dots lc rgb '#999999' title 'measured'";
+  hysteresis << common << terminal_line(term, 900, 700) << "set output "
+             << quoted(image("hysteresis")) << "\nset title "
+             << quoted(title + ": friction vs velocity (hysteresis loops)")
+             << "\nset xlabel 'xd (rad/s)'\nset ylabel 'F (N)'\n"
+             << "plot " << quoted(dat.filename().string())
+             << " using 2:3 with dots lc rgb '#999999' title 'measured'";
   for (std::size_t c = 0; c < curves.size(); ++c)
-    s << ", '' using 2:" << 4 + c << " with lines lw 1 title " << quoted(curves[c].title);
-  s << "\n";
+    hysteresis << ", '' using 2:" << 4 + c << " with lines lw 1 title " << quoted(curves[c].title);
+  hysteresis << "\n";
   // 3. residuals, on the scale of the scored samples: the warm-up (the model
   // starts at rest, the joint may not) is clipped instead of stretching the axis.
   double scored_max = 0.0;
@@ -232,23 +302,28 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
       for (const auto& c : curves)
         if (std::isfinite(c.friction[i]))
           scored_max = std::max(scored_max, std::fabs(data.measured[i] - c.friction[i]));
-  s << terminal_line(term, 1400, 500) << "set output " << quoted(image("residual"))
-    << "\nset title "
-    << quoted(title + ": residual, measured - model (validation shaded; warm-up clipped)")
-    << "\nset xlabel 't (s)'\nset ylabel 'error (N)'\n";
+  residual << common << terminal_line(term, kResidualWidth, 500) << "set output "
+           << quoted(image("residual")) << "\nset title "
+           << quoted(title + ": residual, measured - model (validation shaded; warm-up clipped)")
+           << "\nset xlabel 't (s)'\nset ylabel 'error (N)'\n";
   if (scored_max > 0.0)
-    s << "set yrange [" << -1.1 * scored_max << ":" << 1.1 * scored_max << "]\n";
-  s << shade.str() << "plot ";
+    residual << "set yrange [" << -1.1 * scored_max << ":" << 1.1 * scored_max << "]\n";
+  residual << shade.str() << "plot ";
   for (std::size_t c = 0; c < curves.size(); ++c) {
-    s << (c ? ", " : "") << quoted(dat.filename().string()) << " using 1:($3-$" << 4 + c
-      << ") with lines lw 1 title " << quoted(curves[c].title);
+    residual << (c ? ", " : "") << quoted(res_dat.filename().string()) << " index " << c
+             << " using 1:2 with lines lw 1 title " << quoted(curves[c].title);
   }
-  s << "\nunset object\nset autoscale y\n";
-  const fs::path script = dir / (prefix + "_plots.gp");
-  write_or_throw(script, [&](std::ostream& f) { f << s.str(); });
+  residual << "\n";
+  std::vector<fs::path> scripts;
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"friction", friction.str()},
+                                   {"hysteresis", hysteresis.str()},
+                                   {"residual", residual.str()}}) {
+    scripts.push_back(dir / (prefix + "_" + name + ".gp"));
+    write_or_throw(scripts.back(), [&](std::ostream& f) { f << text; });
+  }
   const std::vector<std::string> images = {image("friction"), image("hysteresis"),
                                            image("residual")};
-  out.error = run_gnuplot(script);
+  out.error = run_gnuplot(scripts);
   check_images(dir, images, out.error);
   if (out.error.empty()) out.files = images;
   return out;

@@ -29,6 +29,9 @@ struct PlotCurve {
 ///   PREFIX_friction.png   measured and model friction over time (validation blocks shaded)
 ///   PREFIX_hysteresis.png friction vs velocity (the hysteresis loops), measured and models
 ///   PREFIX_residual.png   measured - model over time, per curve
+/// each with its script (PREFIX_friction.gp, ...); PREFIX_plot_data.csv holds
+/// the samples (at most ~20000 rows), PREFIX_residual_data.csv each curve's
+/// residual as drawn (its smallest and largest value per pixel column).
 PlotOutcome plot_friction(const std::filesystem::path& dir, const std::string& prefix,
                           const FitData& data, const std::vector<PlotCurve>& curves,
                           const std::string& title);
@@ -52,6 +55,9 @@ PlotOutcome plot_xy(const std::filesystem::path& dir, const std::string& name,
 /// Runs gnuplot on a script file; returns "" or what went wrong (with
 /// gnuplot's own message).
 std::string run_gnuplot(const std::filesystem::path& script);
+/// The same for several scripts at once, each in its own gnuplot; returns
+/// the first failure in `scripts`' order.
+std::string run_gnuplot(const std::vector<std::filesystem::path>& scripts);
 
 /// The gnuplot terminal to use: "pngcairo" when available, else "svg".
 std::string plot_terminal();
