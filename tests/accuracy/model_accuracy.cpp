@@ -126,7 +126,7 @@ void run_set(const Set& set, const std::vector<std::string>& models,
       for (const auto& v : variants)
         add_online(
             variant_row(kTruth, v), t,
-            score_online(truth, t, estimator_variant(v)->diff, estimator_variant(v)->hindsight));
+            score_online(truth, t, estimator_variant(v)->diff, estimator_variant(v)->corrections));
   }
   if (gap) {
     const auto base = estimator::load_model("paper");
@@ -176,7 +176,7 @@ void run_set(const Set& set, const std::vector<std::string>& models,
       for (const auto& v : variants)
         add_online(variant_row(name, v), t,
                    score_online(*run.fit.model, t, estimator_variant(v)->diff,
-                                estimator_variant(v)->hindsight));
+                                estimator_variant(v)->corrections));
   }
 }
 

@@ -56,12 +56,12 @@ OnlineScore score_estimate(const Scored& s, const std::vector<double>& tip_est) 
 
 OnlineScore score_online(const estimator::FrictionModel& model, const Scored& s,
                          const estimator::DifferentiatorConfig& diff,
-                         const estimator::HindsightConfig& hindsight) {
+                         const estimator::CorrectionsConfig& corrections) {
   const auto& rec = s.rec;
   // haptic-server's defaults: DifferentiatorConfig{} (its per-joint
   // settings default to these) and the free-tip start.
   estimator::DistalTorqueEstimator est(model.clone(), rec.radius_m, diff,
-                                       estimator::StartState::kFreeTip, hindsight);
+                                       estimator::StartState::kFreeTip, corrections);
   const bool tensions = !rec.T1.empty() && !rec.T3.empty();
   std::vector<double> tip(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {

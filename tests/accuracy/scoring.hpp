@@ -40,7 +40,7 @@ inline constexpr double kWarmUpS = 1.0;
 /// (update_tensions, as the server is) and tau_in otherwise.
 OnlineScore score_online(const estimator::FrictionModel& model, const Scored& s,
                          const estimator::DifferentiatorConfig& diff = {},
-                         const estimator::HindsightConfig& hindsight = {});
+                         const estimator::CorrectionsConfig& corrections = {});
 /// The naive estimate (tau_in taken as the tip torque) scored alike.
 OnlineScore score_naive(const Scored& s);
 

@@ -13,12 +13,14 @@ constexpr double kNever = std::numeric_limits<double>::infinity();
 const Variant kVariants[] = {
     {"deployed", [](EstimatorVariant&) {}},
     // The rest rule, in the causal sign and in hindsight.
-    {"no-rest", [](EstimatorVariant& v) { v.diff.still_time = 0.0; }},
-    {"no-cruise", [](EstimatorVariant& v) { v.diff.cruise_window = 0.0; }},
-    {"no-hindsight", [](EstimatorVariant& v) { v.hindsight.lag = 0.0; }},
+    {"no-rest", [](EstimatorVariant& v) { v.corrections.still_time = 0.0; }},
+    {"no-cruise", [](EstimatorVariant& v) { v.corrections.cruise_window = 0.0; }},
+    {"no-hindsight", [](EstimatorVariant& v) { v.corrections.hindsight.lag = 0.0; }},
     // Hindsight from the fine channel only (its rest part stays).
     {"no-fine-hindsight",
-     [](EstimatorVariant& v) { v.hindsight.sure = v.hindsight.sure_armed = kNever; }},
+     [](EstimatorVariant& v) {
+       v.corrections.hindsight.sure = v.corrections.hindsight.sure_armed = kNever;
+     }},
 };
 }  // namespace
 

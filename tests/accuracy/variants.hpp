@@ -1,10 +1,10 @@
 #pragma once
 // Estimator variants the judge can score beside the deployed one: the
-// deployed DifferentiatorConfig with one correction switched off, so that
+// deployed CorrectionsConfig with one correction switched off, so that
 // what each correction does is measured on data it was not tuned to (the
 // independent physics world, the virtual slave, held-out paper-model sets).
 // These switches exist for this measurement only; haptic-server deploys
-// DifferentiatorConfig{}.
+// DifferentiatorConfig{} and CorrectionsConfig{}.
 
 #include <optional>
 #include <string>
@@ -21,7 +21,7 @@ std::vector<std::string> variant_names();
 /// The estimator's settings a variant changes.
 struct EstimatorVariant {
   estimator::DifferentiatorConfig diff;
-  estimator::HindsightConfig hindsight;
+  estimator::CorrectionsConfig corrections;
 };
 
 /// The deployed settings with `name`'s change, nullopt for an unknown name.

@@ -38,10 +38,11 @@ Samples encoder_samples(std::size_t n) {
 
 // One estimator step per iteration over the samples, repeated with a time
 // offset so that time keeps increasing.
-void run_estimator(benchmark::State& state, const Samples& s, const HindsightConfig& hindsight = {},
+void run_estimator(benchmark::State& state, const Samples& s,
+                   const CorrectionsConfig& corrections = {},
                    const TsmModelSpec& spec = paper_spec()) {
   DistalTorqueEstimator est(std::make_unique<TsmFrictionModel>(spec), 0.01, {},
-                            StartState::kFreeTip, hindsight);
+                            StartState::kFreeTip, corrections);
   std::size_t i = 0;
   double t_offset = 0.0;
   for (auto _ : state) {
@@ -68,7 +69,7 @@ BENCHMARK(BM_EstimatorStep)
 // The same without the hindsight correction: what the correction costs,
 // beside the figure above.
 void BM_EstimatorStepWithoutHindsight(benchmark::State& state) {
-  run_estimator(state, encoder_samples(1 << 16), {.lag = 0.0});
+  run_estimator(state, encoder_samples(1 << 16), {.hindsight = {.lag = 0.0}});
 }
 BENCHMARK(BM_EstimatorStepWithoutHindsight)
     ->Repetitions(15)

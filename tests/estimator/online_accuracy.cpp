@@ -108,8 +108,9 @@ std::vector<double> offline_friction(const FrictionModel& truth, const Recording
 }
 
 Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
-             const DifferentiatorConfig& diff, const HindsightConfig& hindsight, double resolution,
-             double tremor, double tremor_hz, double drift, const std::string& dump_path) {
+             const DifferentiatorConfig& diff, const CorrectionsConfig& corrections,
+             double resolution, double tremor, double tremor_hz, double drift,
+             const std::string& dump_path) {
   const TsmFrictionModel truth(paper_spec());
   SyntheticConfig sc;
   sc.motion = c.kind;
@@ -147,7 +148,7 @@ Row run_case(const Case& c, std::uint64_t seed, double jitter, double drops,
   // The recordings start at rest with the true friction state at zero, so
   // the estimators start there too (the server's default tares the state
   // from the proximal torque instead: StartState::kFreeTip).
-  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::kZero, hindsight);
+  DistalTorqueEstimator causal(truth.clone(), rec.radius_m, diff, StartState::kZero, corrections);
   DistalTorqueEstimator exact(truth.clone(), rec.radius_m, diff, StartState::kZero);
   // An oracle that knows the exact velocity and acceleration but, like any
   // estimator from this encoder, cannot tell the sign of an acceleration
@@ -264,7 +265,8 @@ int main(int argc, char** argv) {
                  "added, which changes no encoder sample (0: off)")
       ->check(CLI::Range(0.0, 1e-9));
   DifferentiatorConfig diff{};
-  HindsightConfig hindsight{};
+  CorrectionsConfig corrections{};
+  HindsightConfig& hindsight = corrections.hindsight;
   app.add_option("--encoder-quantum", diff.quantum,
                  "Encoder resolution of x_in, rad: the recordings' and the differentiator's")
       ->check(CLI::Validator(
@@ -300,19 +302,19 @@ int main(int argc, char** argv) {
                  "smooth sign from the slow channel: width in sd");
   app.add_option("--sign-sigmas", diff.sign_sigmas, "sgn(xdd) decided beyond this many sd");
   app.add_option("--sign-release", diff.sign_release, "... and released below this many sd");
-  app.add_option("--cruise-window", diff.cruise_window,
+  app.add_option("--cruise-window", corrections.cruise_window,
                  "smooth sign: cruise hypothesis window, s (0: off)");
-  app.add_option("--cruise-prior", diff.cruise_prior, "... its prior probability");
-  app.add_option("--cruise-nis", diff.cruise_nis,
+  app.add_option("--cruise-prior", corrections.cruise_prior, "... its prior probability");
+  app.add_option("--cruise-nis", corrections.cruise_nis,
                  "... armed when the acceleration channel's NIS (5 ms) exceeds this");
-  app.add_option("--cruise-armed-time", diff.cruise_armed_time, "... for this long, s");
-  app.add_option("--cruise-noise", diff.cruise_noise,
+  app.add_option("--cruise-armed-time", corrections.cruise_armed_time, "... for this long, s");
+  app.add_option("--cruise-noise", corrections.cruise_noise,
                  "... its samples' error variance in quantisation variances");
   std::string sign_mode = "smooth";
   app.add_option("--sign-mode", sign_mode, "smooth (deployed), smooth-fast or hard");
   app.add_flag("--exact-covariance", diff.exact_covariance, "full Kalman recursion every sample");
   app.add_option("--smooth-sigmas", diff.smooth_sigmas, "smooth sign: width in sd");
-  app.add_option("--still-time", diff.still_time,
+  app.add_option("--still-time", corrections.still_time,
                  "encoder unchanged this long (s): rest (default automatic: 50 ms at 2 pi/40960 "
                  "rad, with the cube root of the quantum)");
   CLI11_PARSE(app, argc, argv);
@@ -352,7 +354,7 @@ int main(int argc, char** argv) {
   for (const auto& c : cases) {
     for (int s = 0; s < seeds; ++s)
       rows.push_back(run_case(c, first_seed + static_cast<std::uint64_t>(s), jitter, drops, diff,
-                              hindsight, resolution, tremor, tremor_hz, drift,
+                              corrections, resolution, tremor, tremor_hz, drift,
                               rows.empty() ? dump : std::string{}));
   }
 

@@ -11,6 +11,7 @@
 #include <random>
 #include <string>
 
+#include "estimator/corrections.hpp"
 #include "estimator/differentiator.hpp"
 
 namespace tsmh::estimator {
@@ -175,7 +176,7 @@ TEST(Differentiator, SmoothSignIsCertainAwayFromCrossingsAndQuickAtThem) {
 
 TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVelocity) {
   for (SignMode mode : {SignMode::kSmooth, SignMode::kHard}) {
-    Differentiator d(DifferentiatorConfig{.sign_mode = mode});
+    CorrectedDifferentiator d(DifferentiatorConfig{.sign_mode = mode});
     double sum = 0.0;
     int moving = 0, nonzero_at_rest = 0, transitions = 0;
     double last = 0.0;
@@ -190,7 +191,7 @@ TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVeloci
       }
       // At rest the encoder stops changing; after still_time the sign is
       // exactly 0, so lambda sgn(xdd) cannot drive eq. (4).
-      if (t > 10.0 + d.still_time() && der.acc_sign != 0.0) {
+      if (t > 10.0 + d.rest().still_time() && der.acc_sign != 0.0) {
         ++nonzero_at_rest;
       }
       last = der.acc_sign;
@@ -212,15 +213,18 @@ TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVeloci
 // with the cube root of the quantum elsewhere; a value given is used as is,
 // 0 turns it off.
 TEST(Differentiator, RestTimeIsAutomaticUnlessGiven) {
-  EXPECT_EQ(Differentiator{}.still_time(), kRestTime);
-  EXPECT_DOUBLE_EQ(
-      Differentiator(DifferentiatorConfig{.quantum = 8.0 * kReferenceQuantum}).still_time(),
-      2.0 * kRestTime);
-  EXPECT_DOUBLE_EQ(
-      Differentiator(DifferentiatorConfig{.quantum = kReferenceQuantum / 27.0}).still_time(),
-      kRestTime / 3.0);
-  EXPECT_EQ(Differentiator(DifferentiatorConfig{.still_time = 0.02}).still_time(), 0.02);
-  EXPECT_EQ(Differentiator(DifferentiatorConfig{.still_time = 0.0}).still_time(), 0.0);
+  const auto rest_time = [](double quantum, double still_time) {
+    CorrectionsConfig corrections;
+    corrections.still_time = still_time;
+    return CorrectedDifferentiator(DifferentiatorConfig{.quantum = quantum}, corrections)
+        .rest()
+        .still_time();
+  };
+  EXPECT_EQ(CorrectedDifferentiator{}.rest().still_time(), kRestTime);
+  EXPECT_DOUBLE_EQ(rest_time(8.0 * kReferenceQuantum, -1.0), 2.0 * kRestTime);
+  EXPECT_DOUBLE_EQ(rest_time(kReferenceQuantum / 27.0, -1.0), kRestTime / 3.0);
+  EXPECT_EQ(rest_time(kReferenceQuantum, 0.02), 0.02);
+  EXPECT_EQ(rest_time(kReferenceQuantum, 0.0), 0.0);
 }
 
 TEST(Differentiator, ScheduledGainsMatchTheFullRecursionOnceSettled) {
@@ -268,9 +272,6 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
   for (const SignMode mode : {SignMode::kSmooth, SignMode::kSmoothFast, SignMode::kHard}) {
     for (const auto& [slow_psd, fine_psd] : {std::pair{1e-3, 1e5}, {0.0, 1e5}, {1e-3, 0.0}}) {
       DifferentiatorConfig cfg{.fine_psd = fine_psd, .slow_jerk_psd = slow_psd, .sign_mode = mode};
-      // The sign is rebuilt below from the channels alone; the cruise
-      // hypothesis (its own tests) would arm on this input's long gaps.
-      cfg.cruise_window = 0.0;
       Differentiator d(cfg);
       const double r = cfg.quantum * cfg.quantum / 12.0;
       PolyKalman<3> velocity(cfg.jerk_psd, r), slow(slow_psd > 0.0 ? slow_psd : 1.0, r);
@@ -318,7 +319,7 @@ TEST(Differentiator, SteadyStateStepIsPolyKalmanWithTheTableGainsBitForBit) {
             !same(out.xdd, acceleration.state()[2]) || !same(out.acc_sd, g.acc_sd))
           ++mismatches;
         if (mode != SignMode::kHard) {
-          // Away from rest (the still_time rule decides there): the ramp.
+          // The plain differentiator's sign: the ramp.
           double xdd = acceleration.state()[2];
           double sign = std::clamp(xdd * g.inv_width, -1.0, 1.0);
           if (use_fine) {
@@ -405,7 +406,7 @@ struct ReversalTrace {
 };
 
 ReversalTrace run_reversal(double cruise_window, bool jitter, double dt = 1e-3, double kV = 1.0,
-                           double cruise_noise = DifferentiatorConfig{}.cruise_noise) {
+                           double cruise_noise = CorrectionsConfig{}.cruise_noise) {
   constexpr double kStart = 1.0, kDuration = 0.06;
   constexpr double kOmega = std::numbers::pi / kDuration;
   const auto position = [&](double t) {
@@ -418,10 +419,10 @@ ReversalTrace run_reversal(double cruise_window, bool jitter, double dt = 1e-3, 
   };
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> wobble(-2e-4, 2e-4);
-  DifferentiatorConfig config;
+  CorrectionsConfig config;
   config.cruise_window = cruise_window;
   config.cruise_noise = cruise_noise;
-  Differentiator d(config);
+  CorrectedDifferentiator d({}, config);
   ReversalTrace r;
   const double end = kStart + kDuration;
   double sum = 0.0;
@@ -447,7 +448,7 @@ TEST(Differentiator, CruiseHypothesisSettlesTheSignAfterAReversal) {
   // armed by the channel's inconsistency during the reversal, takes the sign
   // to about 0 once the last cruise_window of samples is a straight line.
   for (bool jitter : {false, true}) {
-    const ReversalTrace with = run_reversal(DifferentiatorConfig{}.cruise_window, jitter);
+    const ReversalTrace with = run_reversal(CorrectionsConfig{}.cruise_window, jitter);
     const ReversalTrace without = run_reversal(0.0, jitter);
     const std::string tag = jitter ? "_jittered" : "";
     RecordProperty("reversal_mean_abs_sign_cruising" + tag,
@@ -466,7 +467,7 @@ TEST(Differentiator, CruiseHypothesisSettlesTheSignAfterAReversal) {
 TEST(Differentiator, CruiseHypothesisAtAHighSampleRate) {
   // At 5 kHz the 40 ms window would hold 200 samples; the ring keeps the
   // newest 127 (25 ms) and the sums must stay those of the samples in it.
-  const ReversalTrace with = run_reversal(DifferentiatorConfig{}.cruise_window, true, 2e-4);
+  const ReversalTrace with = run_reversal(CorrectionsConfig{}.cruise_window, true, 2e-4);
   RecordProperty("reversal_mean_abs_sign_cruising_5khz",
                  std::to_string(with.mean_abs_sign_cruising));
   EXPECT_LT(with.mean_abs_sign_cruising, 0.15);
@@ -479,7 +480,7 @@ TEST(Differentiator, CruiseTestToleratesTheEncodersSawtooth) {
   // white (cruise_noise 1) each slip made the test reject the cruise and the
   // ringing sign came back; the deployed cruise_noise takes the slips
   // (mean |sign| on the stroke 0.14 against 0.42).
-  const double window = DifferentiatorConfig{}.cruise_window;
+  const double window = CorrectionsConfig{}.cruise_window;
   for (bool jitter : {false, true}) {
     const ReversalTrace tolerant = run_reversal(window, jitter, 1e-3, 0.4584);
     const ReversalTrace white = run_reversal(window, jitter, 1e-3, 0.4584, 1.0);
@@ -501,9 +502,9 @@ TEST(Differentiator, CruiseHypothesisLeavesSmoothMotionAlone) {
   // keep their predicted size), the hypothesis is never armed, and the sign
   // is the same bit for bit as without it: the small accelerations of smooth
   // motion keep their sign where it decides eq. (4)'s drive.
-  DifferentiatorConfig off;
+  CorrectionsConfig off;
   off.cruise_window = 0.0;
-  Differentiator with{DifferentiatorConfig{}}, without{off};
+  CorrectedDifferentiator with{{}, CorrectionsConfig{}}, without{{}, off};
   int differ = 0;
   for (int i = 0; i < 20000; ++i) {
     const double t = i * 1e-3;

@@ -142,7 +142,7 @@ struct HindsightRun {
 };
 
 HindsightRun run_on_synthetic(MotionKind kind, std::uint64_t seed, const DifferentiatorConfig& diff,
-                              const HindsightConfig& hindsight = {}) {
+                              const CorrectionsConfig& corrections = {}) {
   const TsmFrictionModel truth(paper_spec());
   SyntheticConfig sc;
   sc.motion = kind;
@@ -152,7 +152,7 @@ HindsightRun run_on_synthetic(MotionKind kind, std::uint64_t seed, const Differe
   sc.from_rest = true;
   const SyntheticData data = make_synthetic(truth, sc);
   const Recording& rec = data.recording;
-  DistalTorqueEstimator est(truth.clone(), rec.radius_m, diff, StartState::kZero, hindsight);
+  DistalTorqueEstimator est(truth.clone(), rec.radius_m, diff, StartState::kZero, corrections);
   double se = 0.0, peak = 0.0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < rec.size(); ++i) {
@@ -166,16 +166,16 @@ HindsightRun run_on_synthetic(MotionKind kind, std::uint64_t seed, const Differe
   return {100.0 * std::sqrt(se / static_cast<double>(n)) / peak, est.hindsight_resteps()};
 }
 
-// On each seed of the surgeon's motion, the estimator configured by `config`
-// below `bound` times its RMSE configured by `baseline` (named in the
+// On each seed of the surgeon's motion, the estimator with the corrections
+// `config` below `bound` times its RMSE with `baseline` (named in the
 // recorded property).
-void expect_lower_on_surgeon(const DifferentiatorConfig& config,
-                             const DifferentiatorConfig& baseline,
+void expect_lower_on_surgeon(const DifferentiatorConfig& diff, const CorrectionsConfig& config,
+                             const CorrectionsConfig& baseline,
                              std::initializer_list<std::uint64_t> seeds, double bound,
                              const std::string& baseline_name) {
   for (const std::uint64_t seed : seeds) {
-    const double with = run_on_synthetic(MotionKind::kSurgeon, seed, config).rmse_percent;
-    const double base = run_on_synthetic(MotionKind::kSurgeon, seed, baseline).rmse_percent;
+    const double with = run_on_synthetic(MotionKind::kSurgeon, seed, diff, config).rmse_percent;
+    const double base = run_on_synthetic(MotionKind::kSurgeon, seed, diff, baseline).rmse_percent;
     ::testing::Test::RecordProperty(
         "surgeon_seed_" + std::to_string(seed),
         std::to_string(with) + " % (" + baseline_name + ": " + std::to_string(base) + " %)");
@@ -194,7 +194,8 @@ void expect_lower_on_surgeon(const DifferentiatorConfig& config,
 TEST(DistalEstimator, HindsightCorrectsTheStartsAndStopsOfMoves) {
   for (const std::uint64_t seed : {3u, 8u}) {
     const HindsightRun with = run_on_synthetic(MotionKind::kSurgeon, seed, {});
-    const HindsightRun without = run_on_synthetic(MotionKind::kSurgeon, seed, {}, {.lag = 0.0});
+    const HindsightRun without =
+        run_on_synthetic(MotionKind::kSurgeon, seed, {}, {.hindsight = {.lag = 0.0}});
     RecordProperty("surgeon_seed_" + std::to_string(seed),
                    std::to_string(with.rmse_percent) + " % (without " +
                        std::to_string(without.rmse_percent) + " %)");
@@ -210,11 +211,11 @@ TEST(DistalEstimator, HindsightCorrectsTheStartsAndStopsOfMoves) {
 // hold; the default still_time (50 ms) freezes it closer (measured on the
 // surgeon's seeds 1-10: lower on 9 of 10, see the commit that set it).
 TEST(DistalEstimator, RestIsNotDeclaredBeforeACreepingHandHasStopped) {
-  DifferentiatorConfig rule;
-  DifferentiatorConfig early = rule;
+  const CorrectionsConfig rule;
+  CorrectionsConfig early = rule;
   early.still_time = 0.04;
-  ASSERT_GT(Differentiator{}.still_time(), early.still_time);
-  expect_lower_on_surgeon(rule, early, {2u, 9u}, 0.95, "40 ms");
+  ASSERT_GT(CorrectedDifferentiator{}.rest().still_time(), early.still_time);
+  expect_lower_on_surgeon({}, rule, early, {2u, 9u}, 0.95, "40 ms");
 }
 
 // With a finer encoder the last count comes closer to the stop: the
@@ -224,12 +225,13 @@ TEST(DistalEstimator, RestIsNotDeclaredBeforeACreepingHandHasStopped) {
 // the channels' ringing drive the state (measured on the surgeon's seeds
 // 1-10, 101-110 and 1401-1410: lower on 28 of 30, docs/friction-model.md).
 TEST(DistalEstimator, RestTimeFollowsTheEncodersResolution) {
-  DifferentiatorConfig automatic;
-  automatic.quantum = 2.0 * std::numbers::pi / 131072.0;
-  DifferentiatorConfig fixed = automatic;
+  DifferentiatorConfig fine_encoder;
+  fine_encoder.quantum = 2.0 * std::numbers::pi / 131072.0;
+  const CorrectionsConfig automatic;
+  CorrectionsConfig fixed = automatic;
   fixed.still_time = kRestTime;
-  ASSERT_NEAR(Differentiator(automatic).still_time(), 0.0339, 1e-4);
-  expect_lower_on_surgeon(automatic, fixed, {1u, 2u, 3u}, 0.85, "50 ms");
+  ASSERT_NEAR(CorrectedDifferentiator(fine_encoder).rest().still_time(), 0.0339, 1e-4);
+  expect_lower_on_surgeon(fine_encoder, automatic, fixed, {1u, 2u, 3u}, 0.85, "50 ms");
 }
 
 // On smooth motion it must not cost accuracy: multisine within 1.2x of the
@@ -238,7 +240,8 @@ TEST(DistalEstimator, HindsightKeepsSmoothMotionAccurate) {
   for (const std::uint64_t seed : {1u, 7u}) {
     const double with = run_on_synthetic(MotionKind::kMultisine, seed, {}).rmse_percent;
     const double without =
-        run_on_synthetic(MotionKind::kMultisine, seed, {}, {.lag = 0.0}).rmse_percent;
+        run_on_synthetic(MotionKind::kMultisine, seed, {}, {.hindsight = {.lag = 0.0}})
+            .rmse_percent;
     EXPECT_LT(with, 1.2 * without + 0.05) << "seed " << seed;
     EXPECT_LT(with, 1.0) << "seed " << seed;
   }
@@ -251,7 +254,7 @@ TEST(DistalEstimator, HindsightAheadStepsAgainOncePerZeroCrossing) {
   for (const std::uint64_t seed : {1u, 7u}) {
     const HindsightRun ahead = run_on_synthetic(MotionKind::kMultisine, seed, {});
     const HindsightRun one_by_one =
-        run_on_synthetic(MotionKind::kMultisine, seed, {}, {.ahead = 0.0});
+        run_on_synthetic(MotionKind::kMultisine, seed, {}, {.hindsight = {.ahead = 0.0}});
     RecordProperty(
         "multisine_seed_" + std::to_string(seed) + "_resteps",
         std::to_string(ahead.resteps) + " (one by one " + std::to_string(one_by_one.resteps) + ")");
@@ -264,7 +267,7 @@ TEST(DistalEstimator, HindsightAheadStepsAgainOncePerZeroCrossing) {
 // Turned off (or a sign mode without the fine channel), the estimator is the
 // causal one alone: the same output bit for bit as with no history at all.
 TEST(DistalEstimator, HindsightOffIsTheCausalEstimatorExactly) {
-  const HindsightConfig off{.lag = 0.0};
+  const CorrectionsConfig off{.hindsight = {.lag = 0.0}};
   DifferentiatorConfig no_fine;
   no_fine.fine_psd = 0.0;
   DistalTorqueEstimator a(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01, {},

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
-#include <limits>
 
 namespace tsmh::estimator {
 namespace {
@@ -16,21 +15,7 @@ constexpr std::size_t kCoarse = 200;  // kFineEnd ... max_gap
 // Samples of full recursion after a (re)start, while the covariance falls
 // from the start-up prior to its steady state (about 0.1 s at 1 kHz).
 constexpr int kSettlingSamples = 100;
-// The cruise hypothesis: the acceleration channel's normalised innovation
-// squared is averaged over this time (s) before it is held against
-// cruise_nis; fewer samples than kMinWindowSamples in the window: no test.
-constexpr double kNisTime = 0.005;
-constexpr std::size_t kMinWindowSamples = 8;
-// The window's power sums are moved sample by sample (O(1)) and rebuilt from
-// the samples this often, before rounding can accumulate.
-constexpr int kRebuildSamples = 500;
-// Spread of the acceleration (rad/s^2) and jerk (rad/s^3) of a moving hand
-// or motor, the alternative to the cruise hypothesis: its Bayes factor
-// weighs how much of that spread the window's fit leaves possible.
-constexpr double kMovingAccSd = 10.0;
-constexpr double kMovingJerkSd = 300.0;
-
-double measurement_variance(const DifferentiatorConfig& c) {
+double noise_variance(const DifferentiatorConfig& c) {
   const double r = c.quantum * c.quantum / 12.0 + c.position_noise * c.position_noise;
   return r > 0.0 ? r : 1e-12;
 }
@@ -44,20 +29,14 @@ Derivatives invalidated(Derivatives last) noexcept {
 
 Differentiator::Differentiator(const DifferentiatorConfig& config)
     : cfg_(config),
-      r_(measurement_variance(config)),
+      r_(noise_variance(config)),
       velocity_(config.jerk_psd, r_),
       acceleration_(config.snap_psd, r_),
       slow_(config.slow_jerk_psd > 0.0 ? config.slow_jerk_psd : 1.0, r_),
       fine_(config.fine_psd > 0.0 ? config.fine_psd : 1.0, r_),
       use_slow_(config.sign_mode == SignMode::kSmooth && config.slow_jerk_psd > 0.0),
-      use_fine_(config.sign_mode == SignMode::kSmooth && config.fine_psd > 0.0),
-      use_cruise_(config.sign_mode == SignMode::kSmooth && config.cruise_window > 0.0) {
+      use_fine_(config.sign_mode == SignMode::kSmooth && config.fine_psd > 0.0) {
   if (!config.exact_covariance) build_gain_table();
-  // The window's sums move every sample while armed: one division less each.
-  if (use_cruise_) inv_cruise_window_ = 1.0 / config.cruise_window;
-  still_time_ = config.still_time >= 0.0
-                    ? config.still_time
-                    : kRestTime * std::cbrt(config.quantum / kReferenceQuantum);
   reset();
 }
 
@@ -294,31 +273,13 @@ void Differentiator::start(double t, double x) noexcept {
   slow_.start(x, {0.0, 10.0, 100.0});
   fine_.start(x, {0.0, 10.0, 100.0, 1000.0, 10000.0});
   in_band_ = 0.0;
-  last_x_ = x;
-  still_ = 0.0;
   settling_ = kSettlingSamples;
   steady_ = false;
-  // Nothing seen yet that the acceleration channel could not follow.
-  window_head_ = 0;
-  window_size_ = 1;
-  window_t_[0] = t;
-  window_x_[0] = x;
-  nis_ = 1.0;
-  since_inconsistent_ = std::numeric_limits<double>::infinity();
-  moments_valid_ = false;
+  acc_innovation_ = acc_gain0_ = 0.0;
   out_ = {x, 0.0, 0.0, 0.0, 0.0, true};
 }
 
 inline double Differentiator::decide_sign(const Step& step, double dt) noexcept {
-  // Correction (rest, corrections.hpp): assumes a joint whose encoder has
-  // not changed for still_time has stopped. At rest the true acceleration
-  // is exactly 0 and the model's state must not move; the acceleration
-  // estimate still rings for a while after a stop (the jerk ends abruptly),
-  // so an encoder that has not moved decides.
-  if (still_time_ > 0.0 && still_ >= still_time_) {
-    in_band_ = 0.0;
-    return 0.0;
-  }
   if (cfg_.sign_mode != SignMode::kHard) {
     // The expected sign across the estimate's uncertainty, as a ramp: no
     // decision delay at a zero crossing and no chatter. The model is linear
@@ -346,16 +307,6 @@ inline double Differentiator::decide_sign(const Step& step, double dt) noexcept 
       const double slow = std::clamp(step.slow_xdd * step.slow_inv_width, -1.0, 1.0);
       sign = d * d * sign + (1.0 - d * d) * slow;
     }
-    // Correction (cruise, corrections.hpp): assumes a stroke after a
-    // reversal runs at constant speed. After a manoeuvre the acceleration
-    // channel could not follow, the motion is not the smooth kind its model
-    // describes: it may be a stroke at constant speed, where the true xdd is
-    // exactly 0 (and the channel rings for 0.1-0.2 s). The expected sign is
-    // then (1 - P(cruise)) times the sign given motion. On smooth motion the
-    // channel stays consistent and this never runs: its small accelerations
-    // keep their sign.
-    if (use_cruise_ && since_inconsistent_ < cfg_.cruise_armed_time)
-      sign *= 1.0 - cruise_probability();
     return sign;
   }
   // Hard: a dead band with hysteresis around zero, scaled by the estimate's
@@ -375,168 +326,6 @@ inline double Differentiator::decide_sign(const Step& step, double dt) noexcept 
   if (xdd > on) sign = 1.0, in_band_ = 0.0;
   if (xdd < -on) sign = -1.0, in_band_ = 0.0;
   return sign;
-}
-
-void Differentiator::track_consistency(double t, double x, double innovation, double innovation_var,
-                                       double dt) noexcept {
-  // A Kalman filter whose model holds has innovations of its predicted
-  // variance: their normalised square averages 1 (on smooth motion, 1 +- 0.5
-  // over 5 ms, at most about 5 on every multisine tried). A manoeuvre whose
-  // jerk jumps (a reversal's start and end) takes it to hundreds.
-  const double w = std::min(1.0, dt / kNisTime);
-  nis_ += w * (innovation * innovation / innovation_var - nis_);
-  since_inconsistent_ = nis_ > cfg_.cruise_nis ? 0.0 : since_inconsistent_ + dt;
-  const double dx = x - window_x_[window_head_];
-  window_head_ = (window_head_ + 1) % kWindowCapacity;
-  window_t_[window_head_] = t;
-  window_x_[window_head_] = x;
-  window_size_ = std::min(window_size_ + 1, kWindowCapacity);
-  if (since_inconsistent_ >= cfg_.cruise_armed_time) {
-    moments_valid_ = false;  // not needed until the next manoeuvre
-  } else if (!moments_valid_ || ++since_rebuild_ >= kRebuildSamples) {
-    rebuild_moments();
-  } else {
-    advance_moments(dt, dx);
-  }
-}
-
-// The window's fit works on the power sums M_k = sum u^k (k <= 6) and
-// B_k = sum u^k y (k <= 3) over its samples, u = (t_i - t) / cruise_window
-// in [-1, 0] and y = x_i - x about the newest sample (well conditioned).
-inline void Differentiator::add_to_moments(double u, double y, double weight) noexcept {
-  const double u2 = u * u, u3 = u2 * u;
-  moments_[0] += weight;
-  moments_[1] += weight * u;
-  moments_[2] += weight * u2;
-  moments_[3] += weight * u3;
-  moments_[4] += weight * u2 * u2;
-  moments_[5] += weight * u2 * u3;
-  moments_[6] += weight * u3 * u3;
-  const double wy = weight * y;
-  moments_y_[0] += wy;
-  moments_y_[1] += wy * u;
-  moments_y_[2] += wy * u2;
-  moments_y_[3] += wy * u3;
-}
-
-void Differentiator::rebuild_moments() noexcept {
-  const double inv_window = 1.0 / cfg_.cruise_window;
-  const double t_now = window_t_[window_head_];
-  const double x_now = window_x_[window_head_];
-  moments_ = {};
-  moments_y_ = {};
-  // At most capacity - 1 samples (see advance_moments): above about 3 kHz
-  // the window is the newest 127 samples.
-  const std::size_t most = std::min(window_size_, kWindowCapacity - 1);
-  std::size_t n = 0;
-  for (; n < most; ++n) {
-    const std::size_t i = (window_head_ + kWindowCapacity - n) % kWindowCapacity;
-    const double u = (window_t_[i] - t_now) * inv_window;
-    if (u < -1.0) break;
-    add_to_moments(u, window_x_[i] - x_now, 1.0);
-  }
-  window_count_ = n;
-  since_rebuild_ = 0;
-  moments_valid_ = true;
-}
-
-void Differentiator::advance_moments(double dt, double dx) noexcept {
-  // The same sums, moved to the new newest sample in O(1): every y drops by
-  // dx, every u by dt / window ((u + d)^k by the binomial theorem, highest
-  // k first so that the lower sums are still the old ones); then the new
-  // sample (u = 0, y = 0) joins and those now older than the window leave.
-  // Rounding accumulates in the sums, so they are rebuilt from the samples
-  // every kRebuildSamples.
-  static constexpr double kBinomial[7][7] = {{1, 0, 0, 0, 0, 0, 0},   {1, 1, 0, 0, 0, 0, 0},
-                                             {1, 2, 1, 0, 0, 0, 0},   {1, 3, 3, 1, 0, 0, 0},
-                                             {1, 4, 6, 4, 1, 0, 0},   {1, 5, 10, 10, 5, 1, 0},
-                                             {1, 6, 15, 20, 15, 6, 1}};
-  for (std::size_t k = 0; k < 4; ++k)
-    moments_y_[k] -= dx * moments_[k];
-  const double d = -dt * inv_cruise_window_;
-  double p[7];
-  p[0] = 1.0;
-  for (std::size_t i = 1; i < 7; ++i)
-    p[i] = p[i - 1] * d;
-  for (std::size_t k = 6; k >= 1; --k) {
-    double v = 0.0;
-    for (std::size_t j = 0; j <= k; ++j)
-      v += kBinomial[k][j] * p[k - j] * moments_[j];
-    moments_[k] = v;
-  }
-  for (std::size_t k = 3; k >= 1; --k) {
-    double v = 0.0;
-    for (std::size_t j = 0; j <= k; ++j)
-      v += kBinomial[k][j] * p[k - j] * moments_y_[j];
-    moments_y_[k] = v;
-  }
-  moments_[0] += 1.0;
-  ++window_count_;
-  const double inv_window = inv_cruise_window_;
-  const double t_now = window_t_[window_head_];
-  const double x_now = window_x_[window_head_];
-  // The ring must keep every sample of the window: at most capacity - 1, so
-  // that the next sample does not overwrite the oldest one still in it.
-  while (window_count_ > 0) {
-    const std::size_t i = (window_head_ + kWindowCapacity - (window_count_ - 1)) % kWindowCapacity;
-    const double u = (window_t_[i] - t_now) * inv_window;
-    if (u >= -1.0 && window_count_ < kWindowCapacity) break;
-    add_to_moments(u, window_x_[i] - x_now, -1.0);
-    --window_count_;
-  }
-}
-
-double Differentiator::cruise_probability() const noexcept {
-  // Least-squares cubic c0 + c1 u + c2 u^2 + c3 u^3 through the samples of the
-  // last cruise_window, on their actual time stamps (the sums above). A
-  // finite window forgets a manoeuvre entirely once it has passed, where the
-  // Kalman channels ring.
-  const double window = cfg_.cruise_window;
-  const auto& m = moments_;
-  const auto& b = moments_y_;
-  const std::size_t n = window_count_;
-  if (n < kMinWindowSamples) return 0.0;
-  // Only c2, c3 and their covariance are needed: with the normal matrix in
-  // 2x2 blocks [A B; B' D], they come from the Schur complement
-  // S = D - B' A^-1 B: (c2, c3) = S^-1 ((b2, b3) - B' A^-1 (b0, b1)), and
-  // their covariance is r S^-1.
-  const double det_a = m[0] * m[2] - m[1] * m[1];
-  if (!(det_a > 0.0)) return 0.0;
-  // A^-1 B, column by column (A^-1 = [m2 -m1; -m1 m0] / det_a).
-  const double inv_a = 1.0 / det_a;
-  const double k00 = (m[2] * m[2] - m[1] * m[3]) * inv_a, k10 = (m[0] * m[3] - m[1] * m[2]) * inv_a;
-  const double k01 = (m[2] * m[3] - m[1] * m[4]) * inv_a, k11 = (m[0] * m[4] - m[1] * m[3]) * inv_a;
-  const double s00 = m[4] - (m[2] * k00 + m[3] * k10);
-  const double s01 = m[5] - (m[2] * k01 + m[3] * k11);
-  const double s11 = m[6] - (m[3] * k01 + m[4] * k11);
-  const double r2 = b[2] - (k00 * b[0] + k10 * b[1]);
-  const double r3 = b[3] - (k01 * b[0] + k11 * b[1]);
-  const double det_s = s00 * s11 - s01 * s01;
-  if (!(det_s > 0.0)) return 0.0;
-  const double inv_s = 1.0 / det_s;
-  const double i00 = s11 * inv_s, i01 = -s01 * inv_s, i11 = s00 * inv_s;  // S^-1
-  const double c2 = i00 * r2 + i01 * r3, c3 = i01 * r2 + i11 * r3;
-  // Acceleration and jerk at the newest sample, and their covariance.
-  const double w2 = 1.0 / (window * window), w3 = w2 / window;
-  const double acc = 2.0 * c2 * w2, jerk = 6.0 * c3 * w3;
-  const double r = r_ * cfg_.cruise_noise;
-  const double caa = r * 4.0 * i00 * w2 * w2;
-  const double caj = r * 12.0 * i01 * w2 * w3;
-  const double cjj = r * 36.0 * i11 * w3 * w3;
-  // Bayes factor of "acceleration and jerk exactly 0" against "Gaussian with
-  // the spread of a moving hand": N(e; 0, C) / N(e; 0, C + Pr).
-  const double det0 = caa * cjj - caj * caj;
-  const double paa = caa + kMovingAccSd * kMovingAccSd, pjj = cjj + kMovingJerkSd * kMovingJerkSd;
-  const double det1 = paa * pjj - caj * caj;
-  if (!(det0 > 0.0) || !(det1 > 0.0)) return 0.0;
-  const double q0 = (cjj * acc * acc - 2.0 * caj * acc * jerk + caa * jerk * jerk) / det0;
-  const double q1 = (pjj * acc * acc - 2.0 * caj * acc * jerk + paa * jerk * jerk) / det1;
-  // P = odds / (1 + odds) with odds = prior odds x exp(-(q0 - q1) / 2)
-  // sqrt(det1 / det0), written as 1 / (1 + 1 / odds): no logarithm, and an
-  // exp() that overflows gives P = 0 and one that underflows P = 1.
-  const double inverse_odds = (1.0 - cfg_.cruise_prior) / cfg_.cruise_prior *
-                              std::exp(0.5 * (q0 - q1)) * std::sqrt(det0 / det1);
-  return 1.0 / (1.0 + inverse_odds);
 }
 
 Derivatives Differentiator::update(double t, double x) noexcept {
@@ -561,11 +350,8 @@ Derivatives Differentiator::update(double t, double x) noexcept {
     // Without the slow or fine channel its gains are 0: its lane runs idle.
     step = steady_step(dt, x);
   }
-  // The acceleration channel's innovation against its predicted variance,
-  // P[0][0] + r = r / (1 - K[0]): the cruise hypothesis' consistency test.
-  if (use_cruise_) track_consistency(t, x, step.acc_innovation, r_ / (1.0 - step.acc_gain0), dt);
-  still_ = x == last_x_ ? still_ + dt : 0.0;
-  last_x_ = x;
+  acc_innovation_ = step.acc_innovation;
+  acc_gain0_ = step.acc_gain0;
   const double sign = decide_sign(step, dt);
   // out_ written in 16-byte pairs from registers, the way it is copied to
   // the result: field by field, GCC merged the copy into 16-byte loads of

@@ -16,12 +16,12 @@ bool hindsight_possible(const DifferentiatorConfig& diff, const FrictionDynamics
 
 DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> model,
                                              double radius_m, const DifferentiatorConfig& diff,
-                                             StartState start, const HindsightConfig& hindsight)
+                                             StartState start, const CorrectionsConfig& corrections)
     : model_(std::move(model)),
       radius_(radius_m),
-      diff_(diff),
+      diff_(diff, corrections),
       start_(start),
-      hindsight_(hindsight, hindsight_possible(diff, model_.get())) {
+      hindsight_(corrections.hindsight, hindsight_possible(diff, model_.get())) {
   if (!model_) throw std::invalid_argument("estimator: no friction model");
   if (!(radius_m > 0.0) || !std::isfinite(radius_m))
     throw std::invalid_argument("estimator: radius_m must be a finite number > 0");

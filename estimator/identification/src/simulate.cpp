@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "estimator/corrections.hpp"
+
 namespace tsmh::estimator {
 
 std::vector<Motion> motion_from_recording(const Recording& rec, DerivativeSource source,
@@ -14,7 +16,7 @@ std::vector<Motion> motion_from_recording(const Recording& rec, DerivativeSource
   const bool has_load = rec.has_tau_in() && std::isfinite(rec.radius_m);
   const bool has_tensions = rec.T1.size() == rec.size() && rec.T3.size() == rec.size();
   std::vector<Motion> motion(rec.size());
-  Differentiator d(diff);
+  CorrectedDifferentiator d(diff);
   for (std::size_t i = 0; i < rec.size(); ++i) {
     Motion& m = motion[i];
     m.t = rec.t[i];

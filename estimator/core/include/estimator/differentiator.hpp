@@ -18,11 +18,10 @@
 // default the expected sign across the estimate's uncertainty (SignMode):
 // from the fine channel where it agrees with the fast one, from the slow
 // channel where that agrees too, else from the fast one (a manoeuvre the
-// smoother models lag), and weighted by 1 - P(cruise) for a while after a manoeuvre the
-// acceleration channel could not follow (a reversal: on the stroke after it
-// the true xdd is exactly 0, while that channel rings); exactly 0 once the
-// encoder has been still for `still_time`. Delay, noise and accuracy are
-// measured in docs/friction-model.md.
+// smoother models lag). That is the whole filter: the corrections that add
+// assumptions about the motion (rest, cruise, hindsight) are their own
+// component (corrections.hpp). Delay, noise and accuracy are measured in
+// docs/friction-model.md.
 
 #include <array>
 #include <cstddef>
@@ -46,11 +45,10 @@ enum class SignMode {
   /// crossing and no chatter; +-1 once the sign is certain. The default: the
   /// server and `tsm simulate` use it (docs/friction-model.md has all three).
   /// Where the slow channel agrees with the fast one, its sign (see
-  /// slow_jerk_psd); after a manoeuvre, weighted by 1 - P(cruise) (see
-  /// cruise_window).
+  /// slow_jerk_psd).
   kSmooth,
-  /// kSmooth from the fast channel alone (the default until the slow channel
-  /// was added; for comparison).
+  /// kSmooth from the fast channel alone (no fine or slow channel; for
+  /// comparison).
   kSmoothFast,
 };
 
@@ -62,9 +60,6 @@ inline std::optional<SignMode> sign_mode_from_name(std::string_view name) {
   if (name == "hard") return SignMode::kHard;
   return std::nullopt;
 }
-
-/// The automatic rest time at kReferenceQuantum, s (DifferentiatorConfig::still_time).
-inline constexpr double kRestTime = 0.05;
 
 struct DifferentiatorConfig {
   /// Velocity channel (x, xd): spectral density of the jerk, (rad/s^3)^2/Hz.
@@ -94,29 +89,6 @@ struct DifferentiatorConfig {
   double slow_consistency = 1.5;
   /// Smooth sign from the slow channel: +-1 beyond this many of its sd.
   double slow_sigmas = 1.0;
-  /// Smooth sign, the cruise hypothesis: after a manoeuvre the acceleration
-  /// channel's model cannot follow (its normalised innovation squared,
-  /// averaged over 5 ms, above `cruise_nis`), for `cruise_armed_time` s the
-  /// sign is weighted by 1 - P(cruise), P(cruise) the probability that the
-  /// acceleration and jerk have been exactly 0 over the last `cruise_window`
-  /// s (a least-squares cubic through those samples, a Bayes factor against
-  /// accelerations and jerks of a moving hand, prior `cruise_prior`). On a
-  /// constant-speed stroke the paper's model takes xdd = 0 (no lambda in g,
-  /// branch (11)); the acceleration channel rings there for 0.1-0.2 s after
-  /// the reversal's jerk ends. cruise_window 0: off; the window holds at
-  /// most 127 samples (at 1 kHz, any window up to 0.12 s). cruise_prior in
-  /// (0, 1). Measured, with a sweep of all four, in docs/friction-model.md.
-  double cruise_window = 0.04;
-  double cruise_prior = 0.1;
-  double cruise_nis = 16.0;
-  double cruise_armed_time = 1.0;
-  /// The cruise test takes the samples' error as this many times the
-  /// quantisation variance q^2/12. At constant speed the encoder's error is
-  /// not white but a sawtooth that slips by one count every 1 / frac(counts
-  /// per sample) samples (every 80 ms at 0.458 rad/s, 2.988 counts/ms): as
-  /// white noise, each slip made the test reject a true cruise for 20-50 ms
-  /// and the ringing sign came back. Measured in docs/friction-model.md.
-  double cruise_noise = 5.0;
   /// Encoder quantum, rad; its uniform error (quantum^2/12) is the measurement
   /// noise together with position_noise.
   double quantum = kReferenceQuantum;
@@ -133,16 +105,6 @@ struct DifferentiatorConfig {
   /// Hard sign: a fixed |xdd| threshold, rad/s^2, instead of the
   /// uncertainty-scaled one (negative: scaled, the default).
   double acc_sign_threshold = -1.0;
-  /// The encoder has not changed for this long (s): the joint is at rest and
-  /// sgn(xdd) is 0 (0: off). Too short and a hand still creeping into a stop
-  /// below one count is frozen early; too long and the ringing after a stop
-  /// drives the state. Negative (the default): automatic, kRestTime at
-  /// kReferenceQuantum, scaled with the cube root of `quantum`: a hand
-  /// ending a move smoothly (velocity and acceleration reaching 0 together)
-  /// covers its last count in a time proportional to quantum^(1/3)
-  /// (docs/friction-model.md, "Corrections"). Differentiator::still_time()
-  /// gives the value in use.
-  double still_time = -1.0;
   /// A gap longer than this (s) restarts the filters at the new sample.
   double max_gap = 0.05;
   /// true: the full Kalman recursion every sample (covariance propagated for
@@ -218,15 +180,14 @@ class Differentiator {
     const double snap = steady_ ? fine_snap_ : fine_.state()[4];
     return xdd - back * jerk + 0.5 * back * back * snap;
   }
-  /// Time since the acceleration channel's innovations last exceeded
-  /// cruise_nis (a manoeuvre its model could not follow), s; infinity
-  /// without the cruise hypothesis.
-  double time_since_manoeuvre() const noexcept { return since_inconsistent_; }
-  /// How long the encoder reading has not changed, s.
-  double still_duration() const noexcept { return still_; }
-  /// The rest time in use, s (DifferentiatorConfig::still_time, resolved
-  /// when automatic; 0: off).
-  double still_time() const noexcept { return still_time_; }
+  /// The acceleration channel's innovation at the last sample (the sample
+  /// less its prediction), rad, and the variance its model predicted for it,
+  /// P[0][0] + r = r / (1 - K[0]), rad^2: how consistent the motion is with
+  /// that model (the cruise correction's test).
+  double acceleration_innovation() const noexcept { return acc_innovation_; }
+  double acceleration_innovation_variance() const noexcept { return r_ / (1.0 - acc_gain0_); }
+  /// The measurement noise's variance, rad^2: quantum^2/12 + position_noise^2.
+  double measurement_variance() const noexcept { return r_; }
   /// Whether the last accepted sample (re)started the filters: the first
   /// one, or one after a gap longer than max_gap.
   bool restarted() const noexcept { return restarted_; }
@@ -235,12 +196,6 @@ class Differentiator {
   void start(double t, double x) noexcept;
   struct Step;
   double decide_sign(const Step& step, double dt) noexcept;
-  void track_consistency(double t, double x, double innovation, double innovation_var,
-                         double dt) noexcept;
-  double cruise_probability() const noexcept;
-  void add_to_moments(double u, double y, double weight) noexcept;
-  void rebuild_moments() noexcept;
-  void advance_moments(double dt, double dx) noexcept;
 
   DifferentiatorConfig cfg_;
   double r_;  // measurement variance, rad^2
@@ -292,7 +247,7 @@ class Differentiator {
     double x, xd, xdd, slow_xdd, fine_xdd;
     double acc_sd, inv_width, slow_inv_width, inv_consistency;
     double fine_inv_width, inv_fine_consistency;
-    // The acceleration channel's innovation and K[0] (the cruise test).
+    // The acceleration channel's innovation and K[0].
     double acc_innovation, acc_gain0;
   };
   Step full_step(double dt, double x) noexcept;
@@ -307,28 +262,9 @@ class Differentiator {
   alignas(16) std::array<double, 8> acc_fine_state_{};
   double fine_snap_ = 0.0;
   bool steady_ = false;
-  // The cruise hypothesis (smooth sign, cruise_window > 0): the last samples
-  // (a ring, newest at window_head_), the acceleration channel's normalised
-  // innovation squared averaged over kNisTime, and how long ago it last
-  // exceeded cruise_nis.
-  bool use_cruise_;
-  double inv_cruise_window_ = 0.0;  // 1 / cruise_window
-  double still_time_ = 0.0;         // the rest time in use, s
-  static constexpr std::size_t kWindowCapacity = 128;
-  std::array<double, kWindowCapacity> window_t_{}, window_x_{};
-  std::size_t window_head_ = 0, window_size_ = 0;
-  // Power sums of the samples in the window (see cruise_probability()),
-  // kept only while armed: how many samples, and samples since the last rebuild.
-  std::array<double, 7> moments_{};
-  std::array<double, 4> moments_y_{};
-  std::size_t window_count_ = 0;
-  int since_rebuild_ = 0;
-  bool moments_valid_ = false;
-  double nis_ = 1.0;
-  double since_inconsistent_ = 0.0;
+  // The acceleration channel's last innovation and K[0].
+  double acc_innovation_ = 0.0, acc_gain0_ = 0.0;
   double in_band_ = 0.0;  // how long |xdd| has been inside the release band, s
-  double last_x_ = 0.0;   // last encoder reading
-  double still_ = 0.0;    // how long it has not changed, s
   bool started_ = false;
   bool restarted_ = false;
   double t_ = 0.0;

@@ -46,12 +46,12 @@ enum class StartState {
 class DistalTorqueEstimator {
  public:
   /// `model` is owned (only its real-time face is used); radius_m > 0
-  /// (throws std::invalid_argument otherwise). `hindsight`: the hindsight
-  /// correction's settings (corrections.hpp), deployed as they are.
+  /// (throws std::invalid_argument otherwise). `corrections`: the
+  /// corrections' settings (corrections.hpp), deployed as they are.
   DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> model, double radius_m,
                         const DifferentiatorConfig& diff = {},
                         StartState start = StartState::kFreeTip,
-                        const HindsightConfig& hindsight = {});
+                        const CorrectionsConfig& corrections = {});
 
   /// One sample with the proximal torque given; `tension` (N) is the mean of
   /// the two proximal tensions when known (models with tension copies use
@@ -88,7 +88,7 @@ class DistalTorqueEstimator {
 
   std::unique_ptr<FrictionDynamics> model_;
   double radius_;
-  Differentiator diff_;
+  CorrectedDifferentiator diff_;
   StartState start_;
   HindsightCorrection hindsight_;
   bool started_ = false;
