@@ -398,6 +398,147 @@ TEST(DistributedSlip, DriveCopiesRoundTripThroughTheParamsFile) {
   EXPECT_THROW(validate(bad), std::invalid_argument);
 }
 
+// Two sheaths whose presliding follows each tendon's tension: element
+// families per tendon (tendon_widths), the second tendon's break forces
+// unlike the first's.
+TsmModelSpec tendon_truth() {
+  TsmModelSpec s;
+  s.slip.enabled = true;
+  s.slip.tendon_widths = true;
+  s.slip.elements = 6;
+  s.slip.width_min = 2e-3;
+  s.slip.width_max = 0.15;
+  s.slip.smoothing = 0.02;
+  s.slip.stribeck_speed = 0.15;
+  s.slip.tension_ref = 20.0;
+  const double w[12] = {0.3, 0.8, 1.1, 0.5, 0.9, 0.4, 0.1, 0.5, 0.6, 1.4, 0.2, 0.7};
+  for (std::size_t i = 0; i < 12; ++i)
+    s.slip.weight[i] = w[i];
+  s.slip.weight[kSlidingIndex + 0] = 2.0;
+  s.slip.weight[kSlidingIndex + 1] = 1.8;
+  return s;
+}
+
+// The fit's view of a sheath pair: x, the mean tension and the drive u all
+// measured, the friction from the truth with that drive, plus white noise.
+// The drive reaches 2 T at times, so tendon 2 goes slack.
+FitData tendon_data(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
+  FitData d;
+  const double dt = 1e-3;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, noise);
+  TsmFrictionModel model(truth);
+  model.reset();
+  for (std::size_t k = 0; k < 40000; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    Motion m;
+    m.t = t;
+    m.x = 0.5 * std::sin(0.7 * t) + 0.15 * std::sin(2.9 * t + 1.0) + 0.02 * std::sin(11.0 * t);
+    m.xd = 0.35 * std::cos(0.7 * t) + 0.435 * std::cos(2.9 * t + 1.0) + 0.22 * std::cos(11.0 * t);
+    m.tension = 20.0 + 4.0 * std::sin(0.13 * t + 0.5);
+    m.drive = 40.0 * std::sin(0.21 * t) * std::sin(0.05 * t + 0.3);
+    d.measured.push_back(model.step(m, dt) + g(rng));
+    d.motion.push_back(m);
+    d.role.push_back(t < 0.5
+                         ? SampleRole::kIgnored
+                         : (static_cast<int>((t - 0.5) / 2.0) % 2 == 0 ? SampleRole::kTrain
+                                                                       : SampleRole::kValidation));
+  }
+  d.radius_m = 0.01;
+  return d;
+}
+
+TEST(DistributedSlip, TendonWidthsScaleWithTheTensionAndASlackTendonCarriesNone) {
+  TsmModelSpec s = tendon_truth();
+  s.slip.weight[kSlidingIndex + 0] = s.slip.weight[kSlidingIndex + 1] = 0.0;
+  const SlipKernel kernel(s.slip);
+  SlipState st;
+  SlipBasis b;
+  // Tendon 1 at 40 N (twice the reference), tendon 2 slack (T - u/2 < 0).
+  kernel.advance(st, 0.0, 0.0, 15.0, 50.0, b);
+  EXPECT_DOUBLE_EQ(b.scale[0], 2.0);
+  EXPECT_DOUBLE_EQ(b.scale[1], 0.0);
+  // A long stroke saturates every element: family 1 at twice its break
+  // forces, family 2 at none.
+  kernel.advance(st, 1.0, 1.0, 15.0, 50.0, b);
+  double level = 0.0;
+  double family1 = 0.0;
+  for (std::size_t i = 0; i < 6; ++i)
+    family1 += s.slip.weight[i];
+  EXPECT_NEAR(kernel.friction(b, 15.0, 50.0, 0.0, level), 2.0 * family1, 1e-12);
+  for (std::size_t i = 6; i < 12; ++i)
+    EXPECT_EQ(b.phi[i], 0.0);
+  // The stiffness is the tension's own: from a reversal, the first element
+  // takes twice the displacement to saturate at twice the tension.
+  const double r0 = s.slip.width(0);
+  SlipState a, c;
+  kernel.advance(a, 0.0, 0.0, 20.0, 0.0, b);  // both at the reference
+  kernel.advance(c, 0.0, 0.0, 40.0, 0.0, b);  // both at twice it
+  kernel.advance(a, 1.5 * r0, 1.0, 20.0, 0.0, b);
+  EXPECT_DOUBLE_EQ(b.phi[0], 1.0);  // saturated at 1
+  kernel.advance(c, 1.5 * r0, 1.0, 40.0, 0.0, b);
+  EXPECT_DOUBLE_EQ(b.phi[0], 1.5);  // still on its spring, limit 2
+  // Without measured tensions the families are the plain elements.
+  kernel.advance(a, 0.0, -1.0, std::nan(""), std::nan(""), b);
+  EXPECT_DOUBLE_EQ(b.scale[0], 1.0);
+  EXPECT_DOUBLE_EQ(b.scale[1], 1.0);
+}
+
+TEST(DistributedSlip, LeastSquaresRecoversTendonWidthsThatCopiesCannotMimic) {
+  const TsmModelSpec truth = tendon_truth();
+  const FitData d = tendon_data(truth, 0.05, 17);
+  TsmModelSpec s = truth;
+  s.slip.weight.fill(1.0);
+  const double mse = solve_slip_weights(s, d);
+  EXPECT_NEAR(std::sqrt(mse), 0.05, 0.005);
+  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
+    const std::size_t i = truth.slip.basis_index(k);
+    EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
+  }
+  // One family with both copies (per-tendon break forces, fixed widths)
+  // over the same widths stays well above the noise: the widths themselves
+  // follow the tension, and a slack tendon's elements lose their state.
+  TsmModelSpec plain = truth;
+  plain.slip.tendon_widths = false;
+  plain.slip.elements = 12;
+  plain.slip.tension_copies = true;
+  plain.slip.drive_copies = true;
+  const double plain_mse = solve_slip_weights(plain, d);
+  EXPECT_GT(std::sqrt(plain_mse), 3.0 * 0.05);
+}
+
+TEST(DistributedSlip, TendonWidthsRoundTripThroughTheParamsFileAndTheState) {
+  const TsmModelSpec truth = tendon_truth();
+  const TsmFrictionModel model(truth);
+  const std::string yaml = model_to_yaml(model);
+  EXPECT_NE(yaml.find("tendon_widths: true"), std::string::npos) << yaml;
+  const auto back = parse_model(yaml, "round trip");
+  const auto* tsm = dynamic_cast<const TsmFrictionModel*>(back.get());
+  ASSERT_NE(tsm, nullptr);
+  EXPECT_TRUE(tsm->spec().slip.tendon_widths);
+  EXPECT_EQ(tsm->spec().slip.basis_count(), 16u);
+  // The same friction along a motion, and a restored state continues alike.
+  TsmFrictionModel a(truth), b(tsm->spec());
+  a.reset(), b.reset();
+  const FitData d = tendon_data(truth, 0.0, 1);
+  DynamicsState mid;
+  for (std::size_t k = 0; k < 3000; ++k) {
+    EXPECT_DOUBLE_EQ(a.step(d.motion[k], 1e-3), b.step(d.motion[k], 1e-3));
+    if (k == 1500) {
+      ASSERT_TRUE(a.save_state(mid));
+    }
+  }
+  const double next = a.step(d.motion[3000], 1e-3);
+  b.restore_state(mid);
+  for (std::size_t k = 1501; k < 3000; ++k)
+    b.step(d.motion[k], 1e-3);
+  EXPECT_DOUBLE_EQ(b.step(d.motion[3000], 1e-3), next);
+  // Two families of 13 do not fit the state.
+  std::string bad = yaml;
+  bad.replace(bad.find("elements: 6"), 11, "elements: 13");
+  EXPECT_THROW(parse_model(bad, "bad.yaml"), ParamsError);
+}
+
 TEST(DistributedSlip, SeparableFitFindsTheSpreadFromTheCatalogStart) {
   const TsmModelSpec truth = capstan_truth();
   const FitData d = synthetic(truth, 0.05, 12);

@@ -9,6 +9,7 @@ namespace tsmh::estimator {
 
 double DistributedSlipSpec::width(std::size_t i) const {
   if (elements <= 1) return width_min;
+  i %= static_cast<std::size_t>(elements);
   const double f = static_cast<double>(i) / static_cast<double>(elements - 1);
   return width_min * std::pow(width_max / width_min, f);
 }
@@ -46,6 +47,9 @@ void validate(const DistributedSlipSpec& s) {
   };
   if (s.elements < 1 || s.elements > static_cast<int>(kMaxSlipElements))
     bad("elements", "must be 1 .. " + std::to_string(kMaxSlipElements));
+  if (s.tendon_widths && s.element_count() > kMaxSlipElements)
+    bad("elements", "must be 1 .. " + std::to_string(kMaxSlipElements / 2) +
+                        " with tendon_widths (one family per tendon)");
   positive("width_min", s.width_min);
   positive("width_max", s.width_max);
   if (s.width_max < s.width_min) bad("width_max", "must be >= width_min");
@@ -70,8 +74,9 @@ void validate(const DistributedSlipSpec& s) {
 
 SlipKernel::SlipKernel(const DistributedSlipSpec& spec) : spec_(spec) {
   validate(spec_);
-  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.elements); ++i)
+  for (std::size_t i = 0; i < spec_.element_count(); ++i)
     inv_width_[i] = 1.0 / spec_.width(i);
+  inv_tension_ref_ = spec_.tension_ref > 0.0 ? 1.0 / spec_.tension_ref : 0.0;
   inv_smoothing_ = 1.0 / spec_.smoothing;
   inv_stribeck_ = 1.0 / spec_.stribeck_speed;
   // Entries beyond the copies in use are zero, so the sums below need no flags.
@@ -80,16 +85,26 @@ SlipKernel::SlipKernel(const DistributedSlipSpec& spec) : spec_(spec) {
   if (!spec_.drive_copies) spec_.drive_weight.fill(0.0);
 }
 
-void SlipKernel::advance(SlipState& s, double x, double xd, SlipBasis& out) const noexcept {
+void SlipKernel::advance(SlipState& s, double x, double xd, double tension, double drive,
+                         SlipBasis& out) const noexcept {
   const double dx = s.started ? x - s.x_prev : 0.0;
   s.x_prev = x;
   s.started = true;
   const std::size_t n = static_cast<std::size_t>(spec_.elements);
-  const double lo = -k_neg_, hi = k_pos_;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double e = std::min(std::max(s.e[i] + dx * inv_width_[i], lo), hi);
-    s.e[i] = e;
-    out.phi[i] = e;
+  out.scale = {1.0, 1.0};
+  if (spec_.tendon_widths && std::isfinite(tension) && inv_tension_ref_ > 0.0) {
+    const double half = std::isfinite(drive) ? 0.5 * drive : 0.0;
+    out.scale[0] = std::max(tension + half, 0.0) * inv_tension_ref_;
+    out.scale[1] = std::max(tension - half, 0.0) * inv_tension_ref_;
+  }
+  const std::size_t families = spec_.tendon_widths ? 2 : 1;
+  for (std::size_t f = 0; f < families; ++f) {
+    const double lo = -k_neg_ * out.scale[f], hi = k_pos_ * out.scale[f];
+    for (std::size_t i = f * n; i < (f + 1) * n; ++i) {
+      const double e = std::min(std::max(s.e[i] + dx * inv_width_[i], lo), hi);
+      s.e[i] = e;
+      out.phi[i] = e;
+    }
   }
   const double smooth = std::tanh(xd * inv_smoothing_);
   const double k = xd < 0.0 ? k_neg_ : k_pos_;
@@ -102,7 +117,8 @@ void SlipKernel::advance(SlipState& s, double x, double xd, SlipBasis& out) cons
 double SlipKernel::friction(const SlipBasis& b, double tension, double drive, double extra,
                             double& level) const noexcept {
   const double dt = std::isfinite(tension) ? tension - spec_.tension_ref : 0.0;
-  const std::size_t n = static_cast<std::size_t>(spec_.elements);
+  const std::size_t n = spec_.element_count();
+  const std::size_t per_family = static_cast<std::size_t>(spec_.elements);
   // The drive copies scale like the tension copies (per N of u); without a
   // measured drive they add nothing.
   const double u = std::isfinite(drive) ? drive : 0.0;
@@ -110,7 +126,7 @@ double SlipKernel::friction(const SlipBasis& b, double tension, double drive, do
   for (std::size_t i = 0; i < n; ++i) {
     const double w = weight(i, dt) + u * spec_.drive_weight[i];
     elements += b.phi[i] * w;
-    capacity += w;
+    capacity += w * b.scale[i < per_family ? 0 : 1];
     slope += b.phi[i] * spec_.load_weight[i];
   }
   for (std::size_t i = kSlidingIndex; i < kMaxSlipBasis; ++i) {
@@ -128,16 +144,24 @@ double SlipKernel::friction(const SlipBasis& b, double tension, double drive, do
 
 double SlipKernel::element_capacity(double tension) const noexcept {
   const double dt = std::isfinite(tension) ? tension - spec_.tension_ref : 0.0;
+  const double g = rest_scale(tension);
   double sum = 0.0;
-  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.elements); ++i)
-    sum += weight(i, dt);
+  for (std::size_t i = 0; i < spec_.element_count(); ++i)
+    sum += weight(i, dt) * g;
   return sum;
 }
 
-void SlipKernel::preset(SlipState& s, double x, double fraction) const noexcept {
+double SlipKernel::rest_scale(double tension) const noexcept {
+  // Per-tendon widths at rest: both tendons near the mean tension.
+  return spec_.tendon_widths && std::isfinite(tension) && inv_tension_ref_ > 0.0
+             ? std::max(tension, 0.0) * inv_tension_ref_
+             : 1.0;
+}
+
+void SlipKernel::preset(SlipState& s, double x, double fraction, double tension) const noexcept {
   const double u = std::clamp(fraction, -1.0, 1.0);
-  const double e = u >= 0.0 ? u * k_pos_ : u * k_neg_;
-  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.elements); ++i)
+  const double e = (u >= 0.0 ? u * k_pos_ : u * k_neg_) * rest_scale(tension);
+  for (std::size_t i = 0; i < spec_.element_count(); ++i)
     s.e[i] = e;
   s.x_prev = x;
   s.started = true;

@@ -63,7 +63,7 @@ DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin
   reject_unknown_keys(
       node,
       {"elements", "width_min", "width_max", "smoothing", "stribeck_speed", "weights",
-       "tension_ref", "tension_weights", "load_weights", "drive_weights"},
+       "tension_ref", "tension_weights", "load_weights", "drive_weights", "tendon_widths"},
       origin, "distributed_slip");
   DistributedSlipSpec s;
   s.enabled = true;
@@ -77,6 +77,16 @@ DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin
   s.width_max = number(node["width_max"], origin, "distributed_slip.width_max");
   s.smoothing = number(node["smoothing"], origin, "distributed_slip.smoothing");
   s.stribeck_speed = number(node["stribeck_speed"], origin, "distributed_slip.stribeck_speed");
+  if (node["tendon_widths"]) {
+    const YAML::Node& tw = node["tendon_widths"];
+    if (!tw.IsScalar() || (tw.Scalar() != "true" && tw.Scalar() != "false"))
+      fail(origin, "distributed_slip.tendon_widths", "must be true or false");
+    s.tendon_widths = tw.Scalar() == "true";
+    if (s.tendon_widths && s.element_count() > kMaxSlipElements)
+      fail(origin, "distributed_slip.elements",
+           "must be 1 .. " + std::to_string(kMaxSlipElements / 2) +
+               " with tendon_widths (one family per tendon)");
+  }
   if (!node["weights"]) fail(origin, "distributed_slip.weights", "missing");
   read_weights(node["weights"], s, origin, "weights", s.weight);
   if (node["tension_weights"]) {
@@ -112,11 +122,11 @@ void emit_slip(YAML::Emitter& out, const DistributedSlipSpec& s) {
   out << YAML::Key << "width_max" << YAML::Value << s.width_max;
   out << YAML::Key << "smoothing" << YAML::Value << s.smoothing;
   out << YAML::Key << "stribeck_speed" << YAML::Value << s.stribeck_speed;
+  if (s.tendon_widths) out << YAML::Key << "tendon_widths" << YAML::Value << true;
   emit_weights(out, "weights", s, s.weight);
-  if (s.tension_copies) {
+  if (s.tension_copies || s.tendon_widths)
     out << YAML::Key << "tension_ref" << YAML::Value << s.tension_ref;
-    emit_weights(out, "tension_weights", s, s.tension_weight);
-  }
+  if (s.tension_copies) emit_weights(out, "tension_weights", s, s.tension_weight);
   if (s.load_copies) emit_weights(out, "load_weights", s, s.load_weight);
   if (s.drive_copies) emit_weights(out, "drive_weights", s, s.drive_weight);
   out << YAML::EndMap;

@@ -387,7 +387,7 @@ double TsmFrictionModel::step_with_slip(const Motion& m, double dt, double xd_mi
     }
     bouc_wen = spec_.gamma * z_;
   }
-  slip_.advance(slip_state_, m.x, m.xd, basis_);
+  slip_.advance(slip_state_, m.x, m.xd, m.tension, m.drive, basis_);
   f_ = slip_.friction(basis_, m.tension, m.drive, bouc_wen, slip_level_);
   if (bouc_wen_) slip_level_ += spec_.gamma * level_;
   return f_;
@@ -398,7 +398,7 @@ void TsmFrictionModel::save_slip(DynamicsState& out) const noexcept {
   out.v[7] = slip_state_.started ? 1.0 : 0.0;
   out.v[8] = f_;
   out.v[9] = slip_level_;
-  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.slip.elements); ++i)
+  for (std::size_t i = 0; i < spec_.slip.element_count(); ++i)
     out.v[10 + i] = slip_state_.e[i];
 }
 
@@ -407,7 +407,7 @@ void TsmFrictionModel::restore_slip(const DynamicsState& s) noexcept {
   slip_state_.started = s.v[7] != 0.0;
   f_ = s.v[8];
   slip_level_ = s.v[9];
-  for (std::size_t i = 0; i < static_cast<std::size_t>(spec_.slip.elements); ++i)
+  for (std::size_t i = 0; i < spec_.slip.element_count(); ++i)
     slip_state_.e[i] = s.v[10 + i];
 }
 
@@ -424,7 +424,7 @@ void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {
       level_ = bw / spec_.gamma;
       z_ = z1_ = z2_ = fraction * level_;
     }
-    slip_.preset(slip_state_, m.x, fraction);
+    slip_.preset(slip_state_, m.x, fraction, m.tension);
     f_ = fraction * capacity;
     slip_level_ = capacity;
     return;

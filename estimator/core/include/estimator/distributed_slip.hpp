@@ -46,6 +46,23 @@
 // slope is below one and there is one solution, on the branch u >= A or
 // u < A. In free motion D = 0: free-motion data cannot determine the l_k.
 //
+// Per-tendon widths (`tendon_widths`): a sheath's presliding follows the
+// tension its tendon carries. After a reversal the slip spreads from the
+// pulled end until the friction has turned; the friction per length is
+// mu T kappa, so both the break force and the displacement it takes to
+// reach it grow with the tendon's tension T_j, while the stiffness (the
+// tendon's EA over the slipping length) does not. The elements then come
+// as two families, one per tendon (elements 0 .. n-1 for tendon 1, which
+// pulls x positive, n .. 2n-1 for tendon 2), each element a constant
+// stiffness whose saturation scales with g_j = max(T_j, 0) / T_ref:
+//   e_i <- clamp(e_i + dx / r_i, -k_neg g_j, k_pos g_j)
+// with T_1 = T + u/2, T_2 = T - u/2 (the proximal tensions). A slack tendon
+// (T_j <= 0) clamps its family to zero: its sheath transmits no friction. The
+// break force w_i g_j then follows the tension by itself; the copies add to
+// that. Without measured tensions (T or u NaN) g_j = 1 and the two
+// families are the plain elements twice. At T_j = T_ref the model is the
+// plain one with the two families' weights summed.
+//
 // No sign of the acceleration appears anywhere.
 
 #include <array>
@@ -82,6 +99,9 @@ struct DistributedSlipSpec {
   bool tension_copies = false;  ///< the t_k are part of the model
   bool load_copies = false;     ///< the l_k are part of the model
   bool drive_copies = false;    ///< the d_k are part of the model
+  /// Two element families, one per tendon, whose saturation scales with
+  /// that tendon's tension (see the header); `elements` is per family.
+  bool tendon_widths = false;
   /// Weights per basis function, N: elements 0 .. elements-1, then the sliding
   /// functions at kSlidingIndex + {0: coulomb +, 1: coulomb -, 2: stribeck,
   /// 3: viscous (N s/rad)}. Unused entries are 0.
@@ -90,12 +110,17 @@ struct DistributedSlipSpec {
   std::array<double, kMaxSlipBasis> load_weight{};     ///< per N of |D|
   std::array<double, kMaxSlipBasis> drive_weight{};    ///< per N of u (signed)
 
-  /// The indices of the basis functions in use, in order (elements, sliding).
-  std::size_t basis_count() const { return static_cast<std::size_t>(elements) + kSlidingFunctions; }
-  std::size_t basis_index(std::size_t k) const {
-    return k < static_cast<std::size_t>(elements) ? k : kSlidingIndex + (k - elements);
+  /// Elements in the state: `elements`, twice with per-tendon widths.
+  std::size_t element_count() const {
+    return static_cast<std::size_t>(elements) * (tendon_widths ? 2 : 1);
   }
-  /// Width of element i (log-uniform from width_min to width_max).
+  /// The indices of the basis functions in use, in order (elements, sliding).
+  std::size_t basis_count() const { return element_count() + kSlidingFunctions; }
+  std::size_t basis_index(std::size_t k) const {
+    return k < element_count() ? k : kSlidingIndex + (k - element_count());
+  }
+  /// Width of element i at the reference tension (log-uniform from width_min
+  /// to width_max; each family spans the same widths).
   double width(std::size_t i) const;
 };
 
@@ -119,6 +144,9 @@ struct SlipState {
 /// The basis of one sample, weights applied later: phi by array index.
 struct SlipBasis {
   std::array<double, kMaxSlipBasis> phi{};
+  /// Each element family's saturation scale g_j at this sample (1, 1 without
+  /// per-tendon widths).
+  std::array<double, 2> scale{1.0, 1.0};
 };
 
 /// Precomputed per-spec constants: inverse widths, the level scales.
@@ -127,9 +155,12 @@ class SlipKernel {
   SlipKernel() = default;
   explicit SlipKernel(const DistributedSlipSpec& spec);
 
-  /// Advances the elements to angle x and fills the basis at velocity xd.
-  /// Never allocates; non-finite input is the caller's to refuse.
-  void advance(SlipState& s, double x, double xd, SlipBasis& out) const noexcept;
+  /// Advances the elements to angle x and fills the basis at velocity xd;
+  /// `tension` (T) and `drive` (u) set the per-tendon widths' scales (NaN:
+  /// the reference tension). Never allocates; non-finite x, xd are the
+  /// caller's to refuse.
+  void advance(SlipState& s, double x, double xd, double tension, double drive,
+               SlipBasis& out) const noexcept;
   /// The friction A + B |D| of a basis, solved for the distal load (see the
   /// header): `extra` is friction the rest of the model adds (Bouc-Wen);
   /// `tension` NaN or `drive` NaN turn the respective copies off (the
@@ -138,8 +169,9 @@ class SlipKernel {
   /// saturation plus the magnitude of the sliding functions' friction, N.
   double friction(const SlipBasis& b, double tension, double drive, double extra,
                   double& level) const noexcept;
-  /// Sets every element's state to `fraction` of its saturation (preset).
-  void preset(SlipState& s, double x, double fraction) const noexcept;
+  /// Sets every element's state to `fraction` of its saturation at mean
+  /// tension `tension` (NaN: the reference) (preset).
+  void preset(SlipState& s, double x, double fraction, double tension) const noexcept;
   /// The saturated elements' friction per unit of state (sum of weights).
   double element_capacity(double tension) const noexcept;
 
@@ -156,6 +188,9 @@ class SlipKernel {
   DistributedSlipSpec spec_;
   std::array<double, kMaxSlipElements> inv_width_{};
   double inv_smoothing_ = 1.0, inv_stribeck_ = 1.0;
+  double inv_tension_ref_ = 0.0;  ///< 1 / tension_ref (0: no per-tendon scaling)
+  /// The per-tendon scale at rest (both tendons at the mean tension T).
+  double rest_scale(double tension) const noexcept;
   double k_pos_ = 1.0, k_neg_ = 1.0;
 };
 
