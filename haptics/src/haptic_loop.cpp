@@ -91,8 +91,8 @@ void HapticLoop::tick(std::int64_t now_ns, std::int64_t lateness_ns) noexcept {
   decide_state(f);                     // 5. device freshness, state machine, enable
   render(f);                           // 6. shaping, safety, the device
   command_slave(f);                    // 7. MASTER_COMMAND (position mapping, clutch)
-  if (counters_.ticks % static_cast<std::uint64_t>(config_.status_every) == 0)
-    publish_status(f);          // 8. HAPTIC_STATUS at 100 Hz
+  if (counters_.ticks % static_cast<std::uint64_t>(config_.status_every) == 0 || f.fault_entered())
+    publish_status(f);          // 8. HAPTIC_STATUS at 100 Hz, and at once on a fault
   if (trace_) append_trace(f);  // 9. trace (evaluation, plots)
 }
 
@@ -202,7 +202,7 @@ void HapticLoop::decide_state(TickFacts& f) noexcept {
        .estimate_lost = f.lost_s > config_.estimate_fault_s,
        .slave_session_over = link_.session_over(),
        .master_session_over = reading_.fault == master_devices::FaultCode::kOtherSession});
-  if (f.state == LoopState::kFault && f.before != LoopState::kFault) {
+  if (f.fault_entered()) {
     ++counters_.faults;
     events_.faults.store(counters_.faults, std::memory_order_relaxed);
   }

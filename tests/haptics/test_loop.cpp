@@ -132,6 +132,23 @@ TEST(HapticLoop, EStopAndDeadManZeroTorqueImmediately) {
   EXPECT_EQ(rig.loop.fault(), FaultReason::kEStop);
 }
 
+// A server that ends on a fault may stop before the next status period:
+// the tick that goes into FAULT publishes its status at once, so monitors
+// always see the fault and the zero torque.
+TEST(HapticLoop, GoingIntoFaultPublishesTheStatusOnThatTick) {
+  Rig rig(FeedbackSource::kNaive);
+  rig.run(1003);  // 3 ticks past the last status period
+  ASSERT_EQ(rig.link.statuses.size(), 100u);
+  ASSERT_EQ(rig.link.statuses.back().state, 1);
+  rig.device.reading_.buttons.e_stop = true;
+  rig.run(1);
+  ASSERT_EQ(rig.link.statuses.size(), 101u) << "no status on the tick of the fault";
+  EXPECT_EQ(rig.link.statuses.back().state, 2);
+  EXPECT_EQ(rig.link.statuses.back().torque_cmd[0], 0.0);
+  rig.run(1);
+  EXPECT_EQ(rig.link.statuses.size(), 101u) << "once per fault, then every 10 ticks again";
+}
+
 TEST(HapticLoop, DeviceDisconnectFaults) {
   Rig rig(FeedbackSource::kNaive);
   rig.run(500);

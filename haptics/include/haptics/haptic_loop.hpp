@@ -196,6 +196,11 @@ class HapticLoop {
     LoopState before = LoopState::kDisabled;
     LoopState state = LoopState::kDisabled;
     bool enabled = false;  // state == kEnabled
+    /// This tick went into FAULT: monitors hear of it at once, not at the next
+    /// status period (a server ending on the fault may not see one).
+    bool fault_entered() const noexcept {
+      return state == LoopState::kFault && before != LoopState::kFault;
+    }
     JointArray request{};  // master torque asked for, before shaping and safety
     SafetyOutput out{};    // what safety let through (written to the device)
   };
