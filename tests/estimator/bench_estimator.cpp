@@ -162,6 +162,31 @@ BENCHMARK(BM_ModelStepOnlyDistributed)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);
 
+// The per-tendon form at its largest: two families of 12 elements whose
+// widths follow each tendon's tension, with tension and drive copies.
+TsmModelSpec distributed_per_tendon() {
+  TsmModelSpec s = distributed_spec();
+  s.slip.tendon_widths = true;
+  s.slip.elements = 12;
+  s.slip.tension_copies = true;
+  s.slip.drive_copies = true;
+  for (std::size_t i = 0; i < 24; ++i)
+    s.slip.weight[i] = 0.3;
+  for (std::size_t i = 0; i < kMaxSlipBasis; ++i) {
+    s.slip.tension_weight[i] = 0.01 * s.slip.weight[i];
+    s.slip.drive_weight[i] = 0.005 * s.slip.weight[i];
+  }
+  return s;
+}
+
+void BM_ModelStepOnlyPerTendon(benchmark::State& state) {
+  model_step_only(state, distributed_per_tendon());
+}
+BENCHMARK(BM_ModelStepOnlyPerTendon)
+    ->Repetitions(15)
+    ->ReportAggregatesOnly(true)
+    ->DisplayAggregatesOnly(true);
+
 void BM_DifferentiatorOnly(benchmark::State& state) {
   const Samples s = encoder_samples(1 << 16);
   Differentiator d;
