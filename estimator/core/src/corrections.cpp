@@ -219,32 +219,6 @@ CorrectedDifferentiator::CorrectedDifferentiator(const DifferentiatorConfig& dif
       rest_(corrections.still_time, diff.quantum),
       cruise_(corrections, filter_.measurement_variance(), diff.sign_mode == SignMode::kSmooth) {}
 
-Derivatives CorrectedDifferentiator::update(double t, double x) noexcept {
-  Derivatives d = filter_.update(t, x);
-  if (!d.valid) {
-    d.acc_sign = last_sign_;  // the last estimate as it was given
-    return d;
-  }
-  if (filter_.restarted()) {
-    rest_.restart(x);
-    if (cruise_.enabled()) cruise_.restart(t, x);
-  } else {
-    const double dt = t - t_;
-    if (cruise_.enabled())
-      cruise_.observe(t, x, filter_.acceleration_innovation(),
-                      filter_.acceleration_innovation_variance(), dt);
-    rest_.observe(x, dt);
-    if (rest_.at_rest()) {
-      d.acc_sign = 0.0;
-    } else if (cruise_.armed()) {
-      d.acc_sign *= 1.0 - cruise_.probability();
-    }
-  }
-  t_ = t;
-  last_sign_ = d.acc_sign;
-  return d;
-}
-
 HindsightCorrection::HindsightCorrection(const HindsightConfig& config, bool enabled)
     : cfg_(config), enabled_(enabled && config.lag > 0.0) {
   // certain <= sure: a step at `sure` (the weight is 1 beyond it).
@@ -268,12 +242,16 @@ double HindsightCorrection::update(const Motion& newest, double friction,
   Sample& s_new = history_[newest_];
   s_new.m = newest;
   s_new.friction = friction;
-  model.save_state(s_new.state);
+  // The model's state only every kStride samples: a correction replays the
+  // few samples since (the same steps, so the same state bit for bit).
+  if (newest_ % kStride == 0) model.save_state(checkpoints_[newest_ / kStride]);
   size_ = std::min(size_ + 1, kHistory);
   if (size_ > 1) ++pending_;
 
   const double t = newest.t;
   const double still_time = diff.rest().still_time();
+  const double still = diff.rest().still_duration();
+  const double since = diff.cruise().time_since_manoeuvre();
   bool touched = false;  // the model left the newest state
   bool dirty = false;    // the samples after `frontier` are to be stepped again
   std::size_t frontier = 0;
@@ -281,61 +259,74 @@ double HindsightCorrection::update(const Motion& newest, double friction,
     const std::size_t j = index_back(pending_ - 1);
     const Sample& s = history_[j];
     const double back = t - s.m.t;
-    if (back < cfg_.lag && pending_ < kHistory - 1 && !(dirty && back >= cfg_.lag - cfg_.ahead))
+    if (back < cfg_.lag && pending_ < kMaxPending && !(dirty && back >= cfg_.lag - cfg_.ahead))
       break;
     --pending_;
-    Motion m = s.m;
-    bool corrected = false;
-    if (still_time > 0.0 && diff.rest().still_duration() >= back + still_time) {
+    // The sample's corrected sign and motion (built only when it changes).
+    double sign = s.m.acc_sign;
+    bool corrected = false, rest = false;
+    if (still_time > 0.0 && still >= back + still_time) {
       // The encoder has not changed since before this sample: at rest (the
       // rest rule, applied to the samples it now knows were at rest).
-      corrected = m.xd != 0.0 || m.xdd != 0.0 || m.acc_sign != 0.0;
-      m.xd = m.xdd = m.acc_sign = 0.0;
-    } else {
+      corrected = s.m.xd != 0.0 || s.m.xdd != 0.0 || s.m.acc_sign != 0.0;
+      rest = true;
+    } else if (since > back + cfg_.guard) {
       // Close to a manoeuvre the fine channel's polynomial model rings: the
       // causal sign (with the cruise hypothesis) stands.
-      const double since = diff.cruise().time_since_manoeuvre();
-      if (since > back + cfg_.guard) {
-        const double xdd = diff.filter().fine_acceleration_before(back);
-        const double a = std::fabs(xdd);
-        const bool armed = since <= back + diff.cruise().armed_time();
-        const double sure = armed ? cfg_.sure_armed : cfg_.sure;
-        if (a > sure) {  // hindsight can tell (a NaN cannot)
-          const double w = std::min(1.0, (a - sure) * (armed ? inv_span_armed_ : inv_span_));
-          const double sign = xdd > 0.0 ? 1.0 : -1.0;
-          // A sign within 2 % moves the state too little to matter.
-          if (std::fabs(sign - s.m.acc_sign) * w >= 0.02) {
-            m.acc_sign = w * sign + (1.0 - w) * s.m.acc_sign;
-            corrected = true;
-          }
+      const double xdd = diff.filter().fine_acceleration_before(back);
+      const double a = std::fabs(xdd);
+      const bool armed = since <= back + diff.cruise().armed_time();
+      const double sure = armed ? cfg_.sure_armed : cfg_.sure;
+      if (a > sure) {  // hindsight can tell (a NaN cannot)
+        const double w = std::min(1.0, (a - sure) * (armed ? inv_span_armed_ : inv_span_));
+        const double hindsight = xdd > 0.0 ? 1.0 : -1.0;
+        // A sign within 2 % moves the state too little to matter.
+        if (std::fabs(hindsight - s.m.acc_sign) * w >= 0.02) {
+          sign = w * hindsight + (1.0 - w) * s.m.acc_sign;
+          corrected = true;
         }
       }
     }
     if (!corrected && !dirty) continue;
+    if (!touched) model.save_state(now_);  // the newest state, should nothing change
     // While dirty, every sample is stepped again from the corrected path.
     touched = true;
+    Motion m = s.m;
+    if (rest) {
+      m.xd = m.xdd = m.acc_sign = 0.0;
+    } else {
+      m.acc_sign = sign;
+    }
     dirty = step_again(j, m, dirty, model) || dirty;
     frontier = j;
   }
   if (dirty) {
     catch_up(frontier, model);  // the model ends at the newest sample
   } else if (touched) {
-    model.restore_state(history_[newest_].state);
+    model.restore_state(now_);
   }
   return history_[newest_].friction;
 }
 
 // Steps sample j again with the motion m from the state before it (on the
-// corrected path when `dirty`): true when that changed its friction, so that
-// the samples after it must be stepped again. Out of line: rare, and the
-// per-sample decision above stays compact.
+// corrected path when `dirty`, which the model then holds already): true
+// when that changed its friction, so that the samples after it must be
+// stepped again. Out of line: rare, and the per-sample decision above stays
+// compact.
 [[gnu::noinline]] bool HindsightCorrection::step_again(std::size_t j, const Motion& m, bool dirty,
                                                        FrictionDynamics& model) noexcept {
   Sample& s = history_[j];
-  const Sample& before = history_[(j + kHistory - 1) % kHistory];
-  model.restore_state(before.state);
+  const std::size_t before = (j + kHistory - 1) % kHistory;
+  if (!dirty) {
+    // The state before j: the checkpoint at or before it, and the samples
+    // since stepped again as they were.
+    const std::size_t from = before - before % kStride;
+    model.restore_state(checkpoints_[from / kStride]);
+    for (std::size_t k = from + 1; k <= before; ++k)
+      model.step(history_[k].m, history_[k].m.t - history_[k - 1].m.t);
+  }
   // The interval as the estimator formed it: this sample's time less the last one's.
-  const double f = model.step(m, m.t - before.m.t);
+  const double f = model.step(m, m.t - history_[before].m.t);
   const double level = model.sliding_friction();
   const double tolerance = 1e-4 * (std::isfinite(level) ? std::max(level, 1.0) : 1.0);
   const bool changed = std::fabs(f - s.friction) > tolerance;
@@ -343,7 +334,7 @@ double HindsightCorrection::update(const Motion& newest, double friction,
   if (!changed && !dirty) return false;
   s.m = m;
   s.friction = f;
-  model.save_state(s.state);
+  if (j % kStride == 0) model.save_state(checkpoints_[j / kStride]);
   ++resteps_;
   return changed;
 }
@@ -357,7 +348,7 @@ double HindsightCorrection::update(const Motion& newest, double friction,
     Sample& later = history_[k];
     const double t_before = history_[(k + kHistory - 1) % kHistory].m.t;
     later.friction = model.step(later.m, later.m.t - t_before);
-    model.save_state(later.state);
+    if (k % kStride == 0) model.save_state(checkpoints_[k / kStride]);
     ++resteps_;
   }
 }

@@ -35,8 +35,8 @@ inline constexpr double kRestTime = 0.05;
 /// The hindsight correction's settings.
 struct HindsightConfig {
   /// s after each sample, the fine channel's state extrapolated back gives
-  /// that sample's acceleration (0: off). The history holds kHistory - 2
-  /// samples of lag (62 ms at 1 kHz); at higher rates, or with a longer lag,
+  /// that sample's acceleration (0: off). The history holds 59 samples of
+  /// lag (59 ms at 1 kHz); at higher rates, or with a longer lag,
   /// a sample is looked at when it is about to leave the history.
   double lag = 0.05;
   /// |xdd| (rad/s^2) where the sign from hindsight starts to count and where
@@ -184,8 +184,9 @@ class CorrectedDifferentiator {
  public:
   explicit CorrectedDifferentiator(const DifferentiatorConfig& diff = {},
                                    const CorrectionsConfig& corrections = {});
-  /// Differentiator::update, the sign corrected.
-  Derivatives update(double t, double x) noexcept;
+  /// Differentiator::update, the sign corrected. Inline: the estimator's
+  /// step then takes the filter's result in registers.
+  inline Derivatives update(double t, double x) noexcept;
   void reset() noexcept { filter_.reset(); }
 
   const Differentiator& filter() const noexcept { return filter_; }
@@ -203,6 +204,32 @@ class CorrectedDifferentiator {
   double t_ = 0.0;
   double last_sign_ = 0.0;
 };
+
+inline Derivatives CorrectedDifferentiator::update(double t, double x) noexcept {
+  Derivatives d = filter_.update(t, x);
+  if (!d.valid) {
+    d.acc_sign = last_sign_;  // the last estimate as it was given
+    return d;
+  }
+  if (filter_.restarted()) {
+    rest_.restart(x);
+    if (cruise_.enabled()) cruise_.restart(t, x);
+  } else {
+    const double dt = t - t_;
+    if (cruise_.enabled())
+      cruise_.observe(t, x, filter_.acceleration_innovation(),
+                      filter_.acceleration_innovation_variance(), dt);
+    rest_.observe(x, dt);
+    if (rest_.at_rest()) {
+      d.acc_sign = 0.0;
+    } else if (cruise_.armed()) {
+      d.acc_sign *= 1.0 - cruise_.probability();
+    }
+  }
+  t_ = t;
+  last_sign_ = d.acc_sign;
+  return d;
+}
 
 /// Hindsight: steps the model again where the fine channel, `lag` later,
 /// settles sgn(xdd) differently from the sign the model was given: below
@@ -233,11 +260,15 @@ class HindsightCorrection {
   struct Sample {
     Motion m;
     double friction = 0.0;
-    DynamicsState state;
   };
-  // 64 samples (22 kB with the model's state): the deployed lag at 1 kHz
-  // and the look-ahead, within a core's first-level cache.
+  // 64 samples: the deployed lag at 1 kHz and the look-ahead, with the
+  // model's state every kStride samples (about 6 kB in all, within a core's
+  // first-level cache).
   static constexpr std::size_t kHistory = 64;
+  static constexpr std::size_t kStride = 4;
+  // A sample is looked at at the latest when this many are pending: the
+  // checkpoint before the one before it is still in the history.
+  static constexpr std::size_t kMaxPending = kHistory - kStride;
   bool step_again(std::size_t j, const Motion& m, bool dirty, FrictionDynamics& model) noexcept;
   void catch_up(std::size_t from, FrictionDynamics& model) noexcept;
   std::size_t index_back(std::size_t back) const noexcept {
@@ -248,6 +279,10 @@ class HindsightCorrection {
   bool enabled_ = false;
   double inv_span_ = 0.0, inv_span_armed_ = 0.0;  // 1 / (certain - sure)
   std::array<Sample, kHistory> history_{};
+  // The state after the samples at index 0, kStride, 2 kStride, ...; and the
+  // newest state while a correction is tried.
+  std::array<DynamicsState, kHistory / kStride> checkpoints_{};
+  DynamicsState now_{};
   // newest_: the newest sample; the oldest `pending_` of the newest are not
   // yet past lag. The sample before the oldest pending one is kept too: its
   // state is where a correction steps again from.
