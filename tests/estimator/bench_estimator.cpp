@@ -187,6 +187,8 @@ BENCHMARK(BM_ModelStepOnlyPerTendon)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);
 
+// The plain filter (the four Kalman channels and their sign), without the
+// corrections (corrections.hpp), which BM_EstimatorStep includes.
 void BM_DifferentiatorOnly(benchmark::State& state) {
   const Samples s = encoder_samples(1 << 16);
   Differentiator d;
