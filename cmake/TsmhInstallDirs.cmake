@@ -44,6 +44,22 @@ function(tsmh_install_library target)
   endif()
 endfunction()
 
+# tsmh_add_library(target INCLUDE_DIR dir HEADERS folder [ALIASES alias...]
+#                  SOURCES src...): one of the project's libraries, written
+# once: its sources, the names it is linked by, `dir` as its public include
+# directory (the installed include/tsmh/ once installed), and its install
+# with the header folder dir/folder (tsmh_install_library).
+function(tsmh_add_library target)
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "INCLUDE_DIR;HEADERS" "ALIASES;SOURCES")
+  add_library(${target} ${arg_SOURCES})
+  foreach(alias IN LISTS arg_ALIASES)
+    add_library(${alias} ALIAS ${target})
+  endforeach()
+  target_include_directories(${target} PUBLIC $<BUILD_INTERFACE:${arg_INCLUDE_DIR}>
+    $<INSTALL_INTERFACE:${TSMH_INSTALL_INCLUDEDIR}>)
+  tsmh_install_library(${target} ${arg_INCLUDE_DIR}/${arg_HEADERS})
+endfunction()
+
 # tsmh_install_programs(target...): installs executables into bin/.
 function(tsmh_install_programs)
   install(TARGETS ${ARGN} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)

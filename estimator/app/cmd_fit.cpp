@@ -15,8 +15,7 @@
 #include "estimator/model_io.hpp"
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
-#include "free_motion_options.hpp"
-#include "master_scale_options.hpp"
+#include "fit_input_options.hpp"
 #include "output_checks.hpp"
 #include "progress_line.hpp"
 
@@ -24,19 +23,13 @@ namespace tsmh::tsm_cli {
 namespace {
 
 struct FitCliOptions {
-  std::string data;
-  std::optional<double> radius;
+  FitInputCliOptions in;
   std::string output;
   std::string report;
   std::string model = "paper";
-  std::uint64_t seed = 1;
   int starts = 4;
-  int threads = 0;
   double block_s = 2.0;
-  std::string derivatives = "auto";
   std::string method = "lm";
-  FreeMotionCliOptions free_motion;
-  MasterScaleCliOptions master;
 };
 
 std::string progress_text(const estimator::FitProgress& p) {
@@ -53,19 +46,19 @@ void run_fit_command(const FitCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
   check_outputs(
       {{"--output", o.output, OutputKind::kFile}, {"--report", o.report, OutputKind::kFolder}},
-      {{"the data", o.data}, model_input("--model", o.model), key_input(ctx.lcm_log)});
-  const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
+      {{"the data", o.in.data}, model_input("--model", o.model), key_input(ctx.lcm_log)});
+  const auto loaded = load_fit_recording(ctx, o.in.data, o.in.radius, o.in.free_motion);
   const auto& rec = loaded.recording;
   const auto initial = estimator::load_model(o.model);
-  const auto master = master_scale(o.master);
+  const auto master = master_scale(o.in.master);
 
   estimator::FitWorkflowOptions wo;
-  wo.fit.seed = o.seed;
+  wo.fit.seed = o.in.seed;
   wo.fit.starts = o.starts;
-  wo.fit.threads = o.threads;
+  wo.fit.threads = o.in.threads;
   wo.split.block_s = o.block_s;
   wo.fit.method = o.method;
-  wo.derivatives = estimator::derivatives_from_name(o.derivatives);
+  wo.derivatives = estimator::derivatives_from_name(o.in.derivatives);
   wo.master = master;
   ProgressLine line("tsm fit");
   wo.fit.progress = [&](const estimator::FitProgress& p) { line.update(progress_text(p)); };
@@ -116,41 +109,27 @@ void add_fit_command(CLI::App& app, Context& ctx) {
   auto* cmd = app.add_subcommand(
       "fit",
       "Identify the friction model's parameters from recorded data (docs/identification.md)");
-  cmd->add_option("data", opts->data, "Recorded data: CSV (t, x_in, tau_in, tau_out) or LCM log")
-      ->required();
-  cmd->add_option("--radius", opts->radius,
-                  "Pulley radius in m (default: the file's '# radius_m:' comment)")
-      ->check(CLI::PositiveNumber);
+  add_recording_options(*cmd, opts->in);
   cmd->add_option("--output", opts->output, "Params file to write (YAML, read by simulate/gap)")
       ->required();
   cmd->add_option("--report", opts->report, "Directory for report.json and plots");
   cmd->add_option("--model", opts->model,
                   "Model to fit and its starting values: a preset (paper, dahl, ...) or a params "
                   "file (default paper)");
-  cmd->add_option("--seed", opts->seed, "Seed of the optimiser's random streams (default 1)");
   cmd->add_option(
          "--starts", opts->starts,
          "Starts: lm, the screened candidates polished on full-rate data; nlopt, independent "
          "starts (default 4)")
       ->check(CLI::Range(1, 64));
-  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(0, 64));
   cmd->add_option("--block", opts->block_s,
                   "Length of the alternating train/validation blocks, s (default 2)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--derivatives", opts->derivatives,
-                  "Velocity/acceleration for the fit: auto (the file's xd_in/xdd_in, else "
-                  "offline), offline (zero-phase smoother of x_in), deployed (the online "
-                  "differentiator)")
-      ->check(CLI::IsMember({"auto", "offline", "deployed"}));
   cmd->add_option("--method", opts->method,
                   "Optimiser: lm (informed multi-start + Levenberg-Marquardt, default; for a "
                   "model with distributed_slip: separable), separable (the weights solved "
                   "exactly, the elements' spread searched) or nlopt (MLSL + BOBYQA)")
       ->check(CLI::IsMember({"lm", "separable", "nlopt"}));
-  add_free_motion_options(*cmd, opts->free_motion);
-  add_master_scale_options(*cmd, opts->master);
-  add_lcm_log_options(*cmd, ctx.lcm_log);
+  add_fit_input_options(*cmd, opts->in, ctx);
   cmd->callback([opts, &ctx] { run_fit_command(*opts, ctx); });
 }
 

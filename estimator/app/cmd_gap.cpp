@@ -16,8 +16,7 @@
 #include "estimator/model_io.hpp"
 #include "estimator/plotting.hpp"
 #include "estimator/staged_output.hpp"
-#include "free_motion_options.hpp"
-#include "master_scale_options.hpp"
+#include "fit_input_options.hpp"
 #include "output_checks.hpp"
 #include "progress_line.hpp"
 
@@ -25,38 +24,32 @@ namespace tsmh::tsm_cli {
 namespace {
 
 struct GapCliOptions {
-  std::string data;
-  std::optional<double> radius;
+  FitInputCliOptions in;
   std::string output;
   std::string base = "paper";
-  std::uint64_t seed = 1;
   double margin = 0.10;
   int max_effects = 4;
   std::vector<std::string> candidates;
-  int threads = 0;
-  std::string derivatives = "auto";
-  FreeMotionCliOptions free_motion;
-  MasterScaleCliOptions master;
 };
 
 void run_gap_command(const GapCliOptions& o, const Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
   check_outputs({{"--output", o.output, OutputKind::kFolder}},
-                {{"the data", o.data}, model_input("--base", o.base), key_input(ctx.lcm_log)});
-  const auto loaded = load_fit_recording(ctx, o.data, o.radius, o.free_motion);
+                {{"the data", o.in.data}, model_input("--base", o.base), key_input(ctx.lcm_log)});
+  const auto loaded = load_fit_recording(ctx, o.in.data, o.in.radius, o.in.free_motion);
   const auto& rec = loaded.recording;
   const auto base = estimator::load_model(o.base);
-  const auto master = master_scale(o.master);
+  const auto master = master_scale(o.in.master);
   estimator::StagedDirectory dir(o.output);  // fails early on an unusable path
 
   estimator::GapOptions go;
-  go.base_fit.seed = o.seed;
-  go.base_fit.threads = o.threads;
-  go.threads = o.threads;
+  go.base_fit.seed = o.in.seed;
+  go.base_fit.threads = o.in.threads;
+  go.threads = o.in.threads;
   go.margin = o.margin;
   go.max_effects = o.max_effects;
   go.candidates = o.candidates;
-  go.derivatives = estimator::derivatives_from_name(o.derivatives);
+  go.derivatives = estimator::derivatives_from_name(o.in.derivatives);
   ProgressLine line("tsm gap");
   go.progress = [&](const std::string& s) { line.update(s); };
   const estimator::GapResult g = estimator::find_model_gaps(rec, *base, o.base, go);
@@ -163,17 +156,12 @@ void add_gap_command(CLI::App& app, Context& ctx) {
       "gap",
       "Find where the model and the measurement disagree and name the missing effect "
       "(docs/model-gap.md)");
-  cmd->add_option("data", opts->data, "Recorded data: CSV (t, x_in, tau_in, tau_out) or LCM log")
-      ->required();
-  cmd->add_option("--radius", opts->radius,
-                  "Pulley radius in m (default: the file's '# radius_m:' comment)")
-      ->check(CLI::PositiveNumber);
+  add_recording_options(*cmd, opts->in);
   cmd->add_option("--output", opts->output,
                   "Directory for report.json, summary.txt, params.yaml and plots")
       ->required();
   cmd->add_option("--base", opts->base,
                   "Base model: a tsm preset (paper, dahl) or a tsm params file (default paper)");
-  cmd->add_option("--seed", opts->seed, "Seed of the optimiser's random streams (default 1)");
   cmd->add_option("--margin", opts->margin,
                   "Validation-RMSE reduction an effect must bring to be accepted (default 0.10)")
       ->check(CLI::Range(0.0, 1.0));
@@ -187,15 +175,7 @@ void add_gap_command(CLI::App& app, Context& ctx) {
                   "distributed_slip (with its tension copies when tension_dependent is named "
                   "too), load_copies, tension_copies; a family brings all its forms")
       ->delimiter(',');
-  cmd->add_option("--threads", opts->threads, "Worker threads (default: all cores)")
-      ->check(CLI::Range(0, 64));
-  cmd->add_option("--derivatives", opts->derivatives,
-                  "Velocity/acceleration: auto (the file's xd_in/xdd_in, else offline), offline "
-                  "(zero-phase smoother of x_in), deployed (the online differentiator)")
-      ->check(CLI::IsMember({"auto", "offline", "deployed"}));
-  add_free_motion_options(*cmd, opts->free_motion);
-  add_master_scale_options(*cmd, opts->master);
-  add_lcm_log_options(*cmd, ctx.lcm_log);
+  add_fit_input_options(*cmd, opts->in, ctx);
   cmd->callback([opts, &ctx] { run_gap_command(*opts, ctx); });
 }
 

@@ -133,17 +133,20 @@ Recording recording_from_table(const Table& table, std::optional<double> radius_
     throw DataError(table.source, 0, "", "no data rows (the file has only a header)");
   check_time_column(table, rec.t);
   if (auto w = time_unit_warning(rec.t); !w.empty()) rec.warnings.push_back(std::move(w));
-  if (need.radius && !std::isfinite(rec.radius_m))
-    throw DataError(table.source, 0, "",
-                    "no pulley radius: add '# radius_m: R' to the file or pass --radius");
-  if (need.tau_in && rec.tau_in.empty()) {
-    throw DataError(table.source, 0, "tau_in",
-                    "required column is missing (give tau_in, or T1 and T3 with a radius)");
-  }
-  if (need.tau_out && rec.tau_out.empty())
-    throw DataError(table.source, 0, "tau_out",
-                    "required column is missing (measured distal torque)");
+  check_requirements(rec, need);
   return rec;
+}
+
+void check_requirements(const Recording& rec, const RecordingRequirements& need) {
+  if (need.radius && !(std::isfinite(rec.radius_m) && rec.radius_m > 0.0))
+    throw DataError(rec.source, 0, "",
+                    "no pulley radius: add '# radius_m: R' to the file or pass --radius");
+  if (need.tau_in && !rec.has_tau_in())
+    throw DataError(rec.source, 0, "tau_in",
+                    "required column is missing (give tau_in, or T1 and T3 with a radius)");
+  if (need.tau_out && !rec.has_tau_out())
+    throw DataError(rec.source, 0, "tau_out",
+                    "required column is missing (measured distal torque)");
 }
 
 Table recording_to_table(const Recording& rec) {

@@ -26,12 +26,23 @@ Term& TsmModelSpec::add(TermKind kind) {
   return terms.back();
 }
 
-TsmModelSpec paper_spec() {
+namespace {
+
+// The Bouc-Wen core the paper identified (theta, gamma, sigma), with the
+// state's exponent n: 2 in the paper's model, 1 for Dahl's.
+TsmModelSpec paper_core(double n) {
   TsmModelSpec s;
   s.theta = 15.5181;
   s.gamma = 9.5651;
-  s.n = 2.0;
+  s.n = n;
   s.sigma = 1.0;
+  return s;
+}
+
+}  // namespace
+
+TsmModelSpec paper_spec() {
+  TsmModelSpec s = paper_core(2.0);
   s.add(TermKind::kCoulomb).p = {1.038};
   s.add(TermKind::kDirectionAsymmetry).p = {0.8904};
   s.add(TermKind::kStribeck).p = {1.0978, 6.1264};
@@ -47,11 +58,7 @@ TsmModelSpec paper_memory_spec() {
 }
 
 TsmModelSpec dahl_spec() {
-  TsmModelSpec s;
-  s.theta = 15.5181;
-  s.gamma = 9.5651;
-  s.n = 1.0;
-  s.sigma = 1.0;
+  TsmModelSpec s = paper_core(1.0);
   s.add(TermKind::kCoulomb).p = {1.0};
   return s;
 }

@@ -75,15 +75,7 @@ int count_reversals(std::span<const Motion> motion, double speed) {
 FitData prepare_fit_data(const Recording& rec, const SplitConfig& split,
                          const DataRequirements& need, const DifferentiatorConfig& diff,
                          FitDerivatives derivatives, const OfflineDerivativeConfig& offline) {
-  if (!rec.has_tau_in())
-    throw DataError(rec.source, 0, "tau_in",
-                    "required column is missing (give tau_in, or T1 and T3 with a radius)");
-  if (!rec.has_tau_out())
-    throw DataError(rec.source, 0, "tau_out",
-                    "required column is missing (measured distal torque)");
-  if (!(rec.radius_m > 0.0) || !std::isfinite(rec.radius_m))
-    throw DataError(rec.source, 0, "",
-                    "no pulley radius: add '# radius_m: R' to the file or pass --radius");
+  check_requirements(rec, {.tau_in = true, .tau_out = true, .radius = true});
   if (rec.x_in.size() != rec.size() || rec.tau_in.size() != rec.size() ||
       rec.tau_out.size() != rec.size())
     throw DataError(rec.source, 0, "", "columns t, x_in, tau_in, tau_out differ in length");

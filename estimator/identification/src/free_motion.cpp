@@ -41,12 +41,7 @@ void check_parameter(const Recording& rec, const std::optional<double>& v, const
 }  // namespace
 
 FreeMotionData free_motion_recording(const Recording& rec, const FreeMotionConfig& config) {
-  if (!rec.has_tau_in())
-    throw DataError(rec.source, 0, "tau_in",
-                    "required column is missing (give tau_in, or T1 and T3 with a radius)");
-  if (!(rec.radius_m > 0.0) || !std::isfinite(rec.radius_m))
-    throw DataError(rec.source, 0, "",
-                    "no pulley radius: add '# radius_m: R' to the file or pass --radius");
+  check_requirements(rec, {.tau_in = true, .radius = true});
   check_parameter(rec, config.joint_inertia, "--joint-inertia");
   check_parameter(rec, config.joint_damping, "--joint-damping");
   for (std::size_t i = 0; i < rec.size(); ++i) {

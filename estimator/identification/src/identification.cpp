@@ -567,6 +567,19 @@ ParameterMap search_map(const FrictionModel& initial, const FitData& data, const
   return map;
 }
 
+// What both optimisers search and score: the free parameters, the
+// full-rate data the result is judged on, and the decimated data of the
+// global stage.
+struct Search {
+  ParameterMap map;
+  Scored full;
+  Scored coarse;
+};
+
+Search make_search(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
+  return {search_map(initial, data, o), full_rate(data), decimated(data, o.global_sample_period_s)};
+}
+
 int worker_threads(const FitOptions& o) {
   const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
   return std::max(1, o.threads > 0 ? o.threads : hw);
@@ -734,9 +747,8 @@ std::vector<int> choose_distinct(const std::vector<Screened>& screened, int coun
 
 FitResult identify_lm(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
   const auto t_start = Clock::now();
-  const ParameterMap map = search_map(initial, data, o);
-  const Scored full = full_rate(data);
-  const Scored coarse = decimated(data, o.global_sample_period_s);
+  const Search search = make_search(initial, data, o);
+  const auto& [map, full, coarse] = search;
   const double noise = noise_floor(data.measured);
   const double alpha = o.prior_weight * (std::isfinite(noise) && noise > 0.0 ? noise * noise : 1.0);
   const int threads = worker_threads(o);
@@ -907,9 +919,8 @@ StartOutcome run_nlopt_start(int s, const StartPlan& plan, const FrictionModel& 
 
 FitResult identify_nlopt(const FrictionModel& initial, const FitData& data, const FitOptions& o) {
   const auto t_start = Clock::now();
-  const ParameterMap map = search_map(initial, data, o);
-  const Scored full = full_rate(data);
-  const Scored coarse = decimated(data, o.global_sample_period_s);
+  const Search search = make_search(initial, data, o);
+  const auto& [map, full, coarse] = search;
   const std::vector<StartPlan> plans = nlopt_plans(map, o);
   const int starts = static_cast<int>(plans.size());
 

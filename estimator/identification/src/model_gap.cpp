@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "estimator/fit_workflow.hpp"
 #include "estimator/separable_fit.hpp"
 #include "estimator/simulate.hpp"
 #include "number_text.hpp"
@@ -1299,14 +1300,6 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
 
 namespace {
 
-nlohmann::json gap_json(const ErrorMetrics& m) {
-  return nlohmann::json{{"rmse", m.rmse},
-                        {"p2p", m.p2p},
-                        {"fit_percent", m.fit_percent},
-                        {"bias", m.bias},
-                        {"samples", m.samples}};
-}
-
 nlohmann::json regimes_json(const std::vector<RegimeError>& rs) {
   nlohmann::json a = nlohmann::json::array();
   for (const auto& r : rs) {
@@ -1350,7 +1343,7 @@ nlohmann::json effects_json(const std::vector<EffectFound>& found) {
                        {"confident", e.confounded_with.empty()},
                        {"where", e.where},
                        {"meaning", e.meaning},
-                       {"gap_after", gap_json(e.gap_after)},
+                       {"gap_after", to_json(e.gap_after)},
                        {"gain", e.gain},
                        {"parameters", params}});
   }
@@ -1365,7 +1358,7 @@ nlohmann::json rounds_json(const std::vector<GapRound>& all) {
       trials.push_back({{"name", t.name},
                         {"family", t.family},
                         {"explained_first_order", t.explained},
-                        {"validation", gap_json(t.validation)},
+                        {"validation", to_json(t.validation)},
                         {"gain", t.gain},
                         {"delta_bic", t.delta_bic},
                         {"z", t.z},
@@ -1381,7 +1374,7 @@ nlohmann::json rounds_json(const std::vector<GapRound>& all) {
                         {"accepted_gain_after_rival", rc.winner_gain_after},
                         {"accepted_still_qualifies", rc.winner_still_qualifies}});
     rounds.push_back(
-        {{"gap_before", gap_json(r.before)}, {"candidates", trials}, {"rivals", rivals}});
+        {{"gap_before", to_json(r.before)}, {"candidates", trials}, {"rivals", rivals}});
   }
   return rounds;
 }
@@ -1423,9 +1416,9 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
     warnings.push_back(c.warning);
   return {{"tool", "tsm gap"},
           {"base", g.base_name},
-          {"gap_base", gap_json(g.gap_base)},
+          {"gap_base", to_json(g.gap_base)},
           {"effects", effects_json(g.effects)},
-          {"gap_final", gap_json(g.gap_final)},
+          {"gap_final", to_json(g.gap_final)},
           {"data",
            {{"source", g.data.source},
             {"samples", g.data.size()},

@@ -49,6 +49,11 @@ struct RecordingRequirements {
   bool radius = false;   ///< a radius must be known (file comment or override)
 };
 
+/// Throws DataError (the recording's source, no line) for the first of
+/// `need` that `rec` does not meet, in the same words wherever a recording is
+/// checked: read from a file here, or built by a program (fit, free motion).
+void check_requirements(const Recording& rec, const RecordingRequirements& need);
+
 /// Builds a Recording from a table read from the CSV contract. `radius_override`
 /// (from --radius) wins over the file's "# radius_m:" comment. When tau_in is
 /// absent but T1 and T3 are present, tau_in = R (T1 - T3). Validates time
