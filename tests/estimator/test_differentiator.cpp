@@ -209,6 +209,30 @@ TEST(Differentiator, AccelerationSignIsZeroAtRestAndAveragesZeroAtConstantVeloci
   }
 }
 
+// The corrections act in CorrectedDifferentiator alone: after a stop the
+// plain filter's sign still follows its ringing acceleration estimate, and
+// the corrected one is exactly 0 once the encoder has been still for the
+// rest time; while moving the two are the same sign.
+TEST(Differentiator, ThePlainFilterAppliesNoCorrection) {
+  Differentiator plain;
+  CorrectedDifferentiator corrected;
+  int plain_nonzero_at_rest = 0, corrected_nonzero_at_rest = 0, differ_moving = 0;
+  for (int i = 0; i < 12000; ++i) {
+    const double t = i * 1e-3;
+    const double x = quantise(i < 10000 ? 0.3 * t : 3.0);
+    const Derivatives p = plain.update(t, x);
+    const Derivatives c = corrected.update(t, x);
+    if (t > 10.0 + corrected.rest().still_time() + 0.01 && t < 10.3) {
+      plain_nonzero_at_rest += p.acc_sign != 0.0;
+      corrected_nonzero_at_rest += c.acc_sign != 0.0;
+    }
+    if (t > 1.0 && t < 9.0) differ_moving += p.acc_sign != c.acc_sign || p.xdd != c.xdd;
+  }
+  EXPECT_GT(plain_nonzero_at_rest, 100);
+  EXPECT_EQ(corrected_nonzero_at_rest, 0);
+  EXPECT_EQ(differ_moving, 0);
+}
+
 // The rest time: automatic by default, kRestTime at kReferenceQuantum and
 // with the cube root of the quantum elsewhere; a value given is used as is,
 // 0 turns it off.
