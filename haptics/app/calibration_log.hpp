@@ -16,6 +16,7 @@
 #include "haptics/drift_advice.hpp"
 #include "haptics/recalibration.hpp"
 #include "realtime/joint_names.hpp"
+#include "server_say.hpp"
 
 namespace tsmh::haptic_server {
 
@@ -109,13 +110,10 @@ class CalibrationLog {
   }
 
   __attribute__((format(printf, 2, 3))) void say(const char* fmt, ...) {
-    if (live_) std::fputs("\r\033[K", stderr);
-    std::fputs("haptic-server: ", stderr);
     va_list ap;
     va_start(ap, fmt);
-    std::vfprintf(stderr, fmt, ap);
+    vsay(live_, fmt, ap);
     va_end(ap);
-    std::fputc('\n', stderr);
   }
 
   haptics::Recalibration& calib_;

@@ -47,6 +47,7 @@
 #include "realtime/clock.hpp"
 #include "realtime/joint_names.hpp"
 #include "request_recalibration.hpp"
+#include "server_say.hpp"
 #include "tsmh/cli_words.hpp"
 #include "tsmh/version.hpp"
 
@@ -160,13 +161,11 @@ class EventLog {
 
  private:
   __attribute__((format(printf, 2, 3))) void say(const char* fmt, ...) {
-    clear();
-    std::fputs("haptic-server: ", stderr);
     va_list args;
     va_start(args, fmt);
-    std::vfprintf(stderr, fmt, args);
+    haptic_server::vsay(live_shown_, fmt, args);
     va_end(args);
-    std::fputc('\n', stderr);
+    live_shown_ = false;
   }
 
   // No fresh SLAVE_STATE for a second: say so at once (the operator otherwise
@@ -299,9 +298,10 @@ void confine_lcm_device(const haptics::ServerConfig& cfg, const bridge::LinkSecu
   const std::string url =
       bridge::resolve_lcm_url(url_node && url_node.IsScalar() ? url_node.as<std::string>() : "");
   if (!security.key && !link.insecure && !bridge::is_host_local_url(url))
-    throw bridge::LinkKeyError("the lcm master device's URL '" + url +
-                               "' is reachable from other hosts and there is no link key (create "
-                               "one with `tsm-link keygen`, or pass --insecure on an isolated network)");
+    throw bridge::LinkKeyError(
+        "the lcm master device's URL '" + url +
+        "' is reachable from other hosts and there is no link key (create "
+        "one with `tsm-link keygen`, or pass --insecure on an isolated network)");
   if (const auto port = bridge::host_only_udpm_port(url)) {
     if (bridge::restrict_udp_port_to_host(*port) == 0)
       throw DeviceError("lcm: cannot confine the master device's LCM socket for '" + url +

@@ -33,36 +33,30 @@ class MessageSigner;  // bridge/link_auth.hpp
 template <class Sample>
 struct SampleTraits;
 
-template <>
-struct SampleTraits<SlaveStateSample> {
-  using Message = tsmh::slave_state_t;
-  using Limits = SlaveStateLimits;
-  static constexpr Channel channel = Channel::kSlaveState;
+/// One sample type's message, limits and channel, the parts of its SampleTraits.
+template <class MessageT, class LimitsT, Channel kChannel>
+struct SampleTraitsOf {
+  using Message = MessageT;
+  using Limits = LimitsT;
+  static constexpr Channel channel = kChannel;
 };
+
 template <>
-struct SampleTraits<SlaveTruthSample> {
-  using Message = tsmh::slave_truth_t;
-  using Limits = SlaveTruthLimits;
-  static constexpr Channel channel = Channel::kSlaveTruth;
-};
+struct SampleTraits<SlaveStateSample>
+    : SampleTraitsOf<tsmh::slave_state_t, SlaveStateLimits, Channel::kSlaveState> {};
 template <>
-struct SampleTraits<MasterCommandSample> {
-  using Message = tsmh::master_command_t;
-  using Limits = MasterCommandLimits;
-  static constexpr Channel channel = Channel::kMasterCommand;
-};
+struct SampleTraits<SlaveTruthSample>
+    : SampleTraitsOf<tsmh::slave_truth_t, SlaveTruthLimits, Channel::kSlaveTruth> {};
 template <>
-struct SampleTraits<HapticStatusSample> {
-  using Message = tsmh::haptic_status_t;
-  using Limits = HapticStatusLimits;
-  static constexpr Channel channel = Channel::kHapticStatus;
-};
+struct SampleTraits<MasterCommandSample>
+    : SampleTraitsOf<tsmh::master_command_t, MasterCommandLimits, Channel::kMasterCommand> {};
 template <>
-struct SampleTraits<CalibrationRequestSample> {
-  using Message = tsmh::calibration_request_t;
-  using Limits = CalibrationRequestLimits;
-  static constexpr Channel channel = Channel::kCalibrationRequest;
-};
+struct SampleTraits<HapticStatusSample>
+    : SampleTraitsOf<tsmh::haptic_status_t, HapticStatusLimits, Channel::kHapticStatus> {};
+template <>
+struct SampleTraits<CalibrationRequestSample>
+    : SampleTraitsOf<tsmh::calibration_request_t, CalibrationRequestLimits,
+                     Channel::kCalibrationRequest> {};
 
 // Sample -> message (copies num_joints entries of each array; receive_ns is not sent).
 void to_message(const SlaveStateSample& s, tsmh::slave_state_t& m);

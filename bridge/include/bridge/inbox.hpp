@@ -139,10 +139,7 @@ class Inbox final : public InboxBase {
   realtime::LatestValue<Sample> cell_;
 };
 
-extern template class Inbox<SlaveStateSample>;
-extern template class Inbox<SlaveTruthSample>;
-extern template class Inbox<MasterCommandSample>;
-extern template class Inbox<HapticStatusSample>;
-extern template class Inbox<CalibrationRequestSample>;
+// The members not defined above are compiled in inbox.cpp, once for each sample
+// type of SampleTraits (codec.hpp).
 
 }  // namespace tsmh::bridge

@@ -114,10 +114,7 @@ class Outbox final : public OutboxBase {
   std::vector<std::uint8_t> bytes_;
 };
 
-extern template class Outbox<SlaveStateSample>;
-extern template class Outbox<SlaveTruthSample>;
-extern template class Outbox<MasterCommandSample>;
-extern template class Outbox<HapticStatusSample>;
-extern template class Outbox<CalibrationRequestSample>;
+// The members not defined above are compiled in outbox.cpp, once for each sample
+// type of SampleTraits (codec.hpp).
 
 }  // namespace tsmh::bridge

@@ -5,17 +5,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "field_checks.hpp"
+
 namespace tsmh::virtual_tissue_slave {
 
 void validate(const CommandGateParams& p) {
-  auto require = [](bool ok, const char* field, const char* why) {
-    if (!ok) throw std::invalid_argument(std::string("command gate field '") + field + "' " + why);
-  };
-  require(std::isfinite(p.timeout_s) && p.timeout_s > 0, "timeout_s", "must be > 0");
-  require(std::isfinite(p.max_velocity_rad_s) && p.max_velocity_rad_s > 0, "max_velocity_rad_s",
-          "must be > 0");
-  require(std::isfinite(p.min_rad) && std::isfinite(p.max_rad) && p.min_rad < p.max_rad, "min_rad",
-          "must be finite and below max_rad");
+  const FieldChecks check("command gate");
+  check.positive(p.timeout_s, "timeout_s");
+  check.positive(p.max_velocity_rad_s, "max_velocity_rad_s");
+  check.require(std::isfinite(p.min_rad) && std::isfinite(p.max_rad) && p.min_rad < p.max_rad,
+                "min_rad", "must be finite and below max_rad");
 }
 
 CommandGate::CommandGate(const CommandGateParams& params,

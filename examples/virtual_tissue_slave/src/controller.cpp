@@ -6,31 +6,25 @@
 #include <stdexcept>
 #include <string>
 
+#include "field_checks.hpp"
+
 namespace tsmh::virtual_tissue_slave {
 
 void validate(const ControllerParams& p) {
-  auto require = [](bool ok, const char* field, const char* why) {
-    if (!ok) throw std::invalid_argument(std::string("controller field '") + field + "' " + why);
-  };
-  auto non_negative = [&](double v, const char* field) {
-    require(std::isfinite(v) && v >= 0, field, "must be >= 0");
-  };
-  auto positive = [&](double v, const char* field) {
-    require(std::isfinite(v) && v > 0, field, "must be > 0");
-  };
-  non_negative(p.kp, "kp");
-  non_negative(p.kd, "kd");
-  positive(p.velocity_filter_hz, "velocity_filter_hz");
-  non_negative(p.backlash_initial_rad, "backlash_initial_rad");
-  non_negative(p.backlash_max_rad, "backlash_max_rad");
-  require(p.backlash_initial_rad <= p.backlash_max_rad, "backlash_initial_rad",
-          "must be <= backlash_max_rad");
-  non_negative(p.adapt_gain, "adapt_gain");
-  positive(p.switch_width_rad, "switch_width_rad");
-  positive(p.adapt_velocity, "adapt_velocity");
-  non_negative(p.output_kp, "output_kp");
-  non_negative(p.output_ki, "output_ki");
-  non_negative(p.integral_limit_rad, "integral_limit_rad");
+  const FieldChecks check("controller");
+  check.non_negative(p.kp, "kp");
+  check.non_negative(p.kd, "kd");
+  check.positive(p.velocity_filter_hz, "velocity_filter_hz");
+  check.non_negative(p.backlash_initial_rad, "backlash_initial_rad");
+  check.non_negative(p.backlash_max_rad, "backlash_max_rad");
+  check.require(p.backlash_initial_rad <= p.backlash_max_rad, "backlash_initial_rad",
+                "must be <= backlash_max_rad");
+  check.non_negative(p.adapt_gain, "adapt_gain");
+  check.positive(p.switch_width_rad, "switch_width_rad");
+  check.positive(p.adapt_velocity, "adapt_velocity");
+  check.non_negative(p.output_kp, "output_kp");
+  check.non_negative(p.output_ki, "output_ki");
+  check.non_negative(p.integral_limit_rad, "integral_limit_rad");
 }
 
 JointController::JointController(const ControllerParams& params) : params_(params) {

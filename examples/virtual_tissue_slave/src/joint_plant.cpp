@@ -4,26 +4,19 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "field_checks.hpp"
+
 namespace tsmh::virtual_tissue_slave {
 namespace {
 
-void require(bool ok, const JointParams& p, const char* field, const char* why) {
-  if (!ok) throw std::invalid_argument("joint '" + p.name + "': field '" + field + "' " + why);
-}
-
 const JointParams& validated(const JointParams& p) {
-  auto positive = [&](double v, const char* field) {
-    require(std::isfinite(v) && v > 0, p, field, "must be > 0");
-  };
-  auto non_negative = [&](double v, const char* field) {
-    require(std::isfinite(v) && v >= 0, p, field, "must be >= 0");
-  };
-  positive(p.radius_m, "radius_m");
-  positive(p.input_inertia, "input_inertia");
-  positive(p.output_inertia, "output_inertia");
-  positive(p.motor_torque_limit, "motor_torque_limit");
-  non_negative(p.input_damping, "input_damping");
-  non_negative(p.output_damping, "output_damping");
+  const FieldChecks check("joint '" + p.name + "':");
+  check.positive(p.radius_m, "radius_m");
+  check.positive(p.input_inertia, "input_inertia");
+  check.positive(p.output_inertia, "output_inertia");
+  check.positive(p.motor_torque_limit, "motor_torque_limit");
+  check.non_negative(p.input_damping, "input_damping");
+  check.non_negative(p.output_damping, "output_damping");
   validate(p.tissue);
   return p;
 }

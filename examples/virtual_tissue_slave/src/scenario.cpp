@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string>
+#include <string_view>
 
 namespace tsmh::virtual_tissue_slave {
 namespace {
@@ -48,67 +50,65 @@ double excitation(double t, int joint) {
               0.1 * std::sin(kTwoPi * 1.37 * t + 2.0 + phase));
 }
 
+// The scenarios, in the order they are listed: each one's defaults.
+struct ScenarioDefaults {
+  std::string_view name;
+  ScenarioKind kind;
+  double duration_s;
+  std::string_view tissue;
+  double surface_rad;
+  std::string_view description;
+};
+
+constexpr ScenarioDefaults kScenarios[] = {
+    {"sine", ScenarioKind::kSine, 30.0, "soft", 0.6,
+     "0.8 rad sines (joint1 0.5 Hz, joint2 0.4 Hz) as in the paper's Fig. 2/8/9; "
+     "soft tissue at 0.6 rad, touched lightly at the top of each cycle"},
+    {"multisine", ScenarioKind::kMultisine, 60.0, "soft", 0.5,
+     "sum of four sines (0.13-2.3 Hz, up to 0.8 rad): many speeds and accelerations; "
+     "soft tissue at 0.5 rad"},
+    {"palpate", ScenarioKind::kPalpate, 40.0, "nodule", 0.2,
+     "press the nodule tissue (surface 0.2 rad) every 5 s, alternately gently "
+     "(0.08 rad, soft layer) and deeply (0.3 rad, onto the inclusion)"},
+    {"chirp", ScenarioKind::kChirp, 60.0, "none", 0.6,
+     "0.5 rad chirp 0.1 -> 1.5 Hz over 30 s, repeated; free motion"},
+    {"excite", ScenarioKind::kExcite, 40.0, "none", 0.6,
+     "identification: a three-sine mix (0.23-1.4 Hz) whose amplitude steps through 0.05, "
+     "0.15, 0.4 and 0.8 rad every 10 s, so fits see small strokes as well as large; free motion"},
+    {"identify", ScenarioKind::kIdentify, 60.0, "nodule", 0.85,
+     "identification on a bench with a tip load cell: 40 s of excite (free motion), then 20 s "
+     "of presses into the nodule tissue (surface 0.85 rad, beyond excite's reach), gentle and "
+     "deep, so fits see the friction under load"},
+};
+
 }  // namespace
 
 std::vector<std::string> scenario_names() {
-  return {"sine", "multisine", "palpate", "chirp", "excite", "identify"};
+  std::vector<std::string> names;
+  for (const ScenarioDefaults& d : kScenarios)
+    names.emplace_back(d.name);
+  return names;
 }
 
 Scenario make_scenario(std::string_view name) {
-  Scenario s;
-  s.name = std::string(name);
-  if (name == "sine") {
-    s.kind = ScenarioKind::kSine;
-    s.description =
-        "0.8 rad sines (joint1 0.5 Hz, joint2 0.4 Hz) as in the paper's Fig. 2/8/9; "
-        "soft tissue at 0.6 rad, touched lightly at the top of each cycle";
-    s.default_duration_s = 30.0;
-    s.tissue = "soft";
-    s.surface_rad = 0.6;
-  } else if (name == "multisine") {
-    s.kind = ScenarioKind::kMultisine;
-    s.description =
-        "sum of four sines (0.13-2.3 Hz, up to 0.8 rad): many speeds and accelerations; "
-        "soft tissue at 0.5 rad";
-    s.default_duration_s = 60.0;
-    s.tissue = "soft";
-    s.surface_rad = 0.5;
-  } else if (name == "palpate") {
-    s.kind = ScenarioKind::kPalpate;
-    s.description =
-        "press the nodule tissue (surface 0.2 rad) every 5 s, alternately gently "
-        "(0.08 rad, soft layer) and deeply (0.3 rad, onto the inclusion)";
-    s.default_duration_s = 40.0;
-    s.tissue = "nodule";
-    s.surface_rad = 0.2;
-  } else if (name == "chirp") {
-    s.kind = ScenarioKind::kChirp;
-    s.description = "0.5 rad chirp 0.1 -> 1.5 Hz over 30 s, repeated; free motion";
-    s.default_duration_s = 60.0;
-    s.tissue = "none";
-    s.surface_rad = 0.6;
-  } else if (name == "excite") {
-    s.kind = ScenarioKind::kExcite;
-    s.description =
-        "identification: a three-sine mix (0.23-1.4 Hz) whose amplitude steps through 0.05, "
-        "0.15, 0.4 and 0.8 rad every 10 s, so fits see small strokes as well as large; free motion";
-    s.default_duration_s = 40.0;
-    s.tissue = "none";
-    s.surface_rad = 0.6;
-  } else if (name == "identify") {
-    s.kind = ScenarioKind::kIdentify;
-    s.description =
-        "identification on a bench with a tip load cell: 40 s of excite (free motion), then 20 s "
-        "of presses into the nodule tissue (surface 0.85 rad, beyond excite's reach), gentle and "
-        "deep, so fits see the friction under load";
-    s.default_duration_s = 60.0;
-    s.tissue = "nodule";
-    s.surface_rad = 0.85;
-  } else {
-    throw std::invalid_argument("unknown scenario '" + std::string(name) +
-                                "' (known: sine, multisine, palpate, chirp, excite, identify)");
+  for (const ScenarioDefaults& d : kScenarios) {
+    if (d.name != name) continue;
+    Scenario s;
+    s.kind = d.kind;
+    s.name = std::string(d.name);
+    s.description = std::string(d.description);
+    s.default_duration_s = d.duration_s;
+    s.tissue = std::string(d.tissue);
+    s.surface_rad = d.surface_rad;
+    return s;
   }
-  return s;
+  std::string known;
+  for (const ScenarioDefaults& d : kScenarios) {
+    if (!known.empty()) known += ", ";
+    known += d.name;
+  }
+  throw std::invalid_argument("unknown scenario '" + std::string(name) + "' (known: " + known +
+                              ")");
 }
 
 double Scenario::reference(double t, int joint) const {

@@ -5,19 +5,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "field_checks.hpp"
+
 namespace tsmh::virtual_tissue_slave {
 
 void validate(const SensorParams& s) {
-  auto require = [](bool ok, const char* field) {
-    if (!ok) throw std::invalid_argument(std::string("sensor field '") + field + "' must be >= 0");
-  };
-  require(std::isfinite(s.motor_encoder_quantum_rad) && s.motor_encoder_quantum_rad >= 0,
-          "motor_encoder_quantum_rad");
-  require(std::isfinite(s.joint_encoder_quantum_rad) && s.joint_encoder_quantum_rad >= 0,
-          "joint_encoder_quantum_rad");
-  require(std::isfinite(s.load_cell_noise_n) && s.load_cell_noise_n >= 0, "load_cell_noise_n");
-  require(std::isfinite(s.load_cell_quantum_n) && s.load_cell_quantum_n >= 0,
-          "load_cell_quantum_n");
+  const FieldChecks check("sensor");
+  check.non_negative(s.motor_encoder_quantum_rad, "motor_encoder_quantum_rad");
+  check.non_negative(s.joint_encoder_quantum_rad, "joint_encoder_quantum_rad");
+  check.non_negative(s.load_cell_noise_n, "load_cell_noise_n");
+  check.non_negative(s.load_cell_quantum_n, "load_cell_quantum_n");
 }
 
 double quantize(double value, double quantum) {

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "field_checks.hpp"
+
 namespace tsmh::virtual_tissue_slave {
 namespace {
 
@@ -64,22 +66,17 @@ TissueParams tissue_preset(std::string_view name, ContactLaw law) {
 }
 
 void validate(const TissueParams& t) {
-  auto require = [&](bool ok, const char* field, const char* why) {
-    if (!ok) throw std::invalid_argument("tissue '" + t.name + "': field '" + field + "' " + why);
-  };
-  require(std::isfinite(t.surface_rad), "surface_rad", "must be finite");
-  require(std::isfinite(t.lever_m) && t.lever_m > 0, "lever_m", "must be > 0");
-  require(std::isfinite(t.outer_stiffness_n_per_m) && t.outer_stiffness_n_per_m >= 0,
-          "outer_stiffness_n_per_m", "must be >= 0");
-  require(!std::isnan(t.inclusion_depth_m) && t.inclusion_depth_m > 0, "inclusion_depth_m",
-          "must be > 0 (infinity: no inclusion)");
-  require(std::isfinite(t.inclusion_stiffness_n_per_m) && t.inclusion_stiffness_n_per_m >= 0,
-          "inclusion_stiffness_n_per_m", "must be >= 0");
-  require(std::isfinite(t.damping) && t.damping >= 0, "damping", "must be >= 0");
-  require(std::isfinite(t.exponent) && t.exponent >= 1.0 && t.exponent <= 3.0, "exponent",
-          "must be in [1, 3]");
-  require(std::isfinite(t.reference_depth_m) && t.reference_depth_m > 0, "reference_depth_m",
-          "must be > 0");
+  const FieldChecks check("tissue '" + t.name + "':");
+  check.require(std::isfinite(t.surface_rad), "surface_rad", "must be finite");
+  check.positive(t.lever_m, "lever_m");
+  check.non_negative(t.outer_stiffness_n_per_m, "outer_stiffness_n_per_m");
+  check.require(!std::isnan(t.inclusion_depth_m) && t.inclusion_depth_m > 0, "inclusion_depth_m",
+                "must be > 0 (infinity: no inclusion)");
+  check.non_negative(t.inclusion_stiffness_n_per_m, "inclusion_stiffness_n_per_m");
+  check.non_negative(t.damping, "damping");
+  check.require(std::isfinite(t.exponent) && t.exponent >= 1.0 && t.exponent <= 3.0, "exponent",
+                "must be in [1, 3]");
+  check.positive(t.reference_depth_m, "reference_depth_m");
 }
 
 namespace {
