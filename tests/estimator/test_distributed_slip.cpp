@@ -257,6 +257,13 @@ TEST(DistributedSlip, NonnegativeLeastSquaresMatchesEnumeration) {
 
 // Synthetic data from a known distributed-slip model with tension and load
 // copies: motion, mean tension and distal load varying independently.
+// The first 0.5 s settles; then 2 s blocks alternate between training and
+// validation, so both see every part of the motion.
+SampleRole role_at(double t) {
+  if (t < 0.5) return SampleRole::kIgnored;
+  return static_cast<int>((t - 0.5) / 2.0) % 2 == 0 ? SampleRole::kTrain : SampleRole::kValidation;
+}
+
 FitData synthetic(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
   FitData d;
   const double dt = 1e-3;
@@ -287,10 +294,7 @@ FitData synthetic(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
     m.drive = f + distal;
     d.motion.push_back(m);
     d.measured.push_back(f + g(rng));
-    d.role.push_back(t < 0.5
-                         ? SampleRole::kIgnored
-                         : (static_cast<int>((t - 0.5) / 2.0) % 2 == 0 ? SampleRole::kTrain
-                                                                       : SampleRole::kValidation));
+    d.role.push_back(role_at(t));
   }
   d.radius_m = 0.01;
   return d;
@@ -439,10 +443,7 @@ FitData tendon_data(const TsmModelSpec& truth, double noise, std::uint32_t seed)
     m.drive = 40.0 * std::sin(0.21 * t) * std::sin(0.05 * t + 0.3);
     d.measured.push_back(model.step(m, dt) + g(rng));
     d.motion.push_back(m);
-    d.role.push_back(t < 0.5
-                         ? SampleRole::kIgnored
-                         : (static_cast<int>((t - 0.5) / 2.0) % 2 == 0 ? SampleRole::kTrain
-                                                                       : SampleRole::kValidation));
+    d.role.push_back(role_at(t));
   }
   d.radius_m = 0.01;
   return d;
