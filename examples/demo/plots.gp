@@ -20,7 +20,7 @@ t_first = STATS_min
 t_last = STATS_max
 
 do for [j = 0:1] {
-  set output sprintf("%s/torque-joint%d.png", outdir, j)
+  set output sprintf("%s/torque-joint%d.png", outdir, j + 1)
   set title sprintf("joint%d: distal torque fed back vs the truth", j + 1)
   set xlabel "time (s)"
   set ylabel "distal torque (N m)"

@@ -520,7 +520,7 @@ TEST(ServerConfigFile, FirstSessionTemplateLoadsAndIsTimid) {
     EXPECT_LE(c.loop.force[j].scale, 0.1) << j;
     EXPECT_LE(c.loop.limits[j].max_torque_nm, 0.05) << j;
     EXPECT_EQ(std::filesystem::path(c.joints[j].params).filename(),
-              "params-joint" + std::to_string(j) + ".yaml");
+              "params-joint" + std::to_string(j + 1) + ".yaml");
   }
   EXPECT_FALSE(c.evaluation.truth);
 }
