@@ -91,12 +91,7 @@ void SlipKernel::advance(SlipState& s, double x, double xd, double tension, doub
   s.x_prev = x;
   s.started = true;
   const std::size_t n = static_cast<std::size_t>(spec_.elements);
-  out.scale = {1.0, 1.0};
-  if (spec_.tendon_widths && std::isfinite(tension) && inv_tension_ref_ > 0.0) {
-    const double half = std::isfinite(drive) ? 0.5 * drive : 0.0;
-    out.scale[0] = std::max(tension + half, 0.0) * inv_tension_ref_;
-    out.scale[1] = std::max(tension - half, 0.0) * inv_tension_ref_;
-  }
+  out.scale = family_scales(tension, drive);
   const std::size_t families = spec_.tendon_widths ? 2 : 1;
   for (std::size_t f = 0; f < families; ++f) {
     const double lo = -k_neg_ * out.scale[f], hi = k_pos_ * out.scale[f];
@@ -144,23 +139,25 @@ double SlipKernel::friction(const SlipBasis& b, double tension, double drive, do
 
 double SlipKernel::element_capacity(double tension) const noexcept {
   const double dt = std::isfinite(tension) ? tension - spec_.tension_ref : 0.0;
-  const double g = rest_scale(tension);
+  // At rest both tendons carry about the mean tension (no drive).
+  const double g = family_scales(tension, 0.0)[0];
   double sum = 0.0;
   for (std::size_t i = 0; i < spec_.element_count(); ++i)
     sum += weight(i, dt) * g;
   return sum;
 }
 
-double SlipKernel::rest_scale(double tension) const noexcept {
-  // Per-tendon widths at rest: both tendons near the mean tension.
-  return spec_.tendon_widths && std::isfinite(tension) && inv_tension_ref_ > 0.0
-             ? std::max(tension, 0.0) * inv_tension_ref_
-             : 1.0;
+std::array<double, 2> SlipKernel::family_scales(double tension, double drive) const noexcept {
+  if (!spec_.tendon_widths || !std::isfinite(tension) || !(inv_tension_ref_ > 0.0))
+    return {1.0, 1.0};
+  const double half = std::isfinite(drive) ? 0.5 * drive : 0.0;
+  return {std::max(tension + half, 0.0) * inv_tension_ref_,
+          std::max(tension - half, 0.0) * inv_tension_ref_};
 }
 
 void SlipKernel::preset(SlipState& s, double x, double fraction, double tension) const noexcept {
   const double u = std::clamp(fraction, -1.0, 1.0);
-  const double e = (u >= 0.0 ? u * k_pos_ : u * k_neg_) * rest_scale(tension);
+  const double e = (u >= 0.0 ? u * k_pos_ : u * k_neg_) * family_scales(tension, 0.0)[0];
   for (std::size_t i = 0; i < spec_.element_count(); ++i)
     s.e[i] = e;
   s.x_prev = x;

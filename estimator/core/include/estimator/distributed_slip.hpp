@@ -189,8 +189,10 @@ class SlipKernel {
   std::array<double, kMaxSlipElements> inv_width_{};
   double inv_smoothing_ = 1.0, inv_stribeck_ = 1.0;
   double inv_tension_ref_ = 0.0;  ///< 1 / tension_ref (0: no per-tendon scaling)
-  /// The per-tendon scale at rest (both tendons at the mean tension T).
-  double rest_scale(double tension) const noexcept;
+  /// Each family's saturation scale g_j = max(T_j, 0) / T_ref with
+  /// T_1,2 = T +- u/2 (1, 1 without per-tendon widths or a measured T; u NaN
+  /// counts as 0, both tendons at the mean tension).
+  std::array<double, 2> family_scales(double tension, double drive) const noexcept;
   double k_pos_ = 1.0, k_neg_ = 1.0;
 };
 
