@@ -4,24 +4,17 @@
 
 #include <stdexcept>
 
+#include "realtime/enum_names.hpp"
+
 static_assert(tsmh::bridge::kMaxChannelLength == LCM_MAX_CHANNEL_NAME_LENGTH);
 
 namespace tsmh::bridge {
 
 std::string_view base_name(Channel channel) noexcept {
-  switch (channel) {
-    case Channel::kSlaveState:
-      return "SLAVE_STATE";
-    case Channel::kSlaveTruth:
-      return "SLAVE_TRUTH";
-    case Channel::kMasterCommand:
-      return "MASTER_COMMAND";
-    case Channel::kHapticStatus:
-      return "HAPTIC_STATUS";
-    case Channel::kCalibrationRequest:
-      return "CALIBRATION_REQUEST";
-  }
-  return "UNKNOWN";
+  return realtime::enum_name<Channel::kCalibrationRequest>(
+      channel,
+      {"SLAVE_STATE", "SLAVE_TRUTH", "MASTER_COMMAND", "HAPTIC_STATUS", "CALIBRATION_REQUEST"},
+      "UNKNOWN");
 }
 
 std::string channel_name(std::string_view prefix, Channel channel) {

@@ -1,19 +1,11 @@
 #include "bridge/link_session.hpp"
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::bridge {
 
 const char* to_string(SessionState s) noexcept {
-  switch (s) {
-    case SessionState::kOpen:
-      return "open";
-    case SessionState::kBound:
-      return "bound";
-    case SessionState::kClosed:
-      return "closed";
-    case SessionState::kFault:
-      return "FAULT";
-  }
-  return "?";
+  return realtime::enum_name<SessionState::kFault>(s, {"open", "bound", "closed", "FAULT"}).data();
 }
 
 LinkSession::LinkSession(MessageSigner& signer, SessionOptions options)

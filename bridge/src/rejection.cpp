@@ -4,36 +4,16 @@
 #include <cmath>
 #include <cstdio>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::bridge {
 
 std::string_view reason_name(RejectReason reason) noexcept {
-  switch (reason) {
-    case RejectReason::kDecode:
-      return "decode";
-    case RejectReason::kJointCount:
-      return "joint_count";
-    case RejectReason::kNonFinite:
-      return "non_finite";
-    case RejectReason::kOutOfRange:
-      return "out_of_range";
-    case RejectReason::kTimeBackwards:
-      return "time_backwards";
-    case RejectReason::kImplausible:
-      return "implausible_step";
-    case RejectReason::kUnauthenticated:
-      return "unauthenticated";
-    case RejectReason::kBadMac:
-      return "bad_mac";
-    case RejectReason::kStale:
-      return "stale";
-    case RejectReason::kReplayed:
-      return "replayed";
-    case RejectReason::kOtherSession:
-      return "other_session";
-    case RejectReason::kSessionEnded:
-      return "session_ended";
-  }
-  return "unknown";
+  return realtime::enum_name<RejectReason::kSessionEnded>(
+      reason,
+      {"decode", "joint_count", "non_finite", "out_of_range", "time_backwards", "implausible_step",
+       "unauthenticated", "bad_mac", "stale", "replayed", "other_session", "session_ended"},
+      "unknown");
 }
 
 Rejection make_rejection(RejectReason reason, std::string_view what, double value,
@@ -48,8 +28,55 @@ Rejection make_rejection(RejectReason reason, std::string_view what, double valu
   return r;
 }
 
+namespace {
+
+// What a rejection means, per reason: "{field}" and "{value}" stand for the
+// rejected field (with its joint) and value.
+std::string_view explanation(RejectReason reason) noexcept {
+  return realtime::enum_name<RejectReason::kSessionEnded>(
+      reason,
+      {"cannot decode: {field}", "joint count {value} rejected ({field})",
+       "{field} = {value} is not finite", "{field} = {value} is outside its configured range",
+       "utime {value} us is not after the previous message's ({field})",
+       "{field} stepped by {value} since the last accepted sample: faster than its configured "
+       "limit",
+       "not authenticated (a sender without the link key, or too old a program): {field}",
+       "MAC does not match (wrong link key, or altered on the way): {field}",
+       "sent {value} us from this host's clock, outside the freshness window (a recording, or "
+       "clocks not synchronised): {field}",
+       "replayed: {field} already seen or older than the replay window",
+       "another session (a second keyed sender on this session's channel, a restarted peer or a "
+       "replay of an older session): {field}; the session ends in FAULT",
+       "the session has ended: {field}"},
+      "");
+}
+
+// Appends `text` with its "{field}" and "{value}" filled in. Built with +=
+// only: GCC 12's -Wrestrict misfires on chains of operator+.
+void expand(std::string& out, std::string_view text, std::string_view field,
+            std::string_view value) {
+  constexpr std::string_view kField = "{field}", kValue = "{value}";
+  while (!text.empty()) {
+    const std::size_t brace = text.find('{');
+    out += text.substr(0, brace);
+    if (brace == std::string_view::npos) return;
+    text.remove_prefix(brace);
+    if (text.substr(0, kField.size()) == kField) {
+      out += field;
+      text.remove_prefix(kField.size());
+    } else if (text.substr(0, kValue.size()) == kValue) {
+      out += value;
+      text.remove_prefix(kValue.size());
+    } else {
+      out += '{';
+      text.remove_prefix(1);
+    }
+  }
+}
+
+}  // namespace
+
 std::string describe(const Rejection& r, std::string_view channel) {
-  // Built with += only: GCC 12's -Wrestrict misfires on chains of operator+.
   std::string field(r.what.data());
   if (r.joint >= 0) {
     field += '[';
@@ -65,76 +92,7 @@ std::string describe(const Rejection& r, std::string_view channel) {
     out += std::to_string(r.seq);
   }
   out += ": ";
-  switch (r.reason) {
-    case RejectReason::kDecode:
-      out += "cannot decode: ";
-      out += field;
-      break;
-    case RejectReason::kJointCount:
-      out += "joint count ";
-      out += value;
-      out += " rejected (";
-      out += field;
-      out += ')';
-      break;
-    case RejectReason::kNonFinite:
-      out += field;
-      out += " = ";
-      out += value;
-      out += " is not finite";
-      break;
-    case RejectReason::kOutOfRange:
-      out += field;
-      out += " = ";
-      out += value;
-      out += " is outside its configured range";
-      break;
-    case RejectReason::kTimeBackwards:
-      out += "utime ";
-      out += value;
-      out += " us is not after the previous message's (";
-      out += field;
-      out += ')';
-      break;
-    case RejectReason::kImplausible:
-      out += field;
-      out += " stepped by ";
-      out += value;
-      out += " since the last accepted sample: faster than its configured limit";
-      break;
-    case RejectReason::kUnauthenticated:
-      out += "not authenticated (a sender without the link key, or too old a program): ";
-      out += field;
-      break;
-    case RejectReason::kBadMac:
-      out += "MAC does not match (wrong link key, or altered on the way): ";
-      out += field;
-      break;
-    case RejectReason::kStale:
-      out += "sent ";
-      out += value;
-      out +=
-          " us from this host's clock, outside the freshness window (a recording, or clocks "
-          "not synchronised): ";
-      out += field;
-      break;
-    case RejectReason::kReplayed:
-      out += "replayed: ";
-      out += field;
-      out += " already seen or older than the replay window";
-      break;
-    case RejectReason::kOtherSession:
-      out +=
-          "another session (a second keyed sender on this session's channel, a restarted "
-          "peer or a replay of an older session): ";
-      out += field;
-      out += "; the session ends in FAULT";
-      break;
-    case RejectReason::kSessionEnded:
-      out += "the session has ended: ";
-      out += field;
-      break;
-  }
+  expand(out, explanation(r.reason), field, value);
   return out;
 }
 

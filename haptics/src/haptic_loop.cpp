@@ -6,18 +6,12 @@
 #include <limits>
 #include <stdexcept>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::haptics {
 
 std::string_view to_string(FeedbackSource s) noexcept {
-  switch (s) {
-    case FeedbackSource::kEstimated:
-      return "estimated";
-    case FeedbackSource::kNaive:
-      return "naive";
-    case FeedbackSource::kNone:
-      return "none";
-  }
-  return "?";
+  return realtime::enum_name<FeedbackSource::kNone>(s, {"estimated", "naive", "none"});
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "estimator/contact_check.hpp"
+#include "realtime/enum_names.hpp"
 
 namespace tsmh::haptics {
 namespace {
@@ -14,37 +15,14 @@ constexpr double kSlidingSpeed = 0.1;  // rad/s: below it the joint is reversing
 }  // namespace
 
 std::string_view to_string(CalibrationState s) noexcept {
-  switch (s) {
-    case CalibrationState::kIdle:
-      return "idle";
-    case CalibrationState::kCollecting:
-      return "collecting";
-    case CalibrationState::kIdentifying:
-      return "identifying";
-    case CalibrationState::kApplied:
-      return "applied";
-    case CalibrationState::kRefused:
-      return "refused";
-  }
-  return "?";
+  return realtime::enum_name<CalibrationState::kRefused>(
+      s, {"idle", "collecting", "identifying", "applied", "refused"});
 }
 
 std::string_view to_string(CalibrationReason r) noexcept {
-  switch (r) {
-    case CalibrationReason::kNone:
-      return "none";
-    case CalibrationReason::kMotionTooSmall:
-      return "motion too small";
-    case CalibrationReason::kNotFree:
-      return "not free motion (contact)";
-    case CalibrationReason::kNotBetter:
-      return "new model not better";
-    case CalibrationReason::kImplausible:
-      return "implausible scale";
-    case CalibrationReason::kNoData:
-      return "no slave data";
-  }
-  return "?";
+  return realtime::enum_name<CalibrationReason::kNoData>(
+      r, {"none", "motion too small", "not free motion (contact)", "new model not better",
+          "implausible scale", "no slave data"});
 }
 
 Recalibration::Recalibration(int joints, const RecalibrationConfig& config,

@@ -1,39 +1,20 @@
 #include "haptics/safety_state.hpp"
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::haptics {
 
 std::string_view to_string(LoopState s) noexcept {
-  switch (s) {
-    case LoopState::kDisabled:
-      return "DISABLED";
-    case LoopState::kEnabled:
-      return "ENABLED";
-    case LoopState::kFault:
-      return "FAULT";
-  }
-  return "?";
+  return realtime::enum_name<LoopState::kFault>(s, {"DISABLED", "ENABLED", "FAULT"});
 }
 
 std::string_view to_string(FaultReason r) noexcept {
-  switch (r) {
-    case FaultReason::kNone:
-      return "none";
-    case FaultReason::kEStop:
-      return "e-stop pressed";
-    case FaultReason::kDevice:
-      return "master device fault or disconnected";
-    case FaultReason::kSlaveLost:
-      return "slave state lost";
-    case FaultReason::kEstimateLost:
-      return "torque estimate lost";
-    case FaultReason::kSlaveSession:
-      return "another slave session on the link (a second keyed slave, a restarted one or a "
-             "replay)";
-    case FaultReason::kMasterSession:
-      return "another master session on the link (a second keyed master, a restarted one or a "
-             "replay)";
-  }
-  return "?";
+  return realtime::enum_name<FaultReason::kMasterSession>(
+      r,
+      {"none", "e-stop pressed", "master device fault or disconnected", "slave state lost",
+       "torque estimate lost",
+       "another slave session on the link (a second keyed slave, a restarted one or a replay)",
+       "another master session on the link (a second keyed master, a restarted one or a replay)"});
 }
 
 void SafetyStateMachine::go(LoopState s) noexcept {

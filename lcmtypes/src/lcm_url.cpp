@@ -8,6 +8,8 @@
 #include <limits>
 #include <vector>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::lcmtypes {
 namespace {
 
@@ -90,19 +92,8 @@ struct Option {
 }  // namespace
 
 std::string_view provider_name(LcmProvider provider) noexcept {
-  switch (provider) {
-    case LcmProvider::kUdpm:
-      return "udpm";
-    case LcmProvider::kMpudpm:
-      return "mpudpm";
-    case LcmProvider::kTcpq:
-      return "tcpq";
-    case LcmProvider::kMemq:
-      return "memq";
-    case LcmProvider::kFile:
-      return "file";
-  }
-  return "unknown";
+  return realtime::enum_name<LcmProvider::kFile>(
+      provider, {"udpm", "mpudpm", "tcpq", "memq", "file"}, "unknown");
 }
 
 bool LcmUrl::host_only() const noexcept {

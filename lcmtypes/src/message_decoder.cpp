@@ -14,6 +14,8 @@
 #include <tsmh/slave_truth_t.hpp>
 #include <vector>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::lcmtypes {
 namespace {
 
@@ -54,19 +56,8 @@ bool read_header(const void* data, std::size_t size, WireHeader& out) noexcept {
 }
 
 std::string_view fault_name(DecodeFault fault) noexcept {
-  switch (fault) {
-    case DecodeFault::kTruncatedHeader:
-      return "truncated_header";
-    case DecodeFault::kTypeHash:
-      return "type_hash";
-    case DecodeFault::kJointCount:
-      return "joint_count";
-    case DecodeFault::kSize:
-      return "size";
-    case DecodeFault::kMalformed:
-      return "malformed";
-  }
-  return "unknown";
+  return realtime::enum_name<DecodeFault::kMalformed>(
+      fault, {"truncated_header", "type_hash", "joint_count", "size", "malformed"}, "unknown");
 }
 
 template <class Message>

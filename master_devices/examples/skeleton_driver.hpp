@@ -128,10 +128,11 @@ class SkeletonDevice final : public DriverBase {
     return true;
   }
 
-  // STEP 6. read(): the newest reading from the cell with the shared rules
-  // (stale -> DISCONNECTED, not OK -> disabled with nothing commanded).
-  DeviceReading read(std::int64_t now_ns) noexcept override {
-    return newest_reading(now_ns, static_cast<std::int64_t>(s_.stale_timeout_ms * 1e6));
+  // STEP 6. read() is DriverBase's: the newest reading from the cell with the
+  // shared rules (stale -> DISCONNECTED, not OK -> disabled with nothing
+  // commanded). The driver says only how old a reading may be.
+  std::int64_t freshness_bound_ns() const noexcept override {
+    return static_cast<std::int64_t>(s_.stale_timeout_ms * 1e6);
   }
 
   // STEP 7. write_torque() is DriverBase's: it stamps the command with the

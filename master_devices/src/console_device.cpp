@@ -5,25 +5,19 @@
 #include <cmath>
 #include <cstdio>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::master_devices {
 
 namespace {
 constexpr std::size_t kErrorCapacity = 512;
 
 const char* firmware_fault_text(protocol::FirmwareFault f) {
-  switch (f) {
-    case protocol::FirmwareFault::kNone:
-      return "none";
-    case protocol::FirmwareFault::kOverCurrent:
-      return "over-current";
-    case protocol::FirmwareFault::kOverTemperature:
-      return "over-temperature";
-    case protocol::FirmwareFault::kEncoder:
-      return "encoder error";
-    case protocol::FirmwareFault::kSupply:
-      return "supply out of range";
-  }
-  return "unknown";
+  return realtime::enum_name<protocol::FirmwareFault::kSupply>(
+             f,
+             {"none", "over-current", "over-temperature", "encoder error", "supply out of range"},
+             "unknown")
+      .data();
 }
 }  // namespace
 
@@ -396,10 +390,6 @@ void ConsoleDevice::on_link_lost(const char* why) noexcept {
 }
 
 // ---- real-time path ----
-
-DeviceReading ConsoleDevice::read(std::int64_t now_ns) noexcept {
-  return newest_reading(now_ns, fresh_bound_ns_.load(std::memory_order_relaxed));
-}
 
 // ---- faults and errors ----
 

@@ -28,6 +28,12 @@ void DriverBase::set_error(const std::string& text) {
   error_ = text;
 }
 
+bool DriverBase::clear_fault() {
+  unlatch_fault();
+  set_error("");
+  return true;
+}
+
 void DriverBase::write_torque(const JointArray& tau_nm) noexcept {
   commands_.store(Command{tau_nm, clock_->now_ns(), true});
 }

@@ -291,8 +291,8 @@ bool HaplyDevice::clear_fault() {
   return true;
 }
 
-DeviceReading HaplyDevice::read(std::int64_t now_ns) noexcept {
-  return newest_reading(now_ns, ms_to_ns(s_.watchdog_ms));
+std::int64_t HaplyDevice::freshness_bound_ns() const noexcept {
+  return ms_to_ns(s_.watchdog_ms);
 }
 
 void HaplyDevice::link_lost(const std::string& why) {

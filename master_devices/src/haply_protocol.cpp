@@ -4,6 +4,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::master_devices::haply {
 
 BoardConfig board_preset(std::string_view name) {
@@ -121,17 +123,8 @@ std::size_t encode_state(const BoardConfig& c, const JointArray& tau_nm,
 }
 
 std::string_view to_string(ReplyError e) {
-  switch (e) {
-    case ReplyError::kNone:
-      return "none";
-    case ReplyError::kWrongLength:
-      return "wrong length";
-    case ReplyError::kWrongDeviceId:
-      return "wrong device id";
-    case ReplyError::kNotFinite:
-      return "angle not finite";
-  }
-  return "?";
+  return realtime::enum_name<ReplyError::kNotFinite>(
+      e, {"none", "wrong length", "wrong device id", "angle not finite"});
 }
 
 ReplyError decode_reply(const BoardConfig& c, const std::uint8_t* in, std::size_t n,

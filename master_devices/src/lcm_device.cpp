@@ -259,16 +259,6 @@ std::string LcmDevice::last_rejection() const {
   return last_rejection_;
 }
 
-bool LcmDevice::clear_fault() {
-  unlatch_fault();
-  set_error("");
-  return true;
-}
-
-DeviceReading LcmDevice::read(std::int64_t now_ns) noexcept {
-  return newest_reading(now_ns, settings_.stale_timeout_ms * 1'000'000LL);
-}
-
 void register_lcm_driver(DriverRegistry& registry, std::shared_ptr<const Clock> clock,
                          std::shared_ptr<LcmMessageAuth> auth) {
   registry.add("lcm", "external master driver over LCM (MASTER_STATE in, MASTER_FORCE out)",

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::master_devices::protocol {
 namespace {
 
@@ -124,33 +126,13 @@ std::uint16_t crc16(std::span<const std::uint8_t> bytes) {
 
 const char* describe(const Error& e, std::span<char> buf) {
   if (buf.empty()) return buf.data();
-  const char* what = "ok";
-  switch (e.code) {
-    case ErrorCode::kOk:
-      what = "ok";
-      break;
-    case ErrorCode::kBufferTooSmall:
-      what = "buffer too small";
-      break;
-    case ErrorCode::kWrongLength:
-      what = "wrong length";
-      break;
-    case ErrorCode::kWrongReportId:
-      what = "wrong report ID";
-      break;
-    case ErrorCode::kBadChecksum:
-      what = "bad CRC (garbage)";
-      break;
-    case ErrorCode::kUnsupportedVersion:
-      what = "unsupported protocol version";
-      break;
-    case ErrorCode::kReservedNotZero:
-      what = "reserved bits set";
-      break;
-    case ErrorCode::kOutOfRange:
-      what = "out of range";
-      break;
-  }
+  const char* what =
+      realtime::enum_name<ErrorCode::kOutOfRange>(
+          e.code,
+          {"ok", "buffer too small", "wrong length", "wrong report ID", "bad CRC (garbage)",
+           "unsupported protocol version", "reserved bits set", "out of range"},
+          "ok")
+          .data();
   if (e.field[0] != '\0') {
     std::snprintf(buf.data(), buf.size(), "%s report: %s: %s (value %lld)", e.report, e.field, what,
                   static_cast<long long>(e.value));

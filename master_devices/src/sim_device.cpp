@@ -102,11 +102,6 @@ void SimDevice::close() noexcept {
   if (thread_.joinable()) thread_.join();
 }
 
-bool SimDevice::clear_fault() {
-  unlatch_fault();
-  return true;
-}
-
 void SimDevice::advance(double dt_s, std::int64_t t_ns) noexcept {
   Command cmd;
   command_reader_.fetch(cmd);
@@ -165,10 +160,12 @@ DeviceReading SimDevice::read(std::int64_t now_ns) noexcept {
       last_t_ns_ = now_ns;
     }
   }
-  // In simulated time the world was just advanced to now_ns: never stale.
-  return newest_reading(now_ns, settings_.simulated_time
-                                    ? std::numeric_limits<std::int64_t>::max()
-                                    : settings_.stale_timeout_ms * 1'000'000LL);
+  return DriverBase::read(now_ns);
+}
+
+std::int64_t SimDevice::freshness_bound_ns() const noexcept {
+  return settings_.simulated_time ? std::numeric_limits<std::int64_t>::max()
+                                  : settings_.stale_timeout_ms * 1'000'000LL;
 }
 
 }  // namespace tsmh::master_devices

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "estimator/simulate.hpp"
+#include "realtime/enum_names.hpp"
 
 namespace tsmh::estimator {
 namespace {
@@ -32,15 +33,8 @@ std::string fixed(double v, int digits) {
 }  // namespace
 
 const char* derivatives_name(FitDerivatives d) {
-  switch (d) {
-    case FitDerivatives::kAutomatic:
-      return "automatic";
-    case FitDerivatives::kOffline:
-      return "offline";
-    case FitDerivatives::kDeployed:
-      return "deployed";
-  }
-  return "?";
+  return realtime::enum_name<FitDerivatives::kDeployed>(d, {"automatic", "offline", "deployed"})
+      .data();
 }
 
 FitDerivatives derivatives_from_name(const std::string& name) {

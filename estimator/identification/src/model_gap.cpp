@@ -18,6 +18,7 @@
 #include "estimator/separable_fit.hpp"
 #include "estimator/simulate.hpp"
 #include "number_text.hpp"
+#include "realtime/enum_names.hpp"
 #include "realtime/quantile.hpp"
 
 namespace tsmh::estimator {
@@ -572,17 +573,10 @@ CandidateTrial score_trial(const FitData& d, std::span<const double> f_cur,
 enum class Structural { kDistributedSlip, kSlipWithTension, kLoadCopies, kTensionCopies };
 
 const char* structural_name(Structural s) {
-  switch (s) {
-    case Structural::kDistributedSlip:
-      return "distributed_slip";
-    case Structural::kSlipWithTension:
-      return "distributed_slip+tension_copies";
-    case Structural::kLoadCopies:
-      return "load_copies";
-    case Structural::kTensionCopies:
-      return "tension_copies";
-  }
-  return "";
+  return realtime::enum_name<Structural::kTensionCopies>(
+             s, {"distributed_slip", "distributed_slip+tension_copies", "load_copies",
+                 "tension_copies"})
+      .data();
 }
 
 // The copies a pair adds (the distributed slip itself: none).
@@ -594,16 +588,9 @@ std::optional<Structural> copies_of(Structural s) {
 // A pair's family is its copies' (the effect it adds beyond the elements),
 // so that it meets the load and tension level terms as a rival.
 const char* structural_family(Structural s) {
-  switch (s) {
-    case Structural::kDistributedSlip:
-      return "distributed_slip";
-    case Structural::kLoadCopies:
-      return "load_dependent";
-    case Structural::kTensionCopies:
-    case Structural::kSlipWithTension:
-      return "tension_dependent";
-  }
-  return "";
+  return realtime::enum_name<Structural::kTensionCopies>(
+             s, {"distributed_slip", "tension_dependent", "load_dependent", "tension_dependent"})
+      .data();
 }
 
 std::optional<Structural> structural_from_name(const std::string& name) {

@@ -6,6 +6,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "realtime/enum_names.hpp"
+
 namespace tsmh::estimator {
 namespace {
 
@@ -181,17 +183,9 @@ std::optional<MotionKind> motion_kind_from_name(std::string_view name) {
 }
 
 const char* motion_kind_name(MotionKind kind) {
-  switch (kind) {
-    case MotionKind::kMultisine:
-      return "multisine";
-    case MotionKind::kSurgeon:
-      return "surgeon";
-    case MotionKind::kReversals:
-      return "reversals";
-    case MotionKind::kCreep:
-      return "creep";
-  }
-  return "?";
+  return realtime::enum_name<MotionKind::kCreep>(kind,
+                                                 {"multisine", "surgeon", "reversals", "creep"})
+      .data();
 }
 
 SyntheticData make_synthetic(const FrictionModel& truth, const SyntheticConfig& c) {

@@ -88,7 +88,6 @@ class ConsoleDevice final : public DriverBase, private TransportListener {
   void open() override;
   void close() noexcept override;
   bool clear_fault() override;
-  DeviceReading read(std::int64_t now_ns) noexcept override;
 
   ConsoleStats stats() const;
   const DeviceProfile& profile() const { return profile_; }
@@ -96,7 +95,7 @@ class ConsoleDevice final : public DriverBase, private TransportListener {
   std::string connected_path() const;
   /// read() says kDisconnected (stale) when the newest sample is older than
   /// this: stale_timeout_ms, or stale_periods / nominal rate once connected.
-  std::int64_t freshness_bound_ns() const noexcept { return fresh_bound_ns_.load(); }
+  std::int64_t freshness_bound_ns() const noexcept override { return fresh_bound_ns_.load(); }
 
  private:
   // TransportListener (I/O context)

@@ -4,8 +4,9 @@
 // and the driver's I/O side (readings in, torque commands out), and the
 // Device overrides built on them. A driver derives from DriverBase, fills
 // spec_ in its constructor, and writes only what its device needs: open(),
-// close(), clear_fault(), read() (usually newest_reading()) and its I/O side,
-// which asks torque_to_send() what to put on the wire.
+// close(), how old a reading may be (freshness_bound_ns()) and its I/O side,
+// which asks torque_to_send() what to put on the wire; clear_fault() and
+// read() only when its device needs more than the shared ones.
 //
 // The safety rules therefore hold for every driver alike: a fault latches
 // (the first cause is the one reported) and turns the enable request off;
@@ -38,6 +39,17 @@ class DriverBase : public Device {
   void write_torque(const JointArray& tau_nm) noexcept override;
   void set_enabled(bool on) noexcept override { enable_requested_.store(on); }
   void raise_fault(FaultCode code) noexcept override { latch_fault(code); }
+  /// Unlatches the fault and forgets the error; torque stays off until
+  /// set_enabled(true). A driver whose device must be told, or whose cause
+  /// must be checked first, overrides it.
+  bool clear_fault() override;
+  /// The loop's read(): newest_reading() with the driver's freshness bound.
+  DeviceReading read(std::int64_t now_ns) noexcept override {
+    return newest_reading(now_ns, freshness_bound_ns());
+  }
+  /// read() says kDisconnected (stale) when the newest reading is older than
+  /// this, ns.
+  virtual std::int64_t freshness_bound_ns() const noexcept = 0;
   /// kClosed until open(), kFault while a fault is latched, kDisconnected
   /// while the link is down, else kOk.
   DeviceStatus status() const noexcept override;

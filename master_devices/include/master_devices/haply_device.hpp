@@ -76,7 +76,8 @@ class HaplyDevice final : public DriverBase {
   /// releases the port.
   void close() noexcept override;
   bool clear_fault() override;
-  DeviceReading read(std::int64_t now_ns) noexcept override;
+  /// Readings older than watchdog_ms are stale.
+  std::int64_t freshness_bound_ns() const noexcept override;
 
   const HaplySettings& settings() const { return s_; }
 

@@ -68,8 +68,10 @@ class LcmDevice final : public DriverBase {
 
   void open() override;
   void close() noexcept override;
-  bool clear_fault() override;
-  DeviceReading read(std::int64_t now_ns) noexcept override;
+  /// Readings older than stale_timeout_ms are stale.
+  std::int64_t freshness_bound_ns() const noexcept override {
+    return settings_.stale_timeout_ms * 1'000'000LL;
+  }
 
   /// MASTER_STATE dropped before use: not authentic, not decodable (size,
   /// type, joint count: lcmtypes/message_decoder.hpp) or not plausible.

@@ -57,8 +57,11 @@ class SimDevice final : public DriverBase {
 
   void open() override;
   void close() noexcept override;
-  bool clear_fault() override;
+  /// In simulated time, first advances the world to now_ns.
   DeviceReading read(std::int64_t now_ns) noexcept override;
+  /// stale_timeout_ms; in simulated time read() has just advanced the world
+  /// to now_ns, so a reading is never stale.
+  std::int64_t freshness_bound_ns() const noexcept override;
   bool simulated_time() const noexcept override { return settings_.simulated_time; }
 
   const SimSettings& settings() const { return settings_; }

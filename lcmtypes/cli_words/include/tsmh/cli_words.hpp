@@ -52,21 +52,17 @@ inline std::string nearest(std::string_view word, const std::vector<std::string>
 
 namespace detail {
 
-inline const CLI::Option* find_long(const CLI::App& app, const std::string& name) {
-  for (const CLI::App* a = &app; a != nullptr; a = a->get_parent()) {
-    for (const CLI::Option* o : a->get_options({})) {
-      const auto& l = o->get_lnames();
-      if (std::find(l.begin(), l.end(), name) != l.end()) return o;
-    }
-  }
-  return nullptr;
-}
+// Which names of an option to look in: &CLI::Option::get_lnames (long) or
+// &CLI::Option::get_snames (short).
+using OptionNames = const std::vector<std::string>& (CLI::Option::*)() const;
 
-inline const CLI::Option* find_short(const CLI::App& app, const std::string& name) {
+// The option of `app` or one of its parents that has `name` among its `names`.
+inline const CLI::Option* find_option(const CLI::App& app, const std::string& name,
+                                      OptionNames names) {
   for (const CLI::App* a = &app; a != nullptr; a = a->get_parent()) {
     for (const CLI::Option* o : a->get_options({})) {
-      const auto& s = o->get_snames();
-      if (std::find(s.begin(), s.end(), name) != s.end()) return o;
+      const auto& n = (o->*names)();
+      if (std::find(n.begin(), n.end(), name) != n.end()) return o;
     }
   }
   return nullptr;
@@ -100,7 +96,7 @@ inline std::string unknown_word(const CLI::App& app, int argc, const char* const
     if (arg.rfind("--", 0) == 0) {
       const auto eq = arg.find('=');
       const std::string name = arg.substr(2, eq == std::string::npos ? std::string::npos : eq - 2);
-      const CLI::Option* o = detail::find_long(*cur, name);
+      const CLI::Option* o = detail::find_option(*cur, name, &CLI::Option::get_lnames);
       if (o == nullptr) {
         const std::string near = nearest(name, detail::long_names(*cur));
         return "unknown option '--" + name + "'" +
@@ -110,7 +106,7 @@ inline std::string unknown_word(const CLI::App& app, int argc, const char* const
     } else if (arg.size() >= 2 && arg[0] == '-' && arg[1] != '-' &&
                !(arg[1] >= '0' && arg[1] <= '9') && arg[1] != '.') {
       // Short options: a value either follows (-o FILE) or is attached (-oFILE).
-      const CLI::Option* o = detail::find_short(*cur, arg.substr(1, 1));
+      const CLI::Option* o = detail::find_option(*cur, arg.substr(1, 1), &CLI::Option::get_snames);
       if (o == nullptr) return "unknown option '" + arg.substr(0, 2) + "'";
       if (detail::takes_value(o) && arg.size() == 2) ++i;
     } else if (!sub_chosen) {
