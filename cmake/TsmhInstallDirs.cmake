@@ -44,20 +44,29 @@ function(tsmh_install_library target)
   endif()
 endfunction()
 
-# tsmh_add_library(target INCLUDE_DIR dir HEADERS folder [ALIASES alias...]
+# tsmh_add_library(target ALIAS module::name [INCLUDE_DIR dir] [HEADERS folder]
 #                  SOURCES src...): one of the project's libraries, written
-# once: its sources, the names it is linked by, `dir` as its public include
-# directory (the installed include/tsmh/ once installed), and its install
-# with the header folder dir/folder (tsmh_install_library).
+# once: its sources; the names it is linked by, its module's `module::name`
+# and the package's tsmh::<target>; `dir` (default: the module's include/)
+# as its public include directory (the installed include/tsmh/ once
+# installed); the project's warnings; and its install, with the header folder
+# dir/folder when given (tsmh_install_library).
 function(tsmh_add_library target)
-  cmake_parse_arguments(PARSE_ARGV 1 arg "" "INCLUDE_DIR;HEADERS" "ALIASES;SOURCES")
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "ALIAS;INCLUDE_DIR;HEADERS" "SOURCES")
+  if(NOT arg_INCLUDE_DIR)
+    set(arg_INCLUDE_DIR ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  endif()
   add_library(${target} ${arg_SOURCES})
-  foreach(alias IN LISTS arg_ALIASES)
-    add_library(${alias} ALIAS ${target})
-  endforeach()
+  add_library(${arg_ALIAS} ALIAS ${target})
+  add_library(tsmh::${target} ALIAS ${target})
   target_include_directories(${target} PUBLIC $<BUILD_INTERFACE:${arg_INCLUDE_DIR}>
     $<INSTALL_INTERFACE:${TSMH_INSTALL_INCLUDEDIR}>)
-  tsmh_install_library(${target} ${arg_INCLUDE_DIR}/${arg_HEADERS})
+  target_link_libraries(${target} PRIVATE $<BUILD_INTERFACE:tsmh::warnings>)
+  if(arg_HEADERS)
+    tsmh_install_library(${target} ${arg_INCLUDE_DIR}/${arg_HEADERS})
+  else()
+    tsmh_install_library(${target})
+  endif()
 endfunction()
 
 # tsmh_install_programs(target...): installs executables into bin/.

@@ -71,8 +71,26 @@ Error check_frame(std::span<const std::uint8_t> b, std::size_t size, std::uint8_
   return {};
 }
 
-void seal(std::span<std::uint8_t> b, std::size_t size) {
+// check_frame, and the protocol version in byte 1 (the reports that carry it).
+Error check_versioned_frame(std::span<const std::uint8_t> b, std::size_t size, std::uint8_t id,
+                            const char* report) {
+  if (Error e = check_frame(b, size, id, report)) return e;
+  if (b[1] != kVersion) return make_error(ErrorCode::kUnsupportedVersion, report, "version", b[1]);
+  return {};
+}
+
+// A reserved field of `width` bytes (1, 2 or 4) at `at` that is not zero.
+Error check_reserved(std::span<const std::uint8_t> b, std::size_t at, std::size_t width,
+                     const char* report) {
+  const std::uint32_t v = width == 1 ? b[at] : width == 2 ? get_u16(b, at) : get_u32(b, at);
+  if (v != 0) return make_error(ErrorCode::kReservedNotZero, report, "reserved", v);
+  return {};
+}
+
+// Writes the CRC over the first size - 2 bytes; the encoder's result.
+Result<std::size_t> seal(std::span<std::uint8_t> b, std::size_t size) {
   put_u16(b, size - 2, crc16(std::span<const std::uint8_t>(b.data(), size - 2)));
+  return {size, {}};
 }
 
 bool counts_ok(std::int32_t c) {
@@ -174,14 +192,11 @@ Result<std::size_t> encode(const InputReport& r, std::span<std::uint8_t> out) {
   put_u16(out, 18, r.last_output_sequence);
   put_u8(out, 20, fault);
   put_u8(out, 21, 0);
-  seal(out, kInputReportSize);
-  return {kInputReportSize, {}};
+  return seal(out, kInputReportSize);
 }
 
 Result<InputReport> decode_input(std::span<const std::uint8_t> b) {
-  if (Error e = check_frame(b, kInputReportSize, kInputReportId, kInput)) return {{}, e};
-  if (b[1] != kVersion)
-    return {{}, make_error(ErrorCode::kUnsupportedVersion, kInput, "version", b[1])};
+  if (Error e = check_versioned_frame(b, kInputReportSize, kInputReportId, kInput)) return {{}, e};
   InputReport r;
   r.sequence = get_u16(b, 2);
   r.device_time_us = get_u32(b, 4);
@@ -206,7 +221,7 @@ Result<InputReport> decode_input(std::span<const std::uint8_t> b) {
     return {{}, make_error(ErrorCode::kOutOfRange, kInput, "fault", fault)};
   }
   r.fault = static_cast<FirmwareFault>(fault);
-  if (b[21] != 0) return {{}, make_error(ErrorCode::kReservedNotZero, kInput, "reserved", b[21])};
+  if (Error e = check_reserved(b, 21, 1, kInput)) return {{}, e};
   return {r, {}};
 }
 
@@ -226,8 +241,7 @@ Result<std::size_t> encode(const OutputReport& r, std::span<std::uint8_t> out) {
   for (std::size_t j = 0; j < kJoints; ++j)
     put_i16(out, 4 + 2 * j, r.current_ma[j]);
   put_u16(out, 8, 0);
-  seal(out, kOutputReportSize);
-  return {kOutputReportSize, {}};
+  return seal(out, kOutputReportSize);
 }
 
 Result<OutputReport> decode_output(std::span<const std::uint8_t> b) {
@@ -244,9 +258,7 @@ Result<OutputReport> decode_output(std::span<const std::uint8_t> b) {
       return {{}, make_error(ErrorCode::kOutOfRange, kOutput, kCurrentField[j], r.current_ma[j])};
     }
   }
-  if (get_u16(b, 8) != 0) {
-    return {{}, make_error(ErrorCode::kReservedNotZero, kOutput, "reserved", get_u16(b, 8))};
-  }
+  if (Error e = check_reserved(b, 8, 2, kOutput)) return {{}, e};
   return {r, {}};
 }
 
@@ -309,18 +321,14 @@ Result<std::size_t> encode(const DeviceInfo& r, std::span<std::uint8_t> out) {
   }
   put_u16(out, 24, r.default_watchdog_ms);
   put_u32(out, 26, 0);
-  seal(out, kDeviceInfoReportSize);
-  return {kDeviceInfoReportSize, {}};
+  return seal(out, kDeviceInfoReportSize);
 }
 
 Result<DeviceInfo> decode_device_info(std::span<const std::uint8_t> b) {
-  if (Error e = check_frame(b, kDeviceInfoReportSize, kDeviceInfoReportId, kInfo)) return {{}, e};
-  if (b[1] != kVersion)
-    return {{}, make_error(ErrorCode::kUnsupportedVersion, kInfo, "version", b[1])};
-  if (b[9] != 0) return {{}, make_error(ErrorCode::kReservedNotZero, kInfo, "reserved", b[9])};
-  if (get_u32(b, 26) != 0) {
-    return {{}, make_error(ErrorCode::kReservedNotZero, kInfo, "reserved", get_u32(b, 26))};
-  }
+  if (Error e = check_versioned_frame(b, kDeviceInfoReportSize, kDeviceInfoReportId, kInfo))
+    return {{}, e};
+  if (Error e = check_reserved(b, 9, 1, kInfo)) return {{}, e};
+  if (Error e = check_reserved(b, 26, 4, kInfo)) return {{}, e};
   DeviceInfo r;
   r.firmware_version = get_u16(b, 2);
   r.serial_number = get_u32(b, 4);
@@ -352,17 +360,14 @@ Result<std::size_t> encode(const Calibration& r, std::span<std::uint8_t> out) {
     put_u8(out, 16 + j, static_cast<std::uint8_t>(r.direction[j]));
   }
   put_u32(out, 18, 0);
-  seal(out, kCalibrationReportSize);
-  return {kCalibrationReportSize, {}};
+  return seal(out, kCalibrationReportSize);
 }
 
 Result<Calibration> decode_calibration(std::span<const std::uint8_t> b) {
   if (Error e = check_frame(b, kCalibrationReportSize, kCalibrationReportId, kCalib))
     return {{}, e};
-  if (b[1] != 0) return {{}, make_error(ErrorCode::kReservedNotZero, kCalib, "reserved", b[1])};
-  if (get_u32(b, 18) != 0) {
-    return {{}, make_error(ErrorCode::kReservedNotZero, kCalib, "reserved", get_u32(b, 18))};
-  }
+  if (Error e = check_reserved(b, 1, 1, kCalib)) return {{}, e};
+  if (Error e = check_reserved(b, 18, 4, kCalib)) return {{}, e};
   Calibration r;
   r.watchdog_ms = get_u16(b, 2);
   for (std::size_t j = 0; j < kJoints; ++j) {

@@ -269,6 +269,47 @@ TEST(Protocol, ValidCrcButInvalidFieldsAreErrors) {
   EXPECT_STREQ(decode_device_info(ib).error.field, "dof");
 }
 
+// Every reserved field of every report, and the version byte of the reports
+// that carry one, is refused with the report, the field and the value.
+TEST(Protocol, ReservedFieldsAndVersionAreRefusedNamingReportFieldAndValue) {
+  struct Case {
+    Bytes bytes;
+    std::size_t offset;
+    std::uint8_t value;
+    Error (*decode)(const Bytes&);
+    ErrorCode code;
+    const char* report;
+    const char* field;
+    std::int64_t reported;
+  };
+  const auto in = [](const Bytes& b) { return decode_input(b).error; };
+  const auto out = [](const Bytes& b) { return decode_output(b).error; };
+  const auto info = [](const Bytes& b) { return decode_device_info(b).error; };
+  const auto cal = [](const Bytes& b) { return decode_calibration(b).error; };
+  const Bytes input = encoded(InputReport{}), output = encoded(OutputReport{});
+  const Bytes device = encoded(random_info()), calibration = encoded(random_calibration());
+  const Case cases[] = {
+      {input, 1, 2, in, ErrorCode::kUnsupportedVersion, "input", "version", 2},
+      {input, 21, 5, in, ErrorCode::kReservedNotZero, "input", "reserved", 5},
+      {output, 9, 1, out, ErrorCode::kReservedNotZero, "output", "reserved", 256},
+      {device, 1, 3, info, ErrorCode::kUnsupportedVersion, "device info", "version", 3},
+      {device, 9, 7, info, ErrorCode::kReservedNotZero, "device info", "reserved", 7},
+      {device, 29, 1, info, ErrorCode::kReservedNotZero, "device info", "reserved", 1 << 24},
+      {calibration, 1, 4, cal, ErrorCode::kReservedNotZero, "calibration", "reserved", 4},
+      {calibration, 19, 2, cal, ErrorCode::kReservedNotZero, "calibration", "reserved", 512},
+  };
+  for (const Case& c : cases) {
+    Bytes b = c.bytes;
+    b[c.offset] = c.value;
+    reseal(b);
+    const Error e = c.decode(b);
+    EXPECT_EQ(e.code, c.code) << c.report << " byte " << c.offset;
+    EXPECT_STREQ(e.report, c.report) << c.report << " byte " << c.offset;
+    EXPECT_STREQ(e.field, c.field) << c.report << " byte " << c.offset;
+    EXPECT_EQ(e.value, c.reported) << c.report << " byte " << c.offset;
+  }
+}
+
 TEST(Protocol, EncodersRejectValuesTheDecoderWouldReject) {
   std::array<std::uint8_t, kMaxReportSize> buf{};
   InputReport in;
