@@ -65,7 +65,7 @@ tsmh::master_devices::MasterProfile default_profile() {
 name: generic-2dof
 update_rate_hz: 1000
 kinematics: {type: identity, joints: 2}
-axes: [joint0, joint1]
+axes: [joint1, joint2]
 workspace: {min: -1.0, max: 1.0}
 force_limit: 0.3
 buttons: [dead_man]
@@ -73,7 +73,7 @@ buttons: [dead_man]
                                                     "built-in profile");
 }
 constexpr const char* kDefaultMapping = R"(
-joints: [{axis: joint0}, {axis: joint1}]
+joints: [{axis: joint1}, {axis: joint2}]
 buttons: {dead_man: dead_man}
 )";
 

@@ -23,6 +23,7 @@
 #include "master_devices/clock.hpp"
 #include "master_devices/driver_base.hpp"
 #include "master_devices/registry.hpp"
+#include "realtime/joint_names.hpp"
 #include "realtime/latest_value.hpp"
 #include "realtime/pacing.hpp"
 
@@ -89,12 +90,12 @@ class SkeletonDevice final : public DriverBase {
     spec_.driver = "skeleton";
     spec_.dof = static_cast<std::uint32_t>(s_.dof);
     spec_.nominal_rate_hz = s_.rate_hz;
-    for (int j = 0; j < s_.dof; ++j) {
-      spec_.joint_names[static_cast<std::size_t>(j)] = "joint" + std::to_string(j);
-      spec_.peak_torque_nm[static_cast<std::size_t>(j)] = s_.peak_torque_nm;
-      spec_.max_continuous_torque_nm[static_cast<std::size_t>(j)] = s_.peak_torque_nm;
-      spec_.position_min_rad[static_cast<std::size_t>(j)] = -1.0;
-      spec_.position_max_rad[static_cast<std::size_t>(j)] = 1.0;
+    for (std::size_t j = 0; j < spec_.dof; ++j) {
+      spec_.joint_names[j] = realtime::joint_name(j);  // joint1, joint2, ...
+      spec_.peak_torque_nm[j] = s_.peak_torque_nm;
+      spec_.max_continuous_torque_nm[j] = s_.peak_torque_nm;
+      spec_.position_min_rad[j] = -1.0;
+      spec_.position_max_rad[j] = 1.0;
     }
   }
   ~SkeletonDevice() override { close(); }

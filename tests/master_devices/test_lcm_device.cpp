@@ -115,6 +115,12 @@ TEST(LcmDevice, StateInForceOut) {
   EXPECT_DOUBLE_EQ(r.tau_commanded[1], 0.3);
 }
 
+TEST(LcmDevice, NamesItsJointsJoint1AndJoint2) {
+  Rig rig;
+  EXPECT_EQ(rig.device->spec().joint_names[0], "joint1");
+  EXPECT_EQ(rig.device->spec().joint_names[1], "joint2");
+}
+
 TEST(LcmDevice, RejectsMalformedStateMessages) {
   Rig rig;
   rig.send_state(0.1, 0.1, 1, 0, /*num_joints*/ 3);

@@ -42,6 +42,14 @@ TEST(SimDevice, SimulatedTimeIsDeterministic) {
   EXPECT_TRUE(a.simulated_time());
 }
 
+// The master's joints carry the names the rest of the project gives them.
+TEST(SimDevice, NamesItsJointsJoint1AndJoint2) {
+  SimDevice dev(simulated());
+  ASSERT_EQ(dev.spec().dof, 2u);
+  EXPECT_EQ(dev.spec().joint_names[0], "joint1");
+  EXPECT_EQ(dev.spec().joint_names[1], "joint2");
+}
+
 TEST(SimDevice, ReadAdvancesTheWorldToNowLikeTheBareModel) {
   SimDevice dev(simulated());
   dev.open();

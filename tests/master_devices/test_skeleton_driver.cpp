@@ -55,6 +55,15 @@ TEST(SkeletonDriver, SettingsErrorsNameTheField) {
   EXPECT_THROW(registry.create("skeleton", YAML::Load("{rate: 5}"), {}), config::ConfigError);
 }
 
+TEST(SkeletonDriver, NamesItsJointsAsTheProjectDoes) {
+  Rig rig;
+  const DeviceSpec& spec = rig.device->spec();
+  ASSERT_EQ(spec.dof, 3u);
+  EXPECT_EQ(spec.joint_names[0], "joint1");
+  EXPECT_EQ(spec.joint_names[1], "joint2");
+  EXPECT_EQ(spec.joint_names[2], "joint3");
+}
+
 TEST(SkeletonDriver, TorqueFollowsTheRules) {
   Rig rig;
   ASSERT_TRUE(eventually([&] { return rig.read().sequence > 2; }));

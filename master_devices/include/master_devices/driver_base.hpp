@@ -23,6 +23,7 @@
 
 #include "master_devices/clock.hpp"
 #include "master_devices/device.hpp"
+#include "realtime/joint_names.hpp"
 #include "realtime/latest_value.hpp"
 
 namespace tsmh::master_devices {
@@ -108,11 +109,11 @@ class DriverBase : public Device {
 /// Copies a driver's per-joint limits (settings with peak_torque_nm,
 /// continuous_torque_nm, position_min_rad, position_max_rad and
 /// max_stiffness_nm_per_rad) into `spec` for joints 0 .. spec.dof-1, naming
-/// them joint0, joint1, ...
+/// them as the rest of the project does: joint1, joint2, ... (realtime/joint_names.hpp).
 template <class JointLimits>
 void copy_joint_limits(const JointLimits& s, DeviceSpec& spec) {
   for (std::size_t j = 0; j < spec.dof; ++j) {
-    spec.joint_names[j] = "joint" + std::to_string(j);
+    spec.joint_names[j] = realtime::joint_name(j);
     spec.peak_torque_nm[j] = s.peak_torque_nm[j];
     spec.max_continuous_torque_nm[j] = s.continuous_torque_nm[j];
     spec.position_min_rad[j] = s.position_min_rad[j];
