@@ -1,9 +1,11 @@
 #include "master_devices/scenarios.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <variant>
 
 namespace tsmh::master_devices {
 namespace {
@@ -133,6 +135,77 @@ int count(config::FieldReader& r, std::string_view key, int fallback) {
   return static_cast<int>(v);
 }
 
+Scenario parse_palpate(config::FieldReader& r, std::size_t dof) {
+  PalpateScenario p;
+  const long long joint = r.get_int("press_joint", 0);
+  if (joint < 0 || static_cast<std::size_t>(joint) >= dof) {
+    r.fail("press_joint", "must be a joint index 0 .. " + std::to_string(dof - 1));
+  }
+  p.press_joint = static_cast<std::size_t>(joint);
+  p.press_sign = r.get_double("press_sign", 1.0);
+  if (p.press_sign != 1.0 && p.press_sign != -1.0) r.fail("press_sign", "must be 1 or -1");
+  p.soft_presses = count(r, "soft_presses", p.soft_presses);
+  p.soft_depth_rad = r.get_positive("soft_depth_rad", p.soft_depth_rad);
+  p.hard_presses = count(r, "hard_presses", p.hard_presses);
+  p.hard_depth_rad = r.get_positive("hard_depth_rad", p.hard_depth_rad);
+  if (p.hard_presses > 0 && p.soft_presses > 0 && !(p.hard_depth_rad > p.soft_depth_rad)) {
+    r.fail("hard_depth_rad", "must be > soft_depth_rad (the nodule lies below the soft layer)");
+  }
+  p.start_s = r.get_non_negative("start_s", p.start_s);
+  p.press_s = r.get_positive("press_s", p.press_s);
+  p.hold_s = r.get_non_negative("hold_s", p.hold_s);
+  p.release_s = r.get_positive("release_s", p.release_s);
+  p.rest_s = r.get_non_negative("rest_s", p.rest_s);
+  p.end_s = r.get_non_negative("end_s", p.end_s);
+  p.other_amplitude_rad = r.get_non_negative("other_amplitude_rad", p.other_amplitude_rad);
+  p.other_frequency_hz = r.get_non_negative("other_frequency_hz", p.other_frequency_hz);
+  p.alternate = r.get_bool("alternate", false);
+  const YAML::Node sweep_node = r.node("sweep");
+  if (sweep_node) {
+    config::FieldReader sw(sweep_node, r.source(), r.field("sweep"));
+    p.sweep.after_press = count(sw, "after_press", 0);
+    if (p.sweep.after_press > p.soft_presses + p.hard_presses)
+      sw.fail("after_press", "must be at most the number of presses");
+    p.sweep.duration_s = sw.get_positive("duration_s", p.sweep.duration_s);
+    if (p.sweep.duration_s < 2.0) sw.fail("duration_s", "must be >= 2 (1 s fades)");
+    p.sweep.amplitude_rad = sw.get_positive("amplitude_rad", p.sweep.amplitude_rad);
+    p.sweep.frequency_hz = sw.get_positive("frequency_hz", p.sweep.frequency_hz);
+    p.sweep.button_at_s = sw.get_double("button_at_s", p.sweep.button_at_s);
+    sw.reject_unknown();
+  }
+  return p;
+}
+
+Scenario parse_sine(config::FieldReader& r, std::size_t dof) {
+  SineScenario s;
+  r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
+  r.get_joint_array("frequency_hz", s.frequency_hz, dof);
+  r.get_joint_array("phase_rad", s.phase_rad, dof);
+  r.get_joint_array("offset_rad", s.offset_rad, dof);
+  s.duration_s = r.get_positive("duration_s", s.duration_s);
+  return s;
+}
+
+Scenario parse_step(config::FieldReader& r, std::size_t dof) {
+  StepScenario s;
+  r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
+  s.start_s = r.get_non_negative("start_s", s.start_s);
+  s.high_s = r.get_positive("high_s", s.high_s);
+  s.low_s = r.get_positive("low_s", s.low_s);
+  s.repeats = count(r, "repeats", s.repeats);
+  return s;
+}
+
+// The scenarios in the Scenario variant's order: the name settings and
+// reports use, and the parser of its settings section.
+struct ScenarioKind {
+  std::string_view name;
+  Scenario (*parse)(config::FieldReader& section, std::size_t dof);
+};
+constexpr ScenarioKind kScenarios[] = {
+    {"palpate", parse_palpate}, {"sine", parse_sine}, {"step", parse_step}};
+static_assert(std::size(kScenarios) == std::variant_size_v<Scenario>);
+
 }  // namespace
 
 PressWindow palpate_press(const PalpateScenario& p, int index) {
@@ -169,86 +242,22 @@ double scenario_duration_s(const Scenario& s) {
 }
 
 std::string_view scenario_name(const Scenario& s) {
-  switch (s.index()) {
-    case 0:
-      return "palpate";
-    case 1:
-      return "sine";
-    default:
-      return "step";
-  }
+  return kScenarios[s.index()].name;
 }
 
 Scenario parse_scenario(config::FieldReader& settings, std::size_t dof) {
   const std::string name = settings.get_string("scenario", "palpate");
   // Read every scenario's map key so that e.g. a `sine:` block next to
   // `scenario: palpate` is not reported as unknown, but only parse the chosen one.
-  const YAML::Node palpate_node = settings.node("palpate");
-  const YAML::Node sine_node = settings.node("sine");
-  const YAML::Node step_node = settings.node("step");
-  if (name == "palpate") {
-    config::FieldReader r(palpate_node, settings.source(), settings.field("palpate"));
-    PalpateScenario p;
-    const long long joint = r.get_int("press_joint", 0);
-    if (joint < 0 || static_cast<std::size_t>(joint) >= dof) {
-      r.fail("press_joint", "must be a joint index 0 .. " + std::to_string(dof - 1));
-    }
-    p.press_joint = static_cast<std::size_t>(joint);
-    p.press_sign = r.get_double("press_sign", 1.0);
-    if (p.press_sign != 1.0 && p.press_sign != -1.0) r.fail("press_sign", "must be 1 or -1");
-    p.soft_presses = count(r, "soft_presses", p.soft_presses);
-    p.soft_depth_rad = r.get_positive("soft_depth_rad", p.soft_depth_rad);
-    p.hard_presses = count(r, "hard_presses", p.hard_presses);
-    p.hard_depth_rad = r.get_positive("hard_depth_rad", p.hard_depth_rad);
-    if (p.hard_presses > 0 && p.soft_presses > 0 && !(p.hard_depth_rad > p.soft_depth_rad)) {
-      r.fail("hard_depth_rad", "must be > soft_depth_rad (the nodule lies below the soft layer)");
-    }
-    p.start_s = r.get_non_negative("start_s", p.start_s);
-    p.press_s = r.get_positive("press_s", p.press_s);
-    p.hold_s = r.get_non_negative("hold_s", p.hold_s);
-    p.release_s = r.get_positive("release_s", p.release_s);
-    p.rest_s = r.get_non_negative("rest_s", p.rest_s);
-    p.end_s = r.get_non_negative("end_s", p.end_s);
-    p.other_amplitude_rad = r.get_non_negative("other_amplitude_rad", p.other_amplitude_rad);
-    p.other_frequency_hz = r.get_non_negative("other_frequency_hz", p.other_frequency_hz);
-    p.alternate = r.get_bool("alternate", false);
-    const YAML::Node sweep_node = r.node("sweep");
-    if (sweep_node) {
-      config::FieldReader sw(sweep_node, settings.source(), r.field("sweep"));
-      p.sweep.after_press = count(sw, "after_press", 0);
-      if (p.sweep.after_press > p.soft_presses + p.hard_presses)
-        sw.fail("after_press", "must be at most the number of presses");
-      p.sweep.duration_s = sw.get_positive("duration_s", p.sweep.duration_s);
-      if (p.sweep.duration_s < 2.0) sw.fail("duration_s", "must be >= 2 (1 s fades)");
-      p.sweep.amplitude_rad = sw.get_positive("amplitude_rad", p.sweep.amplitude_rad);
-      p.sweep.frequency_hz = sw.get_positive("frequency_hz", p.sweep.frequency_hz);
-      p.sweep.button_at_s = sw.get_double("button_at_s", p.sweep.button_at_s);
-      sw.reject_unknown();
-    }
+  std::array<YAML::Node, std::size(kScenarios)> sections;
+  for (std::size_t k = 0; k < sections.size(); ++k)
+    sections[k] = settings.node(kScenarios[k].name);
+  for (std::size_t k = 0; k < sections.size(); ++k) {
+    if (name != kScenarios[k].name) continue;
+    config::FieldReader r(sections[k], settings.source(), settings.field(name));
+    Scenario scenario = kScenarios[k].parse(r, dof);
     r.reject_unknown();
-    return p;
-  }
-  if (name == "sine") {
-    config::FieldReader r(sine_node, settings.source(), settings.field("sine"));
-    SineScenario s;
-    r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
-    r.get_joint_array("frequency_hz", s.frequency_hz, dof);
-    r.get_joint_array("phase_rad", s.phase_rad, dof);
-    r.get_joint_array("offset_rad", s.offset_rad, dof);
-    s.duration_s = r.get_positive("duration_s", s.duration_s);
-    r.reject_unknown();
-    return s;
-  }
-  if (name == "step") {
-    config::FieldReader r(step_node, settings.source(), settings.field("step"));
-    StepScenario s;
-    r.get_joint_array("amplitude_rad", s.amplitude_rad, dof);
-    s.start_s = r.get_non_negative("start_s", s.start_s);
-    s.high_s = r.get_positive("high_s", s.high_s);
-    s.low_s = r.get_positive("low_s", s.low_s);
-    s.repeats = count(r, "repeats", s.repeats);
-    r.reject_unknown();
-    return s;
+    return scenario;
   }
   settings.fail("scenario", "unknown scenario '" + name + "' (expected palpate, sine or step)");
 }

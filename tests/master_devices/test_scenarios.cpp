@@ -155,5 +155,24 @@ TEST(Scenarios, ParsesSettingsAndNamesBadFields) {
             std::string::npos);
 }
 
+TEST(Scenarios, EachNameParsesToItsScenarioAndTheOthersSectionsAreKnownKeys) {
+  for (const char* name : {"palpate", "sine", "step"}) {
+    // Every scenario's section may stand beside the chosen one: none is unknown.
+    config::FieldReader r(YAML::Load(std::string("scenario: ") + name +
+                                     "\npalpate: {hard_presses: 2}\nsine: {duration_s: 3}\n"
+                                     "step: {repeats: 4}\n"),
+                          "server.yaml", "device.settings");
+    const Scenario s = parse_scenario(r, 2);
+    EXPECT_NO_THROW(r.reject_unknown()) << name;
+    EXPECT_EQ(scenario_name(s), name);
+  }
+  EXPECT_EQ(std::get<StepScenario>(parse("scenario: step\nstep: {repeats: 4}\n")).repeats, 4);
+  // A nested section's errors name the file and the whole path.
+  EXPECT_NE(error_of("palpate: {sweep: {after_press: 1, duration_s: 1}}\n")
+                .find("server.yaml: device.settings.palpate.sweep.duration_s: must be >= 2"),
+            std::string::npos)
+      << error_of("palpate: {sweep: {after_press: 1, duration_s: 1}}\n");
+}
+
 }  // namespace
 }  // namespace tsmh::master_devices

@@ -8,11 +8,13 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <tsmh/calibration_request_t.hpp>
 #include <tsmh/haptic_status_t.hpp>
 #include <tsmh/master_command_t.hpp>
 #include <tsmh/slave_state_t.hpp>
 #include <tsmh/slave_truth_t.hpp>
+#include <utility>
 #include <vector>
 
 #include "bridge/channels.hpp"
@@ -57,6 +59,13 @@ template <>
 struct SampleTraits<CalibrationRequestSample>
     : SampleTraitsOf<tsmh::calibration_request_t, CalibrationRequestLimits,
                      Channel::kCalibrationRequest> {};
+
+/// The channel a Sample travels on: `given` when it is not empty, else
+/// prefix + its base name (channel_name).
+template <class Sample>
+std::string sample_channel(std::string_view prefix, std::string given) {
+  return given.empty() ? channel_name(prefix, SampleTraits<Sample>::channel) : std::move(given);
+}
 
 // Sample -> message (copies num_joints entries of each array; receive_ns is not sent).
 void to_message(const SlaveStateSample& s, tsmh::slave_state_t& m);

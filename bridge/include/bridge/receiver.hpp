@@ -41,9 +41,7 @@ class Receiver {
   /// for the Receiver's lifetime.
   template <class Sample>
   Inbox<Sample>& subscribe(InboxOptions<Sample> options = {}) {
-    std::string name = options.channel.empty()
-                           ? channel_name(config_.prefix, SampleTraits<Sample>::channel)
-                           : options.channel;
+    std::string name = sample_channel<Sample>(config_.prefix, options.channel);
     auto inbox = std::make_unique<Inbox<Sample>>(std::move(name), std::move(options));
     Inbox<Sample>& ref = *inbox;
     add(std::move(inbox));

@@ -43,8 +43,8 @@ class Sender {
   /// Sender's lifetime.
   template <class Sample>
   Outbox<Sample>& outbox(std::string channel = {}) {
-    if (channel.empty()) channel = channel_name(config_.prefix, SampleTraits<Sample>::channel);
-    auto box = std::make_unique<Outbox<Sample>>(std::move(channel), signal_);
+    auto box = std::make_unique<Outbox<Sample>>(
+        sample_channel<Sample>(config_.prefix, std::move(channel)), signal_);
     Outbox<Sample>& ref = *box;
     add(std::move(box));
     return ref;
