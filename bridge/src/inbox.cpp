@@ -14,12 +14,12 @@ ChannelStats InboxBase::stats() const noexcept {
   for (std::size_t i = 0; i < s.rejected_by.size(); ++i)
     s.rejected_by[i] = rejected_by_[i].load(std::memory_order_relaxed);
   s.handshake = handshake_.load(std::memory_order_relaxed);
-  s.duplicates = duplicates_.load(std::memory_order_relaxed);
-  s.reordered = reordered_.load(std::memory_order_relaxed);
-  s.seq_gaps = seq_gaps_.load(std::memory_order_relaxed);
+  s.duplicates = counted(Order::kDuplicate);
+  s.reordered = counted(Order::kLate);
+  s.seq_gaps = counted(Order::kGap);
   s.seq_missing = seq_missing_.load(std::memory_order_relaxed);
-  s.restarts = restarts_.load(std::memory_order_relaxed);
-  s.resyncs = resyncs_.load(std::memory_order_relaxed);
+  s.restarts = counted(Order::kRestart);
+  s.resyncs = counted(Order::kResync);
   s.discarded_before_start = discarded_.load(std::memory_order_relaxed);
   s.latency = latency_.summary();
   s.last_receive_ns = last_receive_ns_.load(std::memory_order_relaxed);
@@ -90,41 +90,20 @@ void InboxBase::refuse_by_session(SessionVerdict verdict, const AuthTrailer& tra
 
 bool InboxBase::count_order(const OrderVerdict& v, std::int64_t seq, std::int64_t utime,
                             std::int64_t receive_ns) noexcept {
-  switch (v.order) {
-    case Order::kFirst:
-    case Order::kNext:
-      break;
-    case Order::kGap:
-      // One event per gap, whatever its width: a single bogus seq of 2e12
-      // must read as one gap, not two trillion (and never overflow).
-      seq_gaps_.fetch_add(1, std::memory_order_relaxed);
-      {  // single writer (the receive thread): load + store is enough
-        const std::uint64_t had = seq_missing_.load(std::memory_order_relaxed);
-        const auto add = static_cast<std::uint64_t>(v.missing);
-        seq_missing_.store(had > UINT64_MAX - add ? UINT64_MAX : had + add,
-                           std::memory_order_relaxed);
-      }
-      break;
-    case Order::kRestart:
-      restarts_.fetch_add(1, std::memory_order_relaxed);
-      break;
-    case Order::kResync:
-      resyncs_.fetch_add(1, std::memory_order_relaxed);
-      break;
-    case Order::kDuplicate:
-      duplicates_.fetch_add(1, std::memory_order_relaxed);
-      break;
-    case Order::kLate:
-      reordered_.fetch_add(1, std::memory_order_relaxed);
-      break;
-    case Order::kTimeBackwards: {
-      auto r =
-          make_rejection(RejectReason::kTimeBackwards, "seq advanced", static_cast<double>(utime));
-      r.seq = seq;
-      r.receive_ns = receive_ns;
-      count_rejected(r);
-      break;
-    }
+  // One event per verdict: a gap counts once whatever its width, so a single
+  // bogus seq of 2e12 reads as one gap, not two trillion (and never overflows).
+  count(v.order);
+  if (v.order == Order::kGap) {
+    // single writer (the receive thread): load + store is enough
+    const std::uint64_t had = seq_missing_.load(std::memory_order_relaxed);
+    const auto add = static_cast<std::uint64_t>(v.missing);
+    seq_missing_.store(had > UINT64_MAX - add ? UINT64_MAX : had + add, std::memory_order_relaxed);
+  } else if (v.order == Order::kTimeBackwards) {
+    auto r =
+        make_rejection(RejectReason::kTimeBackwards, "seq advanced", static_cast<double>(utime));
+    r.seq = seq;
+    r.receive_ns = receive_ns;
+    count_rejected(r);
   }
   return v.accepted();
 }

@@ -89,7 +89,7 @@ class InboxBase {
   bool count_order(const OrderVerdict& v, std::int64_t seq, std::int64_t utime,
                    std::int64_t receive_ns) noexcept;
   void count_accepted(std::int64_t utime, std::int64_t receive_ns, bool clocks_shared) noexcept;
-  void count_resync() noexcept { resyncs_.fetch_add(1, std::memory_order_relaxed); }
+  void count_resync() noexcept { count(Order::kResync); }
   LinkSession* session_ = nullptr;
 
  private:
@@ -98,12 +98,16 @@ class InboxBase {
   std::atomic<std::uint64_t> accepted_{0};
   std::array<std::atomic<std::uint64_t>, kRejectReasons> rejected_by_{};
   std::atomic<std::uint64_t> handshake_{0};
-  std::atomic<std::uint64_t> duplicates_{0};
-  std::atomic<std::uint64_t> reordered_{0};
-  std::atomic<std::uint64_t> seq_gaps_{0};
+  void count(Order order) noexcept {
+    by_order_[static_cast<std::size_t>(order)].fetch_add(1, std::memory_order_relaxed);
+  }
+  std::uint64_t counted(Order order) const noexcept {
+    return by_order_[static_cast<std::size_t>(order)].load(std::memory_order_relaxed);
+  }
+  /// Messages per ordering verdict (duplicates, reordered, gaps as events,
+  /// restarts, resyncs), indexed by Order.
+  std::array<std::atomic<std::uint64_t>, kOrders> by_order_{};
   std::atomic<std::uint64_t> seq_missing_{0};
-  std::atomic<std::uint64_t> restarts_{0};
-  std::atomic<std::uint64_t> resyncs_{0};
   std::atomic<std::uint64_t> discarded_{0};
   bool discarding_ = false;
   std::atomic<std::int64_t> last_receive_ns_{0};

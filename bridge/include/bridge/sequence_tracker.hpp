@@ -3,6 +3,7 @@
 // against the last accepted one: in order, after a gap, duplicate, late
 // (reordered), sender restart, or time going backwards. Pure logic, no clock.
 
+#include <cstddef>
 #include <cstdint>
 
 namespace tsmh::bridge {
@@ -17,6 +18,7 @@ enum class Order : std::uint8_t {
   kLate,           ///< seq < last and utime not newer: reordered, dropped
   kTimeBackwards,  ///< seq > last but utime <= last: dropped (rejected)
 };
+inline constexpr std::size_t kOrders = static_cast<std::size_t>(Order::kTimeBackwards) + 1;
 
 struct OrderVerdict {
   Order order = Order::kFirst;

@@ -191,6 +191,29 @@ void check_images(const fs::path& dir, const std::vector<std::string>& images, s
       fs::remove(dir / name, ec);
 }
 
+// The terminal gnuplot draws with, and its images' file extension.
+struct Terminal {
+  std::string name = plot_terminal();
+  std::string ext = extension(name);
+};
+
+// Writes each gnuplot script, runs them side by side, and reports the images
+// when every one was drawn whole; else the error, with no image left behind.
+PlotOutcome render(const fs::path& dir,
+                   const std::vector<std::pair<fs::path, std::string>>& scripts,
+                   std::vector<std::string> images) {
+  std::vector<fs::path> paths;
+  for (const auto& [path, text] : scripts) {
+    write_or_throw(path, [&](std::ostream& f) { f << text; });
+    paths.push_back(path);
+  }
+  PlotOutcome out;
+  out.error = run_gnuplot(paths);
+  check_images(dir, images, out.error);
+  if (out.error.empty()) out.files = std::move(images);
+  return out;
+}
+
 // The residual measured - `friction` as the line a pixel-wide plot draws:
 // for each of `columns` equal time bins, its smallest and largest sample in
 // the order they occur. A line through them covers each column from its
@@ -233,9 +256,7 @@ std::vector<std::pair<double, double>> residual_envelope(const FitData& d,
 
 PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const FitData& data,
                           const std::vector<PlotCurve>& curves, const std::string& title) {
-  PlotOutcome out;
-  const std::string term = plot_terminal();
-  const std::string ext = extension(term);
+  const Terminal term;
   // The data file: at most ~20000 rows, so a 40 s record keeps 2 ms detail.
   const std::size_t stride = std::max<std::size_t>(1, data.size() / 20000);
   const fs::path dat = dir / (prefix + "_plot_data.csv");
@@ -271,13 +292,14 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
           << ", graph 1 fc rgb '#eeeeee' fs solid 1.0 noborder behind\n";
   }
   const std::string common = "set datafile separator ','\nset grid\nset key outside right top\n";
-  const auto image = [&](const std::string& name) { return prefix + "_" + name + ext; };
+  const auto image = [&](const std::string& name) { return prefix + "_" + name + term.ext; };
 
   // One script per image, so the three gnuplots run side by side.
   std::ostringstream friction, hysteresis, residual;
   // 1. friction over time
-  friction << common << terminal_line(term, 1400, 600) << "set output " << quoted(image("friction"))
-           << "\nset title " << quoted(title + ": friction over time (validation blocks shaded)")
+  friction << common << terminal_line(term.name, 1400, 600) << "set output "
+           << quoted(image("friction")) << "\nset title "
+           << quoted(title + ": friction over time (validation blocks shaded)")
            << "\nset xlabel 't (s)'\nset ylabel 'F (N)'\n"
            << shade.str() << "plot " << quoted(dat.filename().string())
            << " using 1:3 with lines lw 1 lc rgb '#999999' title 'measured'";
@@ -285,7 +307,7 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
     friction << ", '' using 1:" << 4 + c << " with lines lw 1.5 title " << quoted(curves[c].title);
   friction << "\n";
   // 2. hysteresis loops: friction vs velocity
-  hysteresis << common << terminal_line(term, 900, 700) << "set output "
+  hysteresis << common << terminal_line(term.name, 900, 700) << "set output "
              << quoted(image("hysteresis")) << "\nset title "
              << quoted(title + ": friction vs velocity (hysteresis loops)")
              << "\nset xlabel 'xd (rad/s)'\nset ylabel 'F (N)'\n"
@@ -302,7 +324,7 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
       for (const auto& c : curves)
         if (std::isfinite(c.friction[i]))
           scored_max = std::max(scored_max, std::fabs(data.measured[i] - c.friction[i]));
-  residual << common << terminal_line(term, kResidualWidth, 500) << "set output "
+  residual << common << terminal_line(term.name, kResidualWidth, 500) << "set output "
            << quoted(image("residual")) << "\nset title "
            << quoted(title + ": residual, measured - model (validation shaded; warm-up clipped)")
            << "\nset xlabel 't (s)'\nset ylabel 'error (N)'\n";
@@ -314,26 +336,17 @@ PlotOutcome plot_friction(const fs::path& dir, const std::string& prefix, const 
              << " using 1:2 with lines lw 1 title " << quoted(curves[c].title);
   }
   residual << "\n";
-  std::vector<fs::path> scripts;
-  for (const auto& [name, text] : {std::pair<std::string, std::string>{"friction", friction.str()},
-                                   {"hysteresis", hysteresis.str()},
-                                   {"residual", residual.str()}}) {
-    scripts.push_back(dir / (prefix + "_" + name + ".gp"));
-    write_or_throw(scripts.back(), [&](std::ostream& f) { f << text; });
-  }
-  const std::vector<std::string> images = {image("friction"), image("hysteresis"),
-                                           image("residual")};
-  out.error = run_gnuplot(scripts);
-  check_images(dir, images, out.error);
-  if (out.error.empty()) out.files = images;
-  return out;
+  const auto script = [&](const std::string& name) { return dir / (prefix + "_" + name + ".gp"); };
+  return render(dir,
+                {{script("friction"), friction.str()},
+                 {script("hysteresis"), hysteresis.str()},
+                 {script("residual"), residual.str()}},
+                {image("friction"), image("hysteresis"), image("residual")});
 }
 
 PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const RegimeBars& bars,
                          const std::string& title) {
-  PlotOutcome out;
-  const std::string term = plot_terminal();
-  const std::string ext = extension(term);
+  const Terminal term;
   const fs::path dat = dir / (prefix + "_regimes.csv");
   write_or_throw(dat, [&](std::ostream& f) {
     f << "regime";
@@ -349,8 +362,8 @@ PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const R
   });
   std::ostringstream s;
   s << "set datafile separator ','\n"
-    << terminal_line(term, 1200, 500) << "set output " << quoted(prefix + "_regimes" + ext)
-    << "\nset title " << quoted(title)
+    << terminal_line(term.name, 1200, 500) << "set output "
+    << quoted(prefix + "_regimes" + term.ext) << "\nset title " << quoted(title)
     << "\nset style data histograms\nset style histogram clustered gap 1\n"
     << "set style fill solid 0.8 border -1\nset ylabel 'validation RMSE (N)'\n"
     << "set xtics rotate by -35\nset grid ytics\nset key outside right top\n"
@@ -358,20 +371,13 @@ PlotOutcome plot_regimes(const fs::path& dir, const std::string& prefix, const R
   for (std::size_t k = 1; k < bars.series.size(); ++k)
     s << ", '' using " << 2 + k << " title columnhead";
   s << "\n";
-  const fs::path script = dir / (prefix + "_regimes.gp");
-  write_or_throw(script, [&](std::ostream& f) { f << s.str(); });
-  out.error = run_gnuplot(script);
-  check_images(dir, {prefix + "_regimes" + ext}, out.error);
-  if (out.error.empty()) out.files = {prefix + "_regimes" + ext};
-  return out;
+  return render(dir, {{dir / (prefix + "_regimes.gp"), s.str()}}, {prefix + "_regimes" + term.ext});
 }
 
 PlotOutcome plot_xy(const fs::path& dir, const std::string& name,
                     const std::vector<std::pair<double, double>>& points, const std::string& xlabel,
                     const std::string& ylabel, const std::string& title) {
-  PlotOutcome out;
-  const std::string term = plot_terminal();
-  const std::string ext = extension(term);
+  const Terminal term;
   const fs::path dat = dir / (name + ".csv");
   write_or_throw(dat, [&](std::ostream& f) {
     f << "x,y\n";
@@ -380,15 +386,11 @@ PlotOutcome plot_xy(const fs::path& dir, const std::string& name,
   });
   std::ostringstream s;
   s << "set datafile separator ','\n"
-    << terminal_line(term, 900, 500) << "set output " << quoted(name + ext) << "\nset title "
-    << quoted(title) << "\nset xlabel " << quoted(xlabel) << "\nset ylabel " << quoted(ylabel)
-    << "\nset grid\nset key off\nplot " << quoted(dat.filename().string())
+    << terminal_line(term.name, 900, 500) << "set output " << quoted(name + term.ext)
+    << "\nset title " << quoted(title) << "\nset xlabel " << quoted(xlabel) << "\nset ylabel "
+    << quoted(ylabel) << "\nset grid\nset key off\nplot " << quoted(dat.filename().string())
     << " using 1:2 every ::1 with points pt 7 ps 0.4\n";
-  const fs::path script = dir / (name + ".gp");
-  write_or_throw(script, [&](std::ostream& f) { f << s.str(); });
-  out.error = run_gnuplot(script);
-  if (out.error.empty()) out.files = {name + ext};
-  return out;
+  return render(dir, {{dir / (name + ".gp"), s.str()}}, {name + term.ext});
 }
 
 }  // namespace tsmh::estimator
