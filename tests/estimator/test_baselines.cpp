@@ -87,15 +87,37 @@ TEST(Baselines, BadParametersAreRefusedNamingTheField) {
   EXPECT_THROW(CoulombCapstanModel({1.0, 1.5, 0.01}), std::invalid_argument);
 }
 
-TEST(Baselines, SetValuesRoundTripsParameters) {
-  LuGreModel lugre;
+// Every baseline: set_values takes one value per parameter, in parameters()'
+// order, and keeps its kind; a wrong count or a bad value is refused.
+template <class Model>
+void expect_set_values_round_trip(const char* kind) {
+  Model model;
+  EXPECT_EQ(model.kind(), kind);
   std::vector<double> v;
-  for (const auto& p : lugre.parameters())
+  for (const auto& p : model.parameters())
     v.push_back(p.value * 1.1);
-  lugre.set_values(v);
-  const auto after = lugre.parameters();
+  model.set_values(v);
+  const auto after = model.parameters();
+  ASSERT_EQ(after.size(), v.size()) << kind;
   for (std::size_t i = 0; i < v.size(); ++i)
-    EXPECT_DOUBLE_EQ(after[i].value, v[i]);
+    EXPECT_DOUBLE_EQ(after[i].value, v[i]) << kind << " " << after[i].name;
+  EXPECT_EQ(model.kind(), kind);
+  v.push_back(1.0);
+  try {
+    model.set_values(v);
+    ADD_FAILURE() << kind << ": one value too many accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(kind), std::string::npos) << e.what();
+  }
+  v.assign(after.size(), -1.0);
+  EXPECT_THROW(model.set_values(v), std::invalid_argument) << kind;
+  EXPECT_DOUBLE_EQ(model.parameters()[0].value, after[0].value) << kind << ": changed by a refusal";
+}
+
+TEST(Baselines, SetValuesRoundTripsParameters) {
+  expect_set_values_round_trip<DahlModel>("dahl");
+  expect_set_values_round_trip<LuGreModel>("lugre");
+  expect_set_values_round_trip<CoulombCapstanModel>("coulomb_capstan");
 }
 
 }  // namespace

@@ -15,11 +15,6 @@ void require(bool ok, const std::string& field, const char* why) {
   if (!ok) throw std::invalid_argument(field + ": " + why);
 }
 
-void check_count(std::span<const double> v, std::size_t n, const char* model) {
-  if (v.size() != n)
-    throw std::invalid_argument(std::string(model) + ": wrong number of parameter values");
-}
-
 }  // namespace
 
 DahlModel::DahlModel(Params p) : BaselineModel(p) {
@@ -30,11 +25,6 @@ DahlModel::DahlModel(Params p) : BaselineModel(p) {
 std::vector<Parameter> DahlModel::parameters() const {
   return {{"params.sigma0", p_.sigma0, 1.0, 1e4, false, "N/rad"},
           {"params.fc", p_.fc, 0.01, 200.0, false, "N"}};
-}
-
-void DahlModel::set_values(std::span<const double> v) {
-  check_count(v, 2, "dahl");
-  *this = DahlModel({v[0], v[1]});
 }
 
 double DahlModel::step(const Motion& m, double dt) noexcept {
@@ -60,11 +50,6 @@ std::vector<Parameter> LuGreModel::parameters() const {
           {"params.fc", p_.fc, 0.01, 200.0, false, "N"},
           {"params.fs", p_.fs, 0.01, 200.0, false, "N"},
           {"params.vs", p_.vs, 1e-3, 10.0, false, "rad/s"}};
-}
-
-void LuGreModel::set_values(std::span<const double> v) {
-  check_count(v, 6, "lugre");
-  *this = LuGreModel({v[0], v[1], v[2], v[3], v[4], v[5]});
 }
 
 double LuGreModel::step(const Motion& m, double dt) noexcept {
@@ -93,11 +78,6 @@ std::vector<Parameter> CoulombCapstanModel::parameters() const {
   return {{"params.f0", p_.f0, 0.0, 200.0, false, "N"},
           {"params.capstan", p_.capstan, 0.0, 0.99, false, ""},
           {"params.v_eps", p_.v_eps, 1e-4, 1.0, false, "rad/s"}};
-}
-
-void CoulombCapstanModel::set_values(std::span<const double> v) {
-  check_count(v, 3, "coulomb_capstan");
-  *this = CoulombCapstanModel({v[0], v[1], v[2]});
 }
 
 double CoulombCapstanModel::step(const Motion& m, double dt) noexcept {

@@ -3,17 +3,36 @@
 // paper's model (docs/friction-model.md): Dahl, LuGre, and Kaneko's
 // Coulomb/capstan model of a tendon-sheath pair.
 
+#include <cstddef>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+
 #include "estimator/friction_model.hpp"
 
 namespace tsmh::estimator {
 
 /// What the baselines share: their parameters, the friction they gave last,
-/// and copying themselves. `Derived` is the model, `P` its parameters.
+/// their kind (Derived::kKind), setting their values, resetting and copying
+/// themselves. `Derived` is the model, `P` its parameters: doubles only, in
+/// the order parameters() lists them.
 template <class Derived, class P>
 class BaselineModel : public FrictionModel {
  public:
   using Params = P;
+  std::string kind() const override { return Derived::kKind; }
   double friction() const noexcept override { return f_; }
+  /// The model rebuilt (its constructor checks them) from one value per
+  /// field of Params, in parameters()' order.
+  void set_values(std::span<const double> values) override {
+    if (values.size() != kCount)
+      throw std::invalid_argument(std::string(Derived::kKind) +
+                                  ": wrong number of parameter values");
+    static_cast<Derived&>(*this) = Derived(params_of(values, std::make_index_sequence<kCount>{}));
+  }
+  void reset() noexcept override { f_ = 0.0; }
   std::unique_ptr<FrictionModel> clone() const override {
     return std::make_unique<Derived>(static_cast<const Derived&>(*this));
   }
@@ -22,6 +41,15 @@ class BaselineModel : public FrictionModel {
   explicit BaselineModel(Params p) : p_(p) {}
   Params p_;
   double f_ = 0.0;
+
+ private:
+  static_assert(std::is_aggregate_v<Params> && sizeof(Params) % sizeof(double) == 0,
+                "a baseline's Params holds its values as doubles");
+  static constexpr std::size_t kCount = sizeof(Params) / sizeof(double);
+  template <std::size_t... I>
+  static Params params_of(std::span<const double> v, std::index_sequence<I...>) {
+    return Params{v[I]...};
+  }
 };
 
 /// Dahl: dF/dt = sigma0 (xd - |xd| F / Fc). Integrated exactly for the
@@ -33,11 +61,9 @@ struct DahlParams {
 
 class DahlModel final : public BaselineModel<DahlModel, DahlParams> {
  public:
+  static constexpr const char* kKind = "dahl";
   explicit DahlModel(Params p = {});
-  std::string kind() const override { return "dahl"; }
   std::vector<Parameter> parameters() const override;
-  void set_values(std::span<const double> values) override;
-  void reset() noexcept override { f_ = 0.0; }
   double step(const Motion& m, double dt) noexcept override;
 };
 
@@ -55,10 +81,9 @@ struct LuGreParams {
 
 class LuGreModel final : public BaselineModel<LuGreModel, LuGreParams> {
  public:
+  static constexpr const char* kKind = "lugre";
   explicit LuGreModel(Params p = {});
-  std::string kind() const override { return "lugre"; }
   std::vector<Parameter> parameters() const override;
-  void set_values(std::span<const double> values) override;
   void reset() noexcept override {
     z_ = 0.0;
     f_ = 0.0;
@@ -82,11 +107,9 @@ struct CoulombCapstanParams {
 
 class CoulombCapstanModel final : public BaselineModel<CoulombCapstanModel, CoulombCapstanParams> {
  public:
+  static constexpr const char* kKind = "coulomb_capstan";
   explicit CoulombCapstanModel(Params p = {});
-  std::string kind() const override { return "coulomb_capstan"; }
   std::vector<Parameter> parameters() const override;
-  void set_values(std::span<const double> values) override;
-  void reset() noexcept override { f_ = 0.0; }
   double step(const Motion& m, double dt) noexcept override;
 };
 
