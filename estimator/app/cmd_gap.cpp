@@ -172,8 +172,9 @@ void add_gap_command(CLI::App& app, Context& ctx) {
                   "forms): viscous, load_dependent, position_dependent, time_varying, "
                   "tension_dependent, hysteresis_elements, direction_asymmetry, stribeck, "
                   "acceleration_dependence, reversal_offset, and the structural "
-                  "distributed_slip (with its tension copies when tension_dependent is named "
-                  "too), load_copies, tension_copies; a family brings all its forms")
+                  "distributed_slip (with its tension copies, or its per-tendon families when "
+                  "T1 and T3 are recorded, when tension_dependent is named too), load_copies, "
+                  "tension_copies, tendon_widths; a family brings all its forms")
       ->delimiter(',');
   add_fit_input_options(*cmd, opts->in, ctx);
   cmd->callback([opts, &ctx] { run_gap_command(*opts, ctx); });

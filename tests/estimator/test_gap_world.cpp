@@ -92,5 +92,35 @@ TEST(GapPhysicsWorld, NamesDistributedSlipAndTensionSeed6) {
   expect_slip_and_tension(6);
 }
 
+// World seed 5: a large capstan (tendon 1 wraps 3.55 rad) and a stiff tissue
+// pull tendon 2 slack in deep contact, where its sheath carries no friction.
+// Elements whose break forces only scale with the tensions (the copies) keep
+// a constant presliding width and end at 2.26x the sensor floor; the
+// per-tendon element families (widths and break forces x g(T_j), a slack
+// tendon's family clamped to zero) must be named on the tension line and
+// take the gap below 1.7x.
+TEST(GapPhysicsWorld, NamesPerTendonFamiliesOnTheSlackTendonSeed5) {
+  const WorldRun w = calibration_run(5);
+  const GapResult g = find_model_gaps(w.rec, *load_model("paper"), "paper");
+  record_gap_against_floor(g, w.floor);
+  std::string found;
+  for (const auto& e : g.effects)
+    found += e.name + " (" + e.form + ") ";
+  const EffectFound* slip = effect(g, "distributed_slip");
+  ASSERT_NE(slip, nullptr) << "named: " << found;
+  const EffectFound* tension = effect(g, "tension_dependent");
+  ASSERT_NE(tension, nullptr) << "named: " << found;
+  EXPECT_EQ(tension->form, "distributed_slip+tendon_widths") << found;
+  EXPECT_NE(tension->meaning.find("g_j = max(T_j, 0) / T_ref"), std::string::npos)
+      << tension->meaning;
+  std::map<std::string, double> t(tension->parameters.begin(), tension->parameters.end());
+  // Both sheaths carry friction, each on its own tendon.
+  EXPECT_GT(t["tendon_widths.break_force_T1"], 0.0) << tension->where;
+  EXPECT_GT(t["tendon_widths.break_force_T3"], 0.0) << tension->where;
+  EXPECT_LE(g.gap_final.rmse, 1.7 * w.floor)
+      << "gap " << g.gap_base.rmse << " -> " << g.gap_final.rmse << " N, sensor floor " << w.floor
+      << " N (ratio " << g.gap_final.rmse / w.floor << "); named: " << found;
+}
+
 }  // namespace
 }  // namespace tsmh::estimator

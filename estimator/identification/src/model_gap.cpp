@@ -376,7 +376,8 @@ std::vector<TermKind> candidate_kinds(const GapOptions& o) {
   for (const auto& name : o.candidates) {
     // A family name (position_dependent, load_dependent) brings all its forms.
     // The structural candidates are chosen in each round (structural_candidates).
-    bool found = name == "distributed_slip" || name == "load_copies" || name == "tension_copies";
+    bool found = name == "distributed_slip" || name == "load_copies" || name == "tension_copies" ||
+                 name == "tendon_widths";
     for (const auto& info : term_catalog()) {
       if (info.name == name || term_family(info.kind) == name) {
         if (std::find(out.begin(), out.end(), info.kind) == out.end()) out.push_back(info.kind);
@@ -570,32 +571,53 @@ CandidateTrial score_trial(const FitData& d, std::span<const double> f_cur,
 // follows the tension; a tip load acts on it through the tendons'
 // tensions); when the pair wins, both effects are named, with what the
 // elements alone gave. The load copies come after, on a model with slip.
-enum class Structural { kDistributedSlip, kSlipWithTension, kLoadCopies, kTensionCopies };
+// Where both proximal tensions are recorded, the tension dependence also
+// comes as per-tendon element families (`tendon_widths`, with the copies):
+// each sheath's presliding widths and break forces scale with its own
+// tendon's tension, friction x g(T_j), g_j = max(T_j, 0) / T_ref, so a slack
+// tendon's sheath carries none; the copies scale only the break forces.
+enum class Structural {
+  kDistributedSlip,
+  kSlipWithTension,
+  kSlipWithWidths,
+  kLoadCopies,
+  kTensionCopies,
+  kTendonWidths
+};
 
 const char* structural_name(Structural s) {
-  return realtime::enum_name<Structural::kTensionCopies>(
-             s, {"distributed_slip", "distributed_slip+tension_copies", "load_copies",
-                 "tension_copies"})
+  return realtime::enum_name<Structural::kTendonWidths>(
+             s,
+             {"distributed_slip", "distributed_slip+tension_copies",
+              "distributed_slip+tendon_widths", "load_copies", "tension_copies", "tendon_widths"})
       .data();
 }
 
 // The copies a pair adds (the distributed slip itself: none).
 std::optional<Structural> copies_of(Structural s) {
   if (s == Structural::kSlipWithTension) return Structural::kTensionCopies;
+  if (s == Structural::kSlipWithWidths) return Structural::kTendonWidths;
   return std::nullopt;
 }
 
 // A pair's family is its copies' (the effect it adds beyond the elements),
 // so that it meets the load and tension level terms as a rival.
 const char* structural_family(Structural s) {
-  return realtime::enum_name<Structural::kTensionCopies>(
-             s, {"distributed_slip", "tension_dependent", "load_dependent", "tension_dependent"})
+  return realtime::enum_name<Structural::kTendonWidths>(
+             s, {"distributed_slip", "tension_dependent", "tension_dependent", "load_dependent",
+                 "tension_dependent", "tension_dependent"})
       .data();
 }
 
+// Whether a candidate makes the elements per-tendon families.
+bool adds_widths(Structural s) {
+  return s == Structural::kSlipWithWidths || s == Structural::kTendonWidths;
+}
+
 std::optional<Structural> structural_from_name(const std::string& name) {
-  for (Structural s : {Structural::kDistributedSlip, Structural::kSlipWithTension,
-                       Structural::kLoadCopies, Structural::kTensionCopies})
+  for (Structural s :
+       {Structural::kDistributedSlip, Structural::kSlipWithTension, Structural::kSlipWithWidths,
+        Structural::kLoadCopies, Structural::kTensionCopies, Structural::kTendonWidths})
     if (name == structural_name(s)) return s;
   return std::nullopt;
 }
@@ -609,7 +631,9 @@ bool adds_slip(const std::string& name) {
 bool family_present(const TsmModelSpec& spec, std::string_view family) {
   if (family == "distributed_slip" && spec.slip.enabled) return true;
   if (family == "load_dependent" && spec.slip.enabled && spec.slip.load_copies) return true;
-  if (family == "tension_dependent" && spec.slip.enabled && spec.slip.tension_copies) return true;
+  if (family == "tension_dependent" && spec.slip.enabled &&
+      (spec.slip.tension_copies || spec.slip.tendon_widths))
+    return true;
   return std::any_of(spec.terms.begin(), spec.terms.end(),
                      [&](const Term& t) { return term_family(t.kind) == family; });
 }
@@ -629,11 +653,14 @@ std::vector<Structural> structural_candidates(const TsmModelSpec& spec, const Fi
   };
   std::vector<Structural> out;
   const CopiesInData copies = copies_in_data(d);
+  // The per-tendon families need T1 and T3 on every sample.
+  const bool widths = tensions_measured(d) && !family_present(spec, "tension_dependent");
   if (!spec.slip.enabled) {
     if (wanted(Structural::kDistributedSlip)) out.push_back(Structural::kDistributedSlip);
     if (copies.tension && !family_present(spec, "tension_dependent") &&
         wanted(Structural::kSlipWithTension))
       out.push_back(Structural::kSlipWithTension);
+    if (widths && wanted(Structural::kSlipWithWidths)) out.push_back(Structural::kSlipWithWidths);
     return out;
   }
   if (copies.load && !family_present(spec, "load_dependent") && wanted(Structural::kLoadCopies))
@@ -641,6 +668,8 @@ std::vector<Structural> structural_candidates(const TsmModelSpec& spec, const Fi
   if (copies.tension && !family_present(spec, "tension_dependent") &&
       wanted(Structural::kTensionCopies))
     out.push_back(Structural::kTensionCopies);
+  if (widths && !spec.slip.tendon_widths && wanted(Structural::kTendonWidths))
+    out.push_back(Structural::kTendonWidths);
   return out;
 }
 
@@ -671,6 +700,14 @@ CandidateTrial refit_structural(const FitData& d, const TsmFrictionModel& curren
     spec.slip = default_distributed_slip();
     fo.global_stage = true;  // the spread and the element count are searched
   }
+  if (adds_widths(which)) {
+    // One family per tendon, at the count tsm fit tries (each family spans
+    // the same widths at the reference tension); their spread is searched.
+    spec.slip.tendon_widths = true;
+    spec.slip.elements = adds_elements ? 8 : std::min(spec.slip.elements, 12);
+    spec.slip.tension_ref = std::round(mean_tension(d) * 10.0) / 10.0;
+    fo.global_stage = true;
+  }
   if (which == Structural::kLoadCopies) {
     spec.slip.load_copies = true;
     spec.slip.load_weight = {};
@@ -679,7 +716,10 @@ CandidateTrial refit_structural(const FitData& d, const TsmFrictionModel& curren
   // u = tau_in / R): the mean tension's copies and, where the drive varies
   // apart from the friction (tip loads), the drive's, so that each sheath's
   // friction scales with its own tendon (distributed_slip.hpp).
-  if (which == Structural::kTensionCopies || which == Structural::kSlipWithTension) {
+  const bool tension_copies = which == Structural::kTensionCopies ||
+                              which == Structural::kSlipWithTension ||
+                              (adds_widths(which) && copies_in_data(d).tension);
+  if (tension_copies) {
     spec.slip.tension_copies = true;
     spec.slip.tension_weight = {};
     spec.slip.tension_ref = std::round(mean_tension(d) * 10.0) / 10.0;
@@ -963,14 +1003,15 @@ EffectFound describe_structural(const TsmFrictionModel& model, Structural which)
           "transition after a reversal is the sum of many elasto-slide elements (break "
           "displacements from stiff to compliant) instead of one hysteresis state";
       double total = 0.0;
-      for (int i = 0; i < s.elements; ++i) {
-        const auto k = static_cast<std::size_t>(i);
+      for (std::size_t k = 0; k < s.element_count(); ++k) {
         e.shape.push_back({s.width(k), s.weight[k]});
         total += s.weight[k];
       }
       e.where = "after each reversal, in the transition from sticking to sliding; the data chose " +
                 std::to_string(s.elements) + " elements with widths " + num(s.width_min, 3) +
-                " .. " + num(s.width_max, 3) + " rad (break forces " + num(total, 3) + " N in all)";
+                " .. " + num(s.width_max, 3) + " rad" +
+                (s.tendon_widths ? " per tendon (at the reference tension)" : "") +
+                " (break forces " + num(total, 3) + " N in all)";
       add("distributed_slip.elements", s.elements);
       add("distributed_slip.width_min", s.width_min);
       add("distributed_slip.width_max", s.width_max);
@@ -1036,7 +1077,55 @@ EffectFound describe_structural(const TsmFrictionModel& model, Structural which)
       }
       break;
     }
+    case Structural::kTendonWidths: {
+      // Each family's break forces, and the friction's growth per N of its
+      // tendon's tension sliding (every element saturated at w_i g_j, the
+      // copies' slopes on T = (T1 + T3) / 2 and u = T1 - T3 added).
+      e.variable = "tension";
+      e.meaning =
+          "each sheath's friction scales with the tension its own tendon carries (the capstan "
+          "effect per tendon), multiplicatively: its element family saturates at its break "
+          "forces x g_j, g_j = max(T_j, 0) / T_ref, so the presliding widths and the break "
+          "forces both grow with T_j and a slack tendon's sheath carries none";
+      const std::size_t n = static_cast<std::size_t>(s.elements);
+      double family[2] = {0.0, 0.0};
+      for (std::size_t k = 0; k < 2 * n; ++k)
+        family[k / n] += s.weight[k];
+      const auto copies = [&](std::size_t coulomb, double sign) {
+        double growth = 0.0;
+        for (std::size_t k = 0; k < s.basis_count(); ++k) {
+          const std::size_t i = s.basis_index(k);
+          if (i < kSlidingIndex || i == coulomb)
+            growth += (s.tension_copies ? 0.5 * s.tension_weight[i] : 0.0) +
+                      (s.drive_copies ? sign * s.drive_weight[i] : 0.0);
+        }
+        return growth;
+      };
+      const double t1 = family[0] / s.tension_ref, t3 = family[1] / s.tension_ref;
+      const std::size_t pos = kSlidingIndex, neg = kSlidingIndex + 1;
+      add("tendon_widths.elements_per_tendon", s.elements);
+      add("tendon_widths.tension_ref", s.tension_ref);
+      add("tendon_widths.break_force_T1", family[0]);
+      add("tendon_widths.break_force_T3", family[1]);
+      add("tension_dependent.sliding_positive_per_N_T1", t1 + copies(pos, 1.0));
+      add("tension_dependent.sliding_positive_per_N_T3", t3 + copies(pos, -1.0));
+      add("tension_dependent.sliding_negative_per_N_T1", t1 + copies(neg, 1.0));
+      add("tension_dependent.sliding_negative_per_N_T3", t3 + copies(neg, -1.0));
+      e.where =
+          "where the tendons' tensions change (tip loads raise one and lower the other; a tendon "
+          "near slack loses its sheath's friction), in the transition after a reversal and "
+          "sliding; per-tendon element families (" +
+          std::to_string(s.elements) + " elements each, reference " + num(s.tension_ref, 3) +
+          " N), break forces " + num(family[0], 3) + " N on T1 and " + num(family[1], 3) +
+          " N on T3" + (s.tension_copies ? ", with tension copies" : "") +
+          "; sliding, the friction's magnitude grows by " + num(t1 + copies(pos, 1.0), 3) +
+          " N per N of T1 and " + num(t3 + copies(pos, -1.0), 3) + " N per N of T3 moving " +
+          "positive, " + num(t1 + copies(neg, 1.0), 3) + " and " + num(t3 + copies(neg, -1.0), 3) +
+          " moving negative";
+      break;
+    }
     case Structural::kSlipWithTension:
+    case Structural::kSlipWithWidths:
       break;  // described as its two effects (accept_effect)
   }
   return e;

@@ -130,15 +130,6 @@ double mean_tension(const FitData& data) {
   return n > 0.0 ? s / n : 20.0;
 }
 
-// Both proximal tensions measured on every sample (T and u finite): what the
-// per-tendon element families scale with.
-bool tensions_measured(const FitData& data) {
-  if (data.motion.empty()) return false;
-  for (const auto& m : data.motion)
-    if (!std::isfinite(m.tension) || !std::isfinite(m.drive)) return false;
-  return true;
-}
-
 LinearSystem build_system(const DistributedSlipSpec& spec, const FitData& data,
                           std::span<const double> extra, std::size_t stride) {
   DistributedSlipSpec unit = spec;  // the basis does not depend on the weights
@@ -342,6 +333,13 @@ std::size_t train_count(const FitData& d) {
 }
 
 }  // namespace
+
+bool tensions_measured(const FitData& data) {
+  if (data.motion.empty()) return false;
+  for (const auto& m : data.motion)
+    if (!std::isfinite(m.tension) || !std::isfinite(m.drive)) return false;
+  return true;
+}
 
 double solve_slip_weights(TsmModelSpec& spec, const FitData& data, std::size_t stride) {
   if (!spec.slip.enabled) throw std::invalid_argument("solve_slip_weights: no distributed slip");

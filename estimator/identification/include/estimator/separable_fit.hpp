@@ -45,6 +45,10 @@ struct CopiesInData {
 };
 CopiesInData copies_in_data(const FitData& data);
 
+/// Both proximal tensions measured on every sample (T and u finite): what
+/// the per-tendon element families (`tendon_widths`) scale with.
+bool tensions_measured(const FitData& data);
+
 /// Sets the weights (and the copies `spec.slip` has on) of `spec` to the
 /// least-squares optimum over the train samples (every `stride`-th one),
 /// the Bouc-Wen part (if any) held as it is. Returns the train MSE of the
