@@ -289,6 +289,67 @@ TEST(DistalEstimator, HindsightOffIsTheCausalEstimatorExactly) {
   }
 }
 
+// The paper's model, counting what the estimator calls: the per-sample cost
+// is one virtual call into the model (the friction and the sliding level
+// together), plus a saved state every few samples for the hindsight.
+class CountingModel final : public FrictionDynamics {
+ public:
+  void reset() noexcept override { inner_.reset(); }
+  double step(const Motion& m, double dt) noexcept override {
+    ++calls;
+    return inner_.step(m, dt);
+  }
+  StepResult step_with_level(const Motion& m, double dt) noexcept override {
+    ++calls;
+    return inner_.step_with_level(m, dt);
+  }
+  double friction() const noexcept override {
+    ++calls;
+    return inner_.friction();
+  }
+  double sliding_friction() const noexcept override {
+    ++calls;
+    return inner_.sliding_friction();
+  }
+  void preset(double f, const Motion& m) noexcept override { inner_.preset(f, m); }
+  bool save_state(DynamicsState& out) const noexcept override {
+    ++saves;
+    return inner_.save_state(out);
+  }
+  void restore_state(const DynamicsState& s) noexcept override {
+    ++restores;
+    inner_.restore_state(s);
+  }
+  mutable long calls = 0, saves = 0, restores = 0;
+
+ private:
+  TsmFrictionModel inner_{paper_spec()};
+};
+
+TEST(DistalEstimator, OneModelCallPerSample) {
+  for (const bool hindsight : {false, true}) {
+    auto owned = std::make_unique<CountingModel>();
+    CountingModel& model = *owned;
+    const CorrectionsConfig corrections =
+        hindsight ? CorrectionsConfig{} : CorrectionsConfig{.hindsight = {.lag = 0.0}};
+    DistalTorqueEstimator est(std::move(owned), 0.01, {}, StartState::kFreeTip, corrections);
+    ASSERT_EQ(est.hindsight(), hindsight);
+    // A steady stroke: nothing for the hindsight to correct.
+    const auto x_at = [](double t) { return std::round(0.3 * t / 1.5e-4) * 1.5e-4; };
+    for (int i = 0; i < 500; ++i)
+      est.update(i * 1e-3, x_at(i * 1e-3), 0.05);
+    const long calls = model.calls, saves = model.saves, restores = model.restores;
+    const std::size_t resteps = est.hindsight_resteps();
+    for (int i = 500; i < 700; ++i)
+      est.update(i * 1e-3, x_at(i * 1e-3), 0.05);
+    ASSERT_EQ(est.hindsight_resteps(), resteps) << "a correction in the stretch";
+    ASSERT_EQ(model.restores, restores);
+    EXPECT_EQ(model.calls - calls, 200) << "hindsight " << hindsight;
+    // The hindsight's checkpoints: one state in 4 samples.
+    EXPECT_EQ(model.saves - saves, hindsight ? 50 : 0);
+  }
+}
+
 // A model whose state cannot be saved runs without it; the state of the
 // paper's model round-trips exactly, so stepping again from a saved state
 // repeats the steps bit for bit.

@@ -229,80 +229,43 @@ HindsightCorrection::HindsightCorrection(const HindsightConfig& config, bool ena
   inv_span_armed_ = inverse_span(config.sure_armed, config.certain_armed);
 }
 
-// The samples `lag` old are looked at again with what the fine channel has
-// seen since: where that settles sgn(xdd) differently, the model steps that
-// sample again from the state before it, and every sample after it, to now.
-// One sample per call (more at a sample rate faster than the history holds);
-// after a correction, also those up to `ahead` younger, so that one pass to
-// now serves them all.
-double HindsightCorrection::update(const Motion& newest, double friction,
-                                   const CorrectedDifferentiator& diff,
-                                   FrictionDynamics& model) noexcept {
-  newest_ = size_ == 0 ? 0 : (newest_ + 1) % kHistory;
-  Sample& s_new = history_[newest_];
-  s_new.m = newest;
-  s_new.friction = friction;
-  // The model's state only every kStride samples: a correction replays the
-  // few samples since (the same steps, so the same state bit for bit).
-  if (newest_ % kStride == 0) model.save_state(checkpoints_[newest_ / kStride]);
-  size_ = std::min(size_ + 1, kHistory);
-  if (size_ > 1) ++pending_;
-
-  const double t = newest.t;
-  const double still_time = diff.rest().still_time();
-  const double still = diff.rest().still_duration();
-  const double since = diff.cruise().time_since_manoeuvre();
-  bool touched = false;  // the model left the newest state
-  bool dirty = false;    // the samples after `frontier` are to be stepped again
-  std::size_t frontier = 0;
-  while (pending_ > 0) {
-    const std::size_t j = index_back(pending_ - 1);
-    const Sample& s = history_[j];
-    const double back = t - s.m.t;
+// A correction from sample j on (after_step() found it; the samples before
+// it needed none): j is stepped again from the state before it, and when
+// that changes its friction, every later sample too, to now. After a
+// correction the samples up to `ahead` younger are looked at in the same
+// pass, so that one pass to now serves them all. Out of line: rare.
+[[gnu::noinline]] double HindsightCorrection::correct(std::size_t j, const Verdict& first,
+                                                      const CorrectedDifferentiator& diff,
+                                                      FrictionDynamics& model) noexcept {
+  const double t = history_[newest_].m.t;
+  const Seen now = seen(diff);
+  model.save_state(now_);  // the newest state, should nothing change
+  bool dirty = false;      // the samples after `frontier` are to be stepped again
+  std::size_t frontier = j;
+  Verdict v = first;
+  while (true) {
+    if (v.corrected || dirty) {
+      // While dirty, every sample is stepped again from the corrected path.
+      Motion m = history_[j].m;
+      if (v.rest) {
+        m.xd = m.xdd = m.acc_sign = 0.0;
+      } else if (v.corrected) {
+        m.acc_sign = v.sign;
+      }
+      dirty = step_again(j, m, dirty, model) || dirty;
+      frontier = j;
+    }
+    if (pending_ == 0) break;
+    j = index_back(pending_ - 1);
+    const double back = t - history_[j].m.t;
     if (back < cfg_.lag && pending_ < kMaxPending && !(dirty && back >= cfg_.lag - cfg_.ahead))
       break;
     --pending_;
-    // The sample's corrected sign and motion (built only when it changes).
-    double sign = s.m.acc_sign;
-    bool corrected = false, rest = false;
-    if (still_time > 0.0 && still >= back + still_time) {
-      // The encoder has not changed since before this sample: at rest (the
-      // rest rule, applied to the samples it now knows were at rest).
-      corrected = s.m.xd != 0.0 || s.m.xdd != 0.0 || s.m.acc_sign != 0.0;
-      rest = true;
-    } else if (since > back + cfg_.guard) {
-      // Close to a manoeuvre the fine channel's polynomial model rings: the
-      // causal sign (with the cruise hypothesis) stands.
-      const double xdd = diff.filter().fine_acceleration_before(back);
-      const double a = std::fabs(xdd);
-      const bool armed = since <= back + diff.cruise().armed_time();
-      const double sure = armed ? cfg_.sure_armed : cfg_.sure;
-      if (a > sure) {  // hindsight can tell (a NaN cannot)
-        const double w = std::min(1.0, (a - sure) * (armed ? inv_span_armed_ : inv_span_));
-        const double hindsight = xdd > 0.0 ? 1.0 : -1.0;
-        // A sign within 2 % moves the state too little to matter.
-        if (std::fabs(hindsight - s.m.acc_sign) * w >= 0.02) {
-          sign = w * hindsight + (1.0 - w) * s.m.acc_sign;
-          corrected = true;
-        }
-      }
-    }
-    if (!corrected && !dirty) continue;
-    if (!touched) model.save_state(now_);  // the newest state, should nothing change
-    // While dirty, every sample is stepped again from the corrected path.
-    touched = true;
-    Motion m = s.m;
-    if (rest) {
-      m.xd = m.xdd = m.acc_sign = 0.0;
-    } else {
-      m.acc_sign = sign;
-    }
-    dirty = step_again(j, m, dirty, model) || dirty;
-    frontier = j;
+    v = judge(history_[j], back, now, diff);
   }
   if (dirty) {
     catch_up(frontier, model);  // the model ends at the newest sample
-  } else if (touched) {
+  } else {
     model.restore_state(now_);
   }
   return history_[newest_].friction;

@@ -40,13 +40,26 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in,
     return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
   const Derivatives d = diff_.update(t, x_in);
   if (!d.valid) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
-  const Motion m{
-      t, x_in, d.xd, d.xdd, d.acc_sign, std::fabs(tau_in) / radius_, tau_in / radius_, tension};
-  Estimate e = finish(m, d.xdd, tau_in);
-  if (!hindsight_.enabled()) return e;
+  const double load = std::fabs(tau_in) / radius_, drive = tau_in / radius_;
+  if (!hindsight_.enabled()) {
+    const Motion m{t, x_in, d.xd, d.xdd, d.acc_sign, load, drive, tension};
+    return finish(m, d.xdd, tau_in);
+  }
   // A gap that restarts the differentiator breaks the history as well.
   if (diff_.restarted()) hindsight_.forget();
-  const double f = hindsight_.update(m, e.friction, diff_, *model_);
+  // The model steps with the motion where the history keeps it: no copy.
+  Motion& m = hindsight_.next();
+  m.t = t;
+  m.x = x_in;
+  m.xd = d.xd;
+  m.xdd = d.xdd;
+  m.acc_sign = d.acc_sign;
+  m.load = load;
+  m.drive = drive;
+  m.tension = tension;
+  m.distal = std::numeric_limits<double>::quiet_NaN();
+  Estimate e = finish(m, d.xdd, tau_in);
+  const double f = hindsight_.after_step(e.friction, diff_, *model_);
   if (f != e.friction) {
     e.friction = f;
     e.tau_out_est = tau_in - radius_ * f;
@@ -71,10 +84,15 @@ Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, d
   if (!started_ && start_ == StartState::kFreeTip) model_->preset(tau_in / radius_, m);
   started_ = true;
   t_prev_ = m.t;
-  const double f = dt > 0.0 ? model_->step(m, dt) : model_->friction();
-  return {
-      m.xd,     xdd, m.acc_sign, tau_in, f, tau_in - radius_ * f, true, model_->sliding_friction(),
-      m.tension};
+  // One virtual call: the friction and the sliding level together.
+  const FrictionDynamics::StepResult s =
+      dt > 0.0 ? model_->step_with_level(m, dt)
+               : FrictionDynamics::StepResult{model_->friction(), model_->sliding_friction()};
+  return {m.xd,       xdd,
+          m.acc_sign, tau_in,
+          s.friction, tau_in - radius_ * s.friction,
+          true,       s.sliding_friction,
+          m.tension};
 }
 
 }  // namespace tsmh::estimator

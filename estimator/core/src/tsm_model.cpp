@@ -380,6 +380,12 @@ double TsmFrictionModel::step(const Motion& m, double dt) noexcept {
   return friction();
 }
 
+FrictionDynamics::StepResult TsmFrictionModel::step_with_level(const Motion& m,
+                                                               double dt) noexcept {
+  const double f = TsmFrictionModel::step(m, dt);
+  return {f, sliding_friction()};
+}
+
 double TsmFrictionModel::step_with_slip(const Motion& m, double dt, double xd_mid) noexcept {
   double bouc_wen = 0.0;
   if (bouc_wen_) {

@@ -19,7 +19,9 @@
 // sign (the causal estimate every user of the derivatives gets);
 // DistalTorqueEstimator adds the third after each model step.
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 
@@ -236,7 +238,12 @@ inline Derivatives CorrectedDifferentiator::update(double t, double x) noexcept 
 /// |xd| = lambda a sign decided late or wrongly moves the friction state the
 /// wrong way, and the error would last until the next saturation (0.3 s and
 /// more); this ends it after `lag`. Keeps the last samples as the model was
-/// stepped with them (motion, friction, the model's state). Never allocates.
+/// stepped with them (motion and friction) and the model's state every few
+/// samples. Never allocates.
+///
+/// Per sample: next() gives the slot the caller writes the sample's motion
+/// into and steps the model with (so the history holds it without a copy),
+/// then after_step() records the result and looks back.
 class HindsightCorrection {
  public:
   HindsightCorrection() = default;
@@ -245,14 +252,25 @@ class HindsightCorrection {
   HindsightCorrection(const HindsightConfig& config, bool enabled);
 
   bool enabled() const noexcept { return enabled_; }
-  /// Empties the history (reset, a restart after a gap).
-  void forget() noexcept { size_ = pending_ = 0; }
-  /// Records the sample the model was just stepped with (`friction` its
-  /// result; the model holds the state after it), then looks at the samples
-  /// `lag` old again with what `diff` has seen since. Returns the newest
-  /// sample's friction, corrected when a correction reached it.
-  double update(const Motion& m, double friction, const CorrectedDifferentiator& diff,
-                FrictionDynamics& model) noexcept;
+  /// Empties the history (reset, a restart after a gap): the next sample
+  /// goes to slot 0 and is only the state the one after it starts from.
+  void forget() noexcept {
+    newest_ = kHistory - 1;
+    pending_ = -1;
+  }
+  /// The slot for the motion of the sample the model is about to be stepped
+  /// with; after_step() must follow that step.
+  Motion& next() noexcept {
+    newest_ = (newest_ + 1) % kHistory;
+    return history_[newest_].m;
+  }
+  /// Records the result of the step with next()'s motion (`friction`; the
+  /// model holds the state after it), then looks at the samples `lag` old
+  /// again with what `diff` has seen since. Returns the newest sample's
+  /// friction, corrected when a correction reached it. Inline: on most
+  /// samples it only records and finds nothing to correct.
+  inline double after_step(double friction, const CorrectedDifferentiator& diff,
+                           FrictionDynamics& model) noexcept;
   /// Samples stepped again (the corrected sample and every later one).
   std::size_t resteps() const noexcept { return resteps_; }
 
@@ -261,6 +279,21 @@ class HindsightCorrection {
     Motion m;
     double friction = 0.0;
   };
+  // What a look at one sample found: whether its motion is to be corrected,
+  // and how (at rest: no motion; else the sign).
+  struct Verdict {
+    bool corrected = false;
+    bool rest = false;
+    double sign = 0.0;
+  };
+  // What the differentiator has seen by now, for judge().
+  struct Seen {
+    double still_time, still, since, armed_time;
+  };
+  static Seen seen(const CorrectedDifferentiator& diff) noexcept {
+    return {diff.rest().still_time(), diff.rest().still_duration(),
+            diff.cruise().time_since_manoeuvre(), diff.cruise().armed_time()};
+  }
   // 64 samples: the deployed lag at 1 kHz and the look-ahead, with the
   // model's state every kStride samples (about 6 kB in all, within a core's
   // first-level cache).
@@ -268,11 +301,15 @@ class HindsightCorrection {
   static constexpr std::size_t kStride = 4;
   // A sample is looked at at the latest when this many are pending: the
   // checkpoint before the one before it is still in the history.
-  static constexpr std::size_t kMaxPending = kHistory - kStride;
+  static constexpr std::ptrdiff_t kMaxPending = kHistory - kStride;
+  inline Verdict judge(const Sample& s, double back, const Seen& seen,
+                       const CorrectedDifferentiator& diff) const noexcept;
+  double correct(std::size_t j, const Verdict& v, const CorrectedDifferentiator& diff,
+                 FrictionDynamics& model) noexcept;
   bool step_again(std::size_t j, const Motion& m, bool dirty, FrictionDynamics& model) noexcept;
   void catch_up(std::size_t from, FrictionDynamics& model) noexcept;
-  std::size_t index_back(std::size_t back) const noexcept {
-    return (newest_ + kHistory - back) % kHistory;
+  std::size_t index_back(std::ptrdiff_t back) const noexcept {
+    return (newest_ + kHistory - static_cast<std::size_t>(back)) % kHistory;
   }
 
   HindsightConfig cfg_;
@@ -284,10 +321,66 @@ class HindsightCorrection {
   std::array<DynamicsState, kHistory / kStride> checkpoints_{};
   DynamicsState now_{};
   // newest_: the newest sample; the oldest `pending_` of the newest are not
-  // yet past lag. The sample before the oldest pending one is kept too: its
-  // state is where a correction steps again from.
-  std::size_t newest_ = 0, size_ = 0, pending_ = 0;
+  // yet past lag (-1: the history is empty). The sample before the oldest
+  // pending one is kept too: its state is where a correction steps again
+  // from.
+  std::size_t newest_ = kHistory - 1;
+  std::ptrdiff_t pending_ = -1;
   std::size_t resteps_ = 0;
 };
+
+// Whether sample s, seen `back` later, was stepped with the wrong sign.
+inline HindsightCorrection::Verdict HindsightCorrection::judge(
+    const Sample& s, double back, const Seen& seen,
+    const CorrectedDifferentiator& diff) const noexcept {
+  Verdict v;
+  if (seen.still_time > 0.0 && seen.still >= back + seen.still_time) {
+    // The encoder has not changed since before this sample: at rest (the
+    // rest rule, applied to the samples it now knows were at rest).
+    v.corrected = s.m.xd != 0.0 || s.m.xdd != 0.0 || s.m.acc_sign != 0.0;
+    v.rest = true;
+  } else if (seen.since > back + cfg_.guard) {
+    // Close to a manoeuvre the fine channel's polynomial model rings: the
+    // causal sign (with the cruise hypothesis) stands.
+    const double xdd = diff.filter().fine_acceleration_before(back);
+    const double a = std::fabs(xdd);
+    const bool armed = seen.since <= back + seen.armed_time;
+    const double sure = armed ? cfg_.sure_armed : cfg_.sure;
+    if (a > sure) {  // hindsight can tell (a NaN cannot)
+      const double w = std::min(1.0, (a - sure) * (armed ? inv_span_armed_ : inv_span_));
+      const double hindsight = xdd > 0.0 ? 1.0 : -1.0;
+      // A sign within 2 % moves the state too little to matter.
+      if (std::fabs(hindsight - s.m.acc_sign) * w >= 0.02) {
+        v.sign = w * hindsight + (1.0 - w) * s.m.acc_sign;
+        v.corrected = true;
+      }
+    }
+  }
+  return v;
+}
+
+// The samples `lag` old are looked at again with what the fine channel has
+// seen since; the first one whose sign it settles differently goes to
+// correct(), which steps the model again (rare: a few samples in a hundred).
+// One sample per call (more at a sample rate faster than the history holds).
+inline double HindsightCorrection::after_step(double friction, const CorrectedDifferentiator& diff,
+                                              FrictionDynamics& model) noexcept {
+  history_[newest_].friction = friction;
+  // The model's state only every kStride samples: a correction replays the
+  // few samples since (the same steps, so the same state bit for bit).
+  if (newest_ % kStride == 0) model.save_state(checkpoints_[newest_ / kStride]);
+  ++pending_;
+  const double t = history_[newest_].m.t;
+  while (pending_ > 0) {
+    const std::size_t j = index_back(pending_ - 1);
+    const Sample& s = history_[j];
+    const double back = t - s.m.t;
+    if (back < cfg_.lag && pending_ < kMaxPending) break;
+    --pending_;
+    const Verdict v = judge(s, back, seen(diff), diff);
+    if (v.corrected) return correct(j, v, diff, model);
+  }
+  return friction;
+}
 
 }  // namespace tsmh::estimator

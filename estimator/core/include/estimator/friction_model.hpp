@@ -55,6 +55,20 @@ class FrictionDynamics {
   /// The friction returned by the last step().
   virtual double friction() const noexcept = 0;
 
+  /// What one step gives the estimator: the friction and the sliding level
+  /// at the step's motion.
+  struct StepResult {
+    double friction = 0.0;          ///< N, step()'s result
+    double sliding_friction = 0.0;  ///< N, sliding_friction() after the step
+  };
+  /// step(), then sliding_friction(): the same two results in one call (the
+  /// estimator's per-sample call; both come back in registers). Models
+  /// override it to save the second virtual call. Never allocates or throws.
+  virtual StepResult step_with_level(const Motion& m, double dt) noexcept {
+    const double f = step(m, dt);
+    return {f, sliding_friction()};
+  }
+
   /// Sets the internal state so that the friction is as close to `friction`
   /// (N) as the model allows at rest at `m` (e.g. within +-gamma Ff). Models
   /// without a settable state ignore it. Never allocates or throws.

@@ -71,6 +71,7 @@ class TsmFrictionModel final : public FrictionModel {
   void set_values(std::span<const double> values) override;
   void reset() noexcept override;
   double step(const Motion& m, double dt) noexcept override;
+  StepResult step_with_level(const Motion& m, double dt) noexcept override;
   double friction() const noexcept override { return slip_on_ ? f_ : spec_.gamma * z_; }
   bool reads_acceleration_sign() const noexcept override { return reads_sign_; }
   void preset(double friction, const Motion& m) noexcept override;
