@@ -106,6 +106,12 @@ TEST(GapHiddenShapes, ShortPeriodRipple) {
   record(g, w.floor);
   ASSERT_EQ(names(g), std::set<std::string>{"position_dependent"});
   EXPECT_EQ(g.effects.front().form, "position_ripple");
+  // Its line quotes the base's error in the position regimes, not the
+  // direction regimes.
+  EXPECT_NE(g.effects.front().where.find("low_position"), std::string::npos)
+      << g.effects.front().where;
+  EXPECT_EQ(g.effects.front().where.find("positive_velocity"), std::string::npos)
+      << g.effects.front().where;
   expect_within_floor(g, w.floor);
 }
 

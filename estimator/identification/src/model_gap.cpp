@@ -438,9 +438,12 @@ std::string group_of(TermKind kind) {
       return "speed";
     case TermKind::kLoadDependent:
     case TermKind::kLoadScaling:
+    case TermKind::kLoadSaturating:
     case TermKind::kTensionScaling:
       return "load";
     case TermKind::kPositionDependent:
+    case TermKind::kPositionRipple:
+    case TermKind::kPositionBump:
       return "position";
     case TermKind::kTimeVarying:
       return "time";
