@@ -540,6 +540,63 @@ TEST(DistributedSlip, TendonWidthsRoundTripThroughTheParamsFileAndTheState) {
   EXPECT_THROW(parse_model(bad, "bad.yaml"), ParamsError);
 }
 
+// A stuck sheath holds the friction it had when the input stopped. With
+// tanh(xd / smoothing) the Coulomb functions drop their share when the
+// input stops (the world's palpation holds: ~2 N at every stop); as a play
+// of the narrowest element's width they keep it, until the input moves back
+// by that width. An option of the model (`coulomb_play: true` in a params
+// file); the preset keeps tanh.
+TEST(DistributedSlip, CoulombPlayHoldsItsFrictionAtRest) {
+  TsmModelSpec s = elements_only(4, 1e-3, 0.05, {1.0, 1.0, 1.0, 1.0});
+  s.slip.weight[kSlidingIndex + 0] = 3.0;  // coulomb +
+  s.slip.weight[kSlidingIndex + 1] = 2.0;  // coulomb -
+  s.slip.smoothing = 0.01;
+  const auto friction_after = [&](bool play, double x_back) {
+    TsmModelSpec p = s;
+    p.slip.coulomb_play = play;
+    TsmFrictionModel m(p);
+    m.reset();
+    Motion mo;
+    double f = 0.0;
+    // Slide 0.2 rad positive at 0.5 rad/s, then stop, hold 1 s, then move
+    // back by x_back and hold again.
+    for (int k = 0; k <= 400; ++k) {
+      mo.t = k * 1e-3, mo.x = 5e-4 * k, mo.xd = 0.5;
+      f = m.step(mo, 1e-3);
+    }
+    EXPECT_NEAR(f, 4.0 + 3.0 * std::tanh(0.5 / 0.01), 1e-9);
+    mo.xd = 0.0;
+    for (int k = 0; k < 1000; ++k) {
+      mo.t += 1e-3;
+      f = m.step(mo, 1e-3);
+    }
+    mo.t += 1e-3, mo.x -= x_back;
+    m.step(mo, 1e-3);
+    mo.t += 1e-3;
+    return m.step(mo, 1e-3);
+  };
+  // At rest: tanh drops the Coulomb share, the play keeps it.
+  EXPECT_NEAR(friction_after(false, 0.0), 4.0, 1e-9);
+  EXPECT_NEAR(friction_after(true, 0.0), 7.0, 1e-9);
+  // Two of the narrowest widths back: the play at its negative level (as the
+  // narrowest element), the wider elements part of the way.
+  double elements = 0.0;
+  for (std::size_t i = 0; i < 4; ++i)
+    elements += std::max(-1.0, 1.0 - 2e-3 / s.slip.width(i));
+  EXPECT_NEAR(friction_after(true, 2e-3), elements - 2.0, 1e-9);
+  // The params file carries it (only where it is on) and names a bad value.
+  TsmModelSpec on = s;
+  on.slip.coulomb_play = true;
+  const std::string yaml = model_to_yaml(TsmFrictionModel(on));
+  EXPECT_NE(yaml.find("coulomb_play: true"), std::string::npos) << yaml;
+  const auto back_model = parse_model(yaml, "round trip");
+  EXPECT_TRUE(dynamic_cast<const TsmFrictionModel&>(*back_model).spec().slip.coulomb_play);
+  EXPECT_EQ(model_to_yaml(TsmFrictionModel(s)).find("coulomb_play"), std::string::npos);
+  std::string bad = yaml;
+  bad.replace(bad.find("coulomb_play: true"), 18, "coulomb_play: 3");
+  EXPECT_THROW(parse_model(bad, "bad.yaml"), ParamsError);
+}
+
 TEST(DistributedSlip, SeparableFitFindsTheSpreadFromTheCatalogStart) {
   const TsmModelSpec truth = capstan_truth();
   const FitData d = synthetic(truth, 0.05, 12);

@@ -103,8 +103,16 @@ void SlipKernel::advance(SlipState& s, double x, double xd, double tension, doub
   }
   const double smooth = std::tanh(xd * inv_smoothing_);
   const double k = xd < 0.0 ? k_neg_ : k_pos_;
-  out.phi[kSlidingIndex + 0] = k_pos_ * std::max(smooth, 0.0);
-  out.phi[kSlidingIndex + 1] = k_neg_ * std::min(smooth, 0.0);
+  if (spec_.coulomb_play) {
+    // Like an element: a level scale bounds the state, so it changes the
+    // level reached by motion and leaves the friction of the instant.
+    s.coulomb = std::clamp(s.coulomb + dx * inv_width_[0], -k_neg_, k_pos_);
+    out.phi[kSlidingIndex + 0] = std::max(s.coulomb, 0.0);
+    out.phi[kSlidingIndex + 1] = std::min(s.coulomb, 0.0);
+  } else {
+    out.phi[kSlidingIndex + 0] = k_pos_ * std::max(smooth, 0.0);
+    out.phi[kSlidingIndex + 1] = k_neg_ * std::min(smooth, 0.0);
+  }
   out.phi[kSlidingIndex + 2] = k * std::exp(-std::fabs(xd) * inv_stribeck_) * smooth;
   out.phi[kSlidingIndex + 3] = k * xd;
 }
@@ -160,6 +168,7 @@ void SlipKernel::preset(SlipState& s, double x, double fraction, double tension)
   const double e = (u >= 0.0 ? u * k_pos_ : u * k_neg_) * family_scales(tension, 0.0)[0];
   for (std::size_t i = 0; i < spec_.element_count(); ++i)
     s.e[i] = e;
+  s.coulomb = u >= 0.0 ? u * k_pos_ : u * k_neg_;
   s.x_prev = x;
   s.started = true;
 }

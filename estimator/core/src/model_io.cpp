@@ -60,11 +60,11 @@ void read_weights(const YAML::Node& node, const DistributedSlipSpec& s, const st
 
 DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin) {
   if (!node.IsMap()) fail(origin, "distributed_slip", "must be a map");
-  reject_unknown_keys(
-      node,
-      {"elements", "width_min", "width_max", "smoothing", "stribeck_speed", "weights",
-       "tension_ref", "tension_weights", "load_weights", "drive_weights", "tendon_widths"},
-      origin, "distributed_slip");
+  reject_unknown_keys(node,
+                      {"elements", "width_min", "width_max", "smoothing", "stribeck_speed",
+                       "weights", "tension_ref", "tension_weights", "load_weights", "drive_weights",
+                       "tendon_widths", "coulomb_play"},
+                      origin, "distributed_slip");
   DistributedSlipSpec s;
   s.enabled = true;
   const double elements = number(node["elements"], origin, "distributed_slip.elements");
@@ -86,6 +86,12 @@ DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin
       fail(origin, "distributed_slip.elements",
            "must be 1 .. " + std::to_string(kMaxSlipElements / 2) +
                " with tendon_widths (one family per tendon)");
+  }
+  if (node["coulomb_play"]) {
+    const YAML::Node& cp = node["coulomb_play"];
+    if (!cp.IsScalar() || (cp.Scalar() != "true" && cp.Scalar() != "false"))
+      fail(origin, "distributed_slip.coulomb_play", "must be true or false");
+    s.coulomb_play = cp.Scalar() == "true";
   }
   if (!node["weights"]) fail(origin, "distributed_slip.weights", "missing");
   read_weights(node["weights"], s, origin, "weights", s.weight);
@@ -123,6 +129,7 @@ void emit_slip(YAML::Emitter& out, const DistributedSlipSpec& s) {
   out << YAML::Key << "smoothing" << YAML::Value << s.smoothing;
   out << YAML::Key << "stribeck_speed" << YAML::Value << s.stribeck_speed;
   if (s.tendon_widths) out << YAML::Key << "tendon_widths" << YAML::Value << true;
+  if (s.coulomb_play) out << YAML::Key << "coulomb_play" << YAML::Value << true;
   emit_weights(out, "weights", s, s.weight);
   if (s.tension_copies || s.tendon_widths)
     out << YAML::Key << "tension_ref" << YAML::Value << s.tension_ref;

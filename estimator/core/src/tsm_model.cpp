@@ -413,6 +413,7 @@ void TsmFrictionModel::save_slip(DynamicsState& out) const noexcept {
   out.v[9] = slip_level_;
   for (std::size_t i = 0; i < spec_.slip.element_count(); ++i)
     out.v[10 + i] = slip_state_.e[i];
+  out.v[10 + kMaxSlipElements] = slip_state_.coulomb;
 }
 
 void TsmFrictionModel::restore_slip(const DynamicsState& s) noexcept {
@@ -422,6 +423,7 @@ void TsmFrictionModel::restore_slip(const DynamicsState& s) noexcept {
   slip_level_ = s.v[9];
   for (std::size_t i = 0; i < spec_.slip.element_count(); ++i)
     slip_state_.e[i] = s.v[10 + i];
+  slip_state_.coulomb = s.v[10 + kMaxSlipElements];
 }
 
 void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {

@@ -63,6 +63,17 @@
 // families are the plain elements twice. At T_j = T_ref the model is the
 // plain one with the two families' weights summed.
 //
+// Coulomb as a state (`coulomb_play`): tanh(xd / smoothing) in the two
+// Coulomb functions vanishes when the input stops, while a stuck sheath
+// holds the friction it had when it stopped (the proximal angle still, the
+// segments stuck). With coulomb_play the two Coulomb functions read a play
+// of the narrowest element's width instead,
+//   c <- clamp(c + dx / width_min, -1, 1),  phi = [max(c, 0), min(c, 0), ...]
+// so at rest they keep their last value, as the elements do; the Stribeck
+// rise and the viscous drag stay functions of the velocity (they vanish at
+// rest). The fit cannot tell the two apart on data without holds (a
+// multisine), and they differ wherever the input stops.
+//
 // No sign of the acceleration appears anywhere.
 
 #include <array>
@@ -102,6 +113,9 @@ struct DistributedSlipSpec {
   /// Two element families, one per tendon, whose saturation scales with
   /// that tendon's tension (see the header); `elements` is per family.
   bool tendon_widths = false;
+  /// The Coulomb functions read a play of width width_min (their state
+  /// holds at rest) instead of tanh(xd / smoothing) (see the header).
+  bool coulomb_play = false;
   /// Weights per basis function, N: elements 0 .. elements-1, then the sliding
   /// functions at kSlidingIndex + {0: coulomb +, 1: coulomb -, 2: stribeck,
   /// 3: viscous (N s/rad)}. Unused entries are 0.
@@ -138,6 +152,7 @@ void validate(const DistributedSlipSpec& spec);
 struct SlipState {
   std::array<double, kMaxSlipElements> e{};
   double x_prev = 0.0;
+  double coulomb = 0.0;  ///< the Coulomb functions' play, in [-1, 1] (coulomb_play)
   bool started = false;
 };
 

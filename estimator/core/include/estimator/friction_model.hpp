@@ -33,9 +33,9 @@ struct Parameter {
 /// stretch of samples can be stepped again from an earlier state (the
 /// estimator's hindsight correction). Its meaning is the model's own.
 struct DynamicsState {
-  /// The paper's state (6), the distributed-slip elements and their last
-  /// angle, and the friction of the last step.
-  std::array<double, 34> v{};
+  /// The paper's state (6), the distributed-slip elements, their Coulomb
+  /// play and their last angle, and the friction of the last step.
+  std::array<double, 35> v{};
 };
 
 /// The real-time face of a model: a stateful value object stepped once per
