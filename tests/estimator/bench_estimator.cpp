@@ -194,17 +194,23 @@ BENCHMARK(BM_ModelStepOnlyPerTendon)
     ->ReportAggregatesOnly(true)
     ->DisplayAggregatesOnly(true);
 
-// The plain filter (the four Kalman channels and their sign), without the
-// corrections (corrections.hpp), which BM_EstimatorStep includes.
-void BM_DifferentiatorOnly(benchmark::State& state) {
+// One differentiator's update per iteration over the encoder samples.
+template <class Diff>
+void run_differentiator(benchmark::State& state) {
   const Samples s = encoder_samples(1 << 16);
-  Differentiator d;
+  Diff d;
   std::size_t i = 0;
   double t_offset = 0.0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(d.update(s.t[i] + t_offset, s.x[i]));
     if (++i == s.t.size()) i = 0, t_offset += 100.0;
   }
+}
+
+// The plain filter (the four Kalman channels and their sign), without the
+// corrections (corrections.hpp), which BM_EstimatorStep includes.
+void BM_DifferentiatorOnly(benchmark::State& state) {
+  run_differentiator<Differentiator>(state);
 }
 BENCHMARK(BM_DifferentiatorOnly)
     ->Repetitions(15)
@@ -214,14 +220,7 @@ BENCHMARK(BM_DifferentiatorOnly)
 // The differentiator the estimator runs: the filter with the rest and cruise
 // corrections applied to its sign (corrections.hpp).
 void BM_CorrectedDifferentiatorOnly(benchmark::State& state) {
-  const Samples s = encoder_samples(1 << 16);
-  CorrectedDifferentiator d;
-  std::size_t i = 0;
-  double t_offset = 0.0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(d.update(s.t[i] + t_offset, s.x[i]));
-    if (++i == s.t.size()) i = 0, t_offset += 100.0;
-  }
+  run_differentiator<CorrectedDifferentiator>(state);
 }
 BENCHMARK(BM_CorrectedDifferentiatorOnly)
     ->Repetitions(15)

@@ -56,13 +56,25 @@ const EffectFound* effect(const GapResult& g, const std::string& name) {
   return nullptr;
 }
 
-void expect_slip_and_tension(std::uint64_t world_seed) {
-  const WorldRun w = calibration_run(world_seed);
-  const GapResult g = find_model_gaps(w.rec, *load_model("paper"), "paper");
-  record_gap_against_floor(g, w.floor);
+// The gap workflow from the paper base on a world seed's calibration run,
+// recorded against its floor; `found` lists what it named, for messages.
+struct WorldGap {
+  WorldRun w;
+  GapResult g;
   std::string found;
-  for (const auto& e : g.effects)
-    found += e.name + " (" + e.form + ") ";
+};
+
+WorldGap gap_on_world(std::uint64_t world_seed) {
+  WorldGap out{calibration_run(world_seed), {}, {}};
+  out.g = find_model_gaps(out.w.rec, *load_model("paper"), "paper");
+  record_gap_against_floor(out.g, out.w.floor);
+  for (const auto& e : out.g.effects)
+    out.found += e.name + " (" + e.form + ") ";
+  return out;
+}
+
+void expect_slip_and_tension(std::uint64_t world_seed) {
+  const auto [w, g, found] = gap_on_world(world_seed);
 
   const EffectFound* slip = effect(g, "distributed_slip");
   ASSERT_NE(slip, nullptr) << "named: " << found;
@@ -100,12 +112,7 @@ TEST(GapPhysicsWorld, NamesDistributedSlipAndTensionSeed6) {
 // tendon's family clamped to zero) must be named on the tension line and
 // take the gap below 1.7x.
 TEST(GapPhysicsWorld, NamesPerTendonFamiliesOnTheSlackTendonSeed5) {
-  const WorldRun w = calibration_run(5);
-  const GapResult g = find_model_gaps(w.rec, *load_model("paper"), "paper");
-  record_gap_against_floor(g, w.floor);
-  std::string found;
-  for (const auto& e : g.effects)
-    found += e.name + " (" + e.form + ") ";
+  const auto [w, g, found] = gap_on_world(5);
   const EffectFound* slip = effect(g, "distributed_slip");
   ASSERT_NE(slip, nullptr) << "named: " << found;
   const EffectFound* tension = effect(g, "tension_dependent");
