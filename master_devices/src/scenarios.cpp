@@ -7,6 +7,8 @@
 #include <string>
 #include <variant>
 
+#include "realtime/joint_names.hpp"
+
 namespace tsmh::master_devices {
 namespace {
 
@@ -137,11 +139,14 @@ int count(config::FieldReader& r, std::string_view key, int fallback) {
 
 Scenario parse_palpate(config::FieldReader& r, std::size_t dof) {
   PalpateScenario p;
-  const long long joint = r.get_int("press_joint", 0);
-  if (joint < 0 || static_cast<std::size_t>(joint) >= dof) {
-    r.fail("press_joint", "must be a joint index 0 .. " + std::to_string(dof - 1));
+  // The joint's name, as everywhere else; the 0-based index earlier
+  // configs gave is taken too.
+  const auto joint = realtime::joint_from_text(r.get_string("press_joint", "joint1"), dof);
+  if (!joint) {
+    r.fail("press_joint", "must name a joint: joint1 .. " + realtime::joint_name(dof - 1) +
+                              " (or its 0-based index 0 .. " + std::to_string(dof - 1) + ")");
   }
-  p.press_joint = static_cast<std::size_t>(joint);
+  p.press_joint = joint.value_or(0);
   p.press_sign = r.get_double("press_sign", 1.0);
   if (p.press_sign != 1.0 && p.press_sign != -1.0) r.fail("press_sign", "must be 1 or -1");
   p.soft_presses = count(r, "soft_presses", p.soft_presses);

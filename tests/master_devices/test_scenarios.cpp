@@ -134,6 +134,10 @@ TEST(Scenarios, ParsesSettingsAndNamesBadFields) {
   ASSERT_TRUE(std::holds_alternative<PalpateScenario>(p));
   EXPECT_EQ(std::get<PalpateScenario>(p).soft_depth_rad, 0.1);
   EXPECT_EQ(std::get<PalpateScenario>(p).hard_presses, 3);
+  EXPECT_EQ(std::get<PalpateScenario>(p).press_joint, 0u);  // joint1 by default
+  // The pressing joint by its name, or by the 0-based index earlier configs gave.
+  EXPECT_EQ(std::get<PalpateScenario>(parse("palpate: {press_joint: joint2}\n")).press_joint, 1u);
+  EXPECT_EQ(std::get<PalpateScenario>(parse("palpate: {press_joint: 1}\n")).press_joint, 1u);
   const Scenario s = parse("scenario: sine\nsine: {amplitude_rad: [0.1, 0.2], frequency_hz: 2}\n");
   ASSERT_TRUE(std::holds_alternative<SineScenario>(s));
   EXPECT_EQ(std::get<SineScenario>(s).amplitude_rad[1], 0.2);
@@ -145,9 +149,12 @@ TEST(Scenarios, ParsesSettingsAndNamesBadFields) {
   EXPECT_NE(error_of("palpate: {hard_depth_rad: 0.1}\n")
                 .find("device.settings.palpate.hard_depth_rad: must be > soft_depth_rad"),
             std::string::npos);
-  EXPECT_NE(
-      error_of("palpate: {press_joint: 2}\n").find("palpate.press_joint: must be a joint index"),
-      std::string::npos);
+  EXPECT_NE(error_of("palpate: {press_joint: 2}\n")
+                .find("palpate.press_joint: must name a joint: joint1 .. joint2"),
+            std::string::npos);
+  EXPECT_NE(error_of("palpate: {press_joint: joint3}\n")
+                .find("palpate.press_joint: must name a joint: joint1 .. joint2"),
+            std::string::npos);
   EXPECT_NE(error_of("scenario: sine\nsine: {amplitude_rad: [1, 2, 3]}\n")
                 .find("sine.amplitude_rad: must be a number or a list of 2 numbers"),
             std::string::npos);
