@@ -289,6 +289,30 @@ TEST(DistalEstimator, HindsightOffIsTheCausalEstimatorExactly) {
   }
 }
 
+// Rest and cruise act on sgn(xdd) alone: with a model that never reads it
+// (distributed slip) they stay off, whatever the settings say.
+TEST(DistalEstimator, SignCorrectionsRunOnlyForAModelThatReadsTheSign) {
+  DistalTorqueEstimator paper(std::make_unique<TsmFrictionModel>(paper_spec()), 0.01);
+  DistalTorqueEstimator slip(std::make_unique<TsmFrictionModel>(distributed_spec()), 0.01);
+  EXPECT_TRUE(paper.sign_corrections());
+  EXPECT_FALSE(slip.sign_corrections());
+  EXPECT_FALSE(slip.hindsight());
+  // Off by the caller's settings as well: the same friction, sample for sample.
+  CorrectionsConfig off;
+  off.still_time = 0.0;
+  off.cruise_window = 0.0;
+  DistalTorqueEstimator slip_off(std::make_unique<TsmFrictionModel>(distributed_spec()), 0.01, {},
+                                 StartState::kFreeTip, off);
+  for (int i = 0; i < 4000; ++i) {
+    const double t = i * 1e-3;
+    // Strokes with holds: the rest correction would fire in the holds.
+    const double phase = std::fmod(t, 1.0);
+    const double x = std::round(0.3 * std::sin(2.0 * std::min(phase, 0.6) + t) / 1.5e-4) * 1.5e-4;
+    const double tau = 0.05 * std::sin(1.3 * t);
+    EXPECT_EQ(slip.update(t, x, tau).friction, slip_off.update(t, x, tau).friction);
+  }
+}
+
 // The paper's model, counting what the estimator calls: the per-sample cost
 // is one virtual call into the model (the friction and the sliding level
 // together), plus a saved state every few samples for the hindsight.

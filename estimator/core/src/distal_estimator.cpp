@@ -12,6 +12,16 @@ bool hindsight_possible(const DifferentiatorConfig& diff, const FrictionDynamics
   return model != nullptr && diff.sign_mode == SignMode::kSmooth && diff.fine_psd > 0.0 &&
          model->save_state(probe) && model->reads_acceleration_sign();
 }
+// Every correction acts on sgn(xdd) alone: for a model that never reads it
+// they would change nothing the model computes, and cost a step's worth of
+// bookkeeping, so they stay off.
+CorrectionsConfig corrections_for(const FrictionDynamics* model, CorrectionsConfig c) {
+  if (model != nullptr && !model->reads_acceleration_sign()) {
+    c.still_time = 0.0;
+    c.cruise_window = 0.0;
+  }
+  return c;
+}
 }  // namespace
 
 DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> model,
@@ -19,7 +29,7 @@ DistalTorqueEstimator::DistalTorqueEstimator(std::unique_ptr<FrictionDynamics> m
                                              StartState start, const CorrectionsConfig& corrections)
     : model_(std::move(model)),
       radius_(radius_m),
-      diff_(diff, corrections),
+      diff_(diff, corrections_for(model_.get(), corrections)),
       start_(start),
       hindsight_(corrections.hindsight, hindsight_possible(diff, model_.get())) {
   if (!model_) throw std::invalid_argument("estimator: no friction model");

@@ -73,6 +73,11 @@ class DistalTorqueEstimator {
   /// smooth sign with the fine channel, and a model whose state can be saved
   /// and that reads the sign of the acceleration).
   bool hindsight() const { return hindsight_.enabled(); }
+  /// Whether the rest and cruise corrections run: not for a model that reads
+  /// no sign of the acceleration (they act on that sign alone).
+  bool sign_corrections() const {
+    return diff_.rest().still_time() > 0.0 || diff_.cruise().enabled();
+  }
   /// Samples the hindsight correction stepped the model again for (the
   /// corrected sample and every later one), since construction.
   std::size_t hindsight_resteps() const { return hindsight_.resteps(); }
