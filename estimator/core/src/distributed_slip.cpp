@@ -165,10 +165,11 @@ std::array<double, 2> SlipKernel::family_scales(double tension, double drive) co
 
 void SlipKernel::preset(SlipState& s, double x, double fraction, double tension) const noexcept {
   const double u = std::clamp(fraction, -1.0, 1.0);
-  const double e = (u >= 0.0 ? u * k_pos_ : u * k_neg_) * family_scales(tension, 0.0)[0];
+  const double level = u >= 0.0 ? u * k_pos_ : u * k_neg_;
+  const double e = level * family_scales(tension, 0.0)[0];
   for (std::size_t i = 0; i < spec_.element_count(); ++i)
     s.e[i] = e;
-  s.coulomb = u >= 0.0 ? u * k_pos_ : u * k_neg_;
+  s.coulomb = level;
   s.x_prev = x;
   s.started = true;
 }
