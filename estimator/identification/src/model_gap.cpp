@@ -1106,14 +1106,16 @@ EffectFound describe_structural(const TsmFrictionModel& model, Structural which)
       };
       const double t1 = family[0] / s.tension_ref, t3 = family[1] / s.tension_ref;
       const std::size_t pos = kSlidingIndex, neg = kSlidingIndex + 1;
+      const double pos_t1 = t1 + copies(pos, 1.0), pos_t3 = t3 + copies(pos, -1.0);
+      const double neg_t1 = t1 + copies(neg, 1.0), neg_t3 = t3 + copies(neg, -1.0);
       add("tendon_widths.elements_per_tendon", s.elements);
       add("tendon_widths.tension_ref", s.tension_ref);
       add("tendon_widths.break_force_T1", family[0]);
       add("tendon_widths.break_force_T3", family[1]);
-      add("tension_dependent.sliding_positive_per_N_T1", t1 + copies(pos, 1.0));
-      add("tension_dependent.sliding_positive_per_N_T3", t3 + copies(pos, -1.0));
-      add("tension_dependent.sliding_negative_per_N_T1", t1 + copies(neg, 1.0));
-      add("tension_dependent.sliding_negative_per_N_T3", t3 + copies(neg, -1.0));
+      add("tension_dependent.sliding_positive_per_N_T1", pos_t1);
+      add("tension_dependent.sliding_positive_per_N_T3", pos_t3);
+      add("tension_dependent.sliding_negative_per_N_T1", neg_t1);
+      add("tension_dependent.sliding_negative_per_N_T3", neg_t3);
       e.where =
           "where the tendons' tensions change (tip loads raise one and lower the other; a tendon "
           "near slack loses its sheath's friction), in the transition after a reversal and "
@@ -1121,10 +1123,9 @@ EffectFound describe_structural(const TsmFrictionModel& model, Structural which)
           std::to_string(s.elements) + " elements each, reference " + num(s.tension_ref, 3) +
           " N), break forces " + num(family[0], 3) + " N on T1 and " + num(family[1], 3) +
           " N on T3" + (s.tension_copies ? ", with tension copies" : "") +
-          "; sliding, the friction's magnitude grows by " + num(t1 + copies(pos, 1.0), 3) +
-          " N per N of T1 and " + num(t3 + copies(pos, -1.0), 3) + " N per N of T3 moving " +
-          "positive, " + num(t1 + copies(neg, 1.0), 3) + " and " + num(t3 + copies(neg, -1.0), 3) +
-          " moving negative";
+          "; sliding, the friction's magnitude grows by " + num(pos_t1, 3) + " N per N of T1 and " +
+          num(pos_t3, 3) + " N per N of T3 moving positive, " + num(neg_t1, 3) + " and " +
+          num(neg_t3, 3) + " moving negative";
       break;
     }
     case Structural::kSlipWithTension:
