@@ -4,6 +4,8 @@
 
 #include "bridge/host_only.hpp"
 #include "bridge/lcm_url.hpp"
+#include "bridge/stop_signals.hpp"
+#include "realtime/clock.hpp"
 
 namespace tsmh::bridge {
 
@@ -66,6 +68,32 @@ int start_node_link(const char* program, const NodeLinkOptions& options, NodeLin
     }
   }
   return 0;
+}
+
+NodeTicker::NodeTicker(NodeLink& link, double rate_hz, double duration_s,
+                       const sigset_t& stop_signals)
+    : link_(link),
+      stop_signals_(stop_signals),
+      duration_s_(duration_s),
+      start_ns_(realtime::monotonic_now_ns()),
+      pace_(static_cast<std::int64_t>(1e9 / rate_hz),
+            start_ns_ + static_cast<std::int64_t>(1e9 / rate_hz)) {}
+
+bool NodeTicker::next() {
+  if (ticked_) pace_.advance(realtime::monotonic_now_ns());
+  // A signal outside the stop set may end the sleep early: check, sleep again.
+  do {
+    if (terminating_signal_pending(stop_signals_) ||
+        (duration_s_ > 0.0 &&
+         static_cast<double>(realtime::monotonic_now_ns() - start_ns_) >= duration_s_ * 1e9))
+      return false;
+  } while (!pace_.wait());
+  ticked_ = true;
+  while (link_.lcm->handleTimeout(0) > 0) {
+  }
+  now_ = realtime::monotonic_now_ns();
+  if (link_.session) link_.session->tick(now_);
+  return true;
 }
 
 void print_session_fault(const char* program, const char* peer, const SessionFault& fault,

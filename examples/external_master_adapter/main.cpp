@@ -25,13 +25,12 @@
 // MASTER_STATE carries a MAC and only MASTER_FORCE that verifies drives the
 // motors, from one server session at a time (bridge/link_session.hpp).
 // Project code it uses: the bridge's link_auth.hpp and link_session.hpp,
-// and the message decoder every receiver of ours uses
+// its node start-up and period (node_link.hpp: options, key, LCM, pacing,
+// stop signals), and the message decoder every receiver of ours uses
 // (lcmtypes/message_decoder.hpp).
 // Server side: device: {driver: lcm, settings: {channel_prefix: LEFT_}}
 
-#include <pthread.h>
 #include <signal.h>
-#include <time.h>
 #include <yaml-cpp/yaml.h>
 
 #include <CLI/CLI.hpp>
@@ -51,6 +50,7 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/node_inbox.hpp"
 #include "bridge/node_link.hpp"
+#include "bridge/stop_signals.hpp"
 #include "files/cli_numbers.hpp"
 #include "master_devices/axis_mapping.hpp"
 #include "master_devices/vendor_master.hpp"
@@ -108,16 +108,6 @@ struct ForceInbox {
   }
 };
 
-// The stop signals are blocked and polled once per period, so stopping
-// needs no global flag and always ends with zero torque.
-bool stop_requested(const sigset_t& set) {
-  sigset_t pending;
-  sigpending(&pending);
-  for (int s = 1; s < NSIG; ++s)
-    if (sigismember(&set, s) == 1 && sigismember(&pending, s) == 1) return true;
-  return false;
-}
-
 // A crash (the core-dumping signals: SIGSEGV, SIGABRT, SIGBUS, SIGFPE, SIGILL,
 // SIGTRAP, SIGSYS) must not leave the motors driven either: the handler zeroes
 // the device's torque with async-signal-safe calls only, then lets the signal
@@ -140,24 +130,6 @@ void zero_torque_on_crash(tsmh::master_devices::VendorMaster& device) {
   sa.sa_flags = SA_RESETHAND;
   for (int s : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGTRAP, SIGSYS})
     sigaction(s, &sa, nullptr);
-}
-
-// Every signal that would end the process by default and can be caught (not
-// only Ctrl-C / SIGTERM: SIGHUP when the terminal closes, SIGQUIT, SIGUSR1,
-// ...): all of them stop through the zero-torque path. SIGPIPE is ignored.
-// (haptic-server uses the same list, bridge/stop_signals.hpp; this adapter
-// uses only the project's message authentication, on purpose.)
-sigset_t block_stop_signals() {
-  signal(SIGPIPE, SIG_IGN);
-  sigset_t set;
-  sigemptyset(&set);
-  for (int s : {SIGHUP, SIGINT, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGTERM, SIGVTALRM, SIGPROF,
-                SIGXCPU, SIGXFSZ, SIGIO, SIGPWR, SIGSTKFLT})
-    sigaddset(&set, s);
-  for (int s = SIGRTMIN; s <= SIGRTMAX; ++s)
-    sigaddset(&set, s);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  return set;
 }
 
 }  // namespace
@@ -192,7 +164,10 @@ int main(int argc, char** argv) {
                  "the mapping to the slave's joints: joints: [{axis: NAME, scale: S}], "
                  "buttons: {dead_man: NAME, clutch: NAME, ...} (needed with --profile)");
   CLI11_PARSE(app, argc, argv);
-  const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
+  // Every signal that would end the process by default and can be caught
+  // (SIGINT, SIGTERM, SIGHUP when the terminal closes, ...) stops through the
+  // zero-torque path; SIGPIPE is ignored. Before LCM starts any thread.
+  const sigset_t stop_signals = tsmh::bridge::block_terminating_signals();
 
   tsmh::master_devices::MasterProfile profile;
   tsmh::master_devices::MappingConfig mapping_cfg;
@@ -251,23 +226,17 @@ int main(int argc, char** argv) {
   state.qd.resize(slave_joints);
   tsmh::master_devices::JointArray v_prev{};
   bool have_prev = false;
-  const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
-  const std::int64_t start = tsmh::realtime::monotonic_now_ns();
-  std::int64_t next = start;
   std::int64_t seq = 0;
   std::int64_t watchdog_trips = 0;
   bool was_fresh = false;
   bool session_over = false;
 
-  while (!session_over && !stop_requested(stop_signals) &&
-         (duration_s <= 0.0 || tsmh::realtime::monotonic_now_ns() - start < duration_s * 1e9)) {
-    next += period_ns;  // absolute deadlines: no drift
-    tsmh::realtime::sleep_until_ns(next);
-
-    while (lcm.handleTimeout(0) > 0) {
-    }  // drain MASTER_FORCE without blocking
-    const std::int64_t now = tsmh::realtime::monotonic_now_ns();
-    if (session) session->tick(now);  // a silent server ends its session after 1 s
+  // Each period: MASTER_FORCE drained, the session ticked (a silent server
+  // ends it after 1 s), then the device and MASTER_STATE.
+  tsmh::bridge::NodeTicker ticker(node, rate_hz, duration_s, stop_signals);
+  const double dt = static_cast<double>(ticker.period_ns()) * 1e-9;
+  while (!session_over && ticker.next()) {
+    const std::int64_t now = ticker.now_ns();
     const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= watchdog_ms * 1e6;
     if (was_fresh && !fresh) {
       // Once per trip, not per period: the operator learns why the handle went limp.
@@ -286,7 +255,6 @@ int main(int argc, char** argv) {
     // the profile's limits; the pose is the one of the previous update.
     device->write(fresh && inbox.enable && bound ? mapping.joint_torques(inbox.torque)
                                                  : tsmh::master_devices::JointArray{});
-    const double dt = static_cast<double>(period_ns) * 1e-9;
     tsmh::master_devices::JointArray coordinates{};
     std::uint32_t buttons = 0;
     const bool pose_ok = device->read(coordinates, buttons) && mapping.update(coordinates, buttons);

@@ -3,8 +3,8 @@
 // writes; it depends on nothing of ours but the generated LCM types, their
 // decoder for untrusted bytes (lcmtypes/message_decoder.hpp) and the
 // bridge's message authentication (bridge/link_auth.hpp: a MAC trailer on
-// every message, docs/bridge.md "Authentication") with its start-up
-// (options, key, LCM: bridge/node_link.hpp).
+// every message, docs/bridge.md "Authentication") with its start-up and
+// period (options, key, LCM, pacing, stop signals: bridge/node_link.hpp).
 //
 //   every period (1 kHz):  drain MASTER_COMMAND (newest wins)
 //                          fresh and enabled -> position reference to the robot
@@ -18,9 +18,7 @@
 //   slave-node-skeleton [--lcm-url URL] [--prefix ARM1_] [--rate-hz 1000]
 //                       [--command-timeout-ms 100] [--duration S] [--key FILE | --insecure]
 
-#include <pthread.h>
 #include <signal.h>
-#include <time.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -36,6 +34,7 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/node_inbox.hpp"
 #include "bridge/node_link.hpp"
+#include "bridge/stop_signals.hpp"
 #include "files/cli_numbers.hpp"
 #include "realtime/clock.hpp"
 
@@ -131,24 +130,6 @@ struct CommandInbox {
   }
 };
 
-sigset_t block_stop_signals() {
-  signal(SIGPIPE, SIG_IGN);
-  sigset_t set;
-  sigemptyset(&set);
-  for (int s : {SIGHUP, SIGINT, SIGQUIT, SIGTERM})
-    sigaddset(&set, s);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  return set;
-}
-
-bool stop_requested(const sigset_t& set) {
-  sigset_t pending;
-  sigpending(&pending);
-  for (int s : {SIGHUP, SIGINT, SIGQUIT, SIGTERM})
-    if (sigismember(&set, s) == 1 && sigismember(&pending, s) == 1) return true;
-  return false;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -172,7 +153,10 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration_s, "stop after this many seconds (0: until Ctrl-C)")
       ->check(tsmh::files::finite_range(0.0, 1e7, "s"));
   CLI11_PARSE(app, argc, argv);
-  const sigset_t stop_signals = block_stop_signals();  // before LCM starts any thread
+  // Every signal that would end the process by default and can be caught
+  // (SIGINT, SIGTERM, SIGHUP when the terminal closes, ...) stops through the
+  // hold below; SIGPIPE is ignored. Before LCM starts any thread.
+  const sigset_t stop_signals = tsmh::bridge::block_terminating_signals();
 
   // Only authenticated peers move the robot: MASTER_COMMAND must carry a
   // valid MAC, and SLAVE_STATE carries ours, when a link key exists.
@@ -183,8 +167,10 @@ int main(int argc, char** argv) {
     return status;
   lcm::LCM& lcm = *node.lcm;
   const auto& session = node.session;
-  const std::int64_t period_ns = static_cast<std::int64_t>(1e9 / rate_hz);
-  StubRobot robot(static_cast<double>(period_ns) * 1e-9);  // REAL DRIVER: your RobotIo
+  // Each period: MASTER_COMMAND drained, the session ticked (a silent server
+  // ends it after 1 s), then the robot and SLAVE_STATE.
+  tsmh::bridge::NodeTicker ticker(node, rate_hz, duration_s, stop_signals);
+  StubRobot robot(static_cast<double>(ticker.period_ns()) * 1e-9);  // REAL DRIVER: your RobotIo
   const int n = robot.joints();
   CommandInbox inbox(node, n);
   lcm.subscribe(link.prefix + "MASTER_COMMAND", &CommandInbox::on_raw, &inbox);
@@ -203,8 +189,6 @@ int main(int argc, char** argv) {
     state.radius_m[static_cast<std::size_t>(j)] = robot.radius_m(j);
   std::vector<JointSample> samples;
 
-  const std::int64_t start = tsmh::realtime::monotonic_now_ns();
-  std::int64_t next = start;
   std::int64_t seq = 0;
   std::int64_t holds = 0;
   bool was_driving = false;
@@ -213,15 +197,8 @@ int main(int argc, char** argv) {
   // for 2 s, so that a late process of the other session stops too; then exit 4.
   std::int64_t fault_since = 0;
   while ((!session_over || tsmh::realtime::monotonic_now_ns() - fault_since < 2'000'000'000) &&
-         !stop_requested(stop_signals) &&
-         (duration_s <= 0.0 || tsmh::realtime::monotonic_now_ns() - start < duration_s * 1e9)) {
-    next += period_ns;  // absolute deadlines: no drift
-    tsmh::realtime::sleep_until_ns(next);
-
-    while (lcm.handleTimeout(0) > 0) {
-    }  // drain MASTER_COMMAND without blocking
-    const std::int64_t now = tsmh::realtime::monotonic_now_ns();
-    if (session) session->tick(now);  // a silent server ends its session after 1 s
+         ticker.next()) {
+    const std::int64_t now = ticker.now_ns();
     const bool fresh = inbox.received_ns > 0 && now - inbox.received_ns <= command_timeout_ms * 1e6;
     // Without a bound session (between servers, or after another master
     // appeared) the robot holds, whatever the last command said.

@@ -1,18 +1,25 @@
 // The start-up of the standalone nodes (bridge/node_link.hpp): the refusal
 // to run unkeyed on a network URL, the signer/verifier/session that come
-// with a key, and the messages and exit statuses the programs print.
+// with a key, and the messages and exit statuses the programs print; the
+// node's period (NodeTicker): LCM drained, a pending stop signal or the end of
+// the duration ends it, an overrun re-bases the schedule.
 
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/node_link.hpp"
+#include "realtime/clock.hpp"
 
 namespace {
 
@@ -67,7 +74,7 @@ TEST_F(NodeLinkStart, NoKeyOnANetworkUrlIsRefusedWithExit2) {
   EXPECT_EQ(start(o, link, err), 2);
   EXPECT_EQ(err.rfind("node-under-test: error: ", 0), 0U) << err;
   EXPECT_NE(err.find("tsm-link keygen"), std::string::npos) << err;  // says how to make a key
-  EXPECT_EQ(link.lcm, nullptr);                                 // LCM never started
+  EXPECT_EQ(link.lcm, nullptr);                                      // LCM never started
   EXPECT_EQ(link.signer, nullptr);
 }
 
@@ -141,6 +148,78 @@ TEST_F(NodeLinkStart, HostOnlyUdpmStartsUnkeyedAndConfined) {
   ASSERT_EQ(status, 0) << err;
   ASSERT_NE(link.lcm, nullptr);
   EXPECT_EQ(link.signer, nullptr);
+}
+
+// A memq link (no key, no session): the ticker's loop alone.
+NodeLink memq_link() {
+  NodeLink link;
+  link.lcm = std::make_unique<lcm::LCM>("memq://");
+  return link;
+}
+
+sigset_t no_stop_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  return set;
+}
+
+TEST(NodeTicker, EachPeriodDrainsWhatLcmReceived) {
+  NodeLink link = memq_link();
+  ASSERT_TRUE(link.lcm->good());
+  int received = 0;
+  link.lcm->subscribeFunction<int*>(
+      "NODE_TICKER_TEST", [](const lcm::ReceiveBuffer*, const std::string&, int* n) { ++*n; },
+      &received);
+  tsmh::bridge::NodeTicker ticker(link, 1000.0, 0.0, no_stop_signals());
+  const std::uint8_t byte = 7;
+  for (int i = 0; i < 3; ++i)
+    link.lcm->publish("NODE_TICKER_TEST", &byte, 1);
+  ASSERT_TRUE(ticker.next());
+  EXPECT_EQ(received, 3);  // all of them, in the one period
+  EXPECT_GT(ticker.now_ns(), 0);
+  EXPECT_EQ(ticker.period_ns(), 1'000'000);
+}
+
+TEST(NodeTicker, EndsAtTheDurationAfterNoMorePeriodsThanFitInIt) {
+  NodeLink link = memq_link();
+  const std::int64_t start = tsmh::realtime::monotonic_now_ns();
+  tsmh::bridge::NodeTicker ticker(link, 1000.0, 0.03, no_stop_signals());
+  int periods = 0;
+  while (ticker.next())
+    ++periods;
+  EXPECT_GE(tsmh::realtime::monotonic_now_ns() - start, 30'000'000);
+  EXPECT_GE(periods, 1);
+  EXPECT_LE(periods, 30);  // deadlines 1, 2, ... 30 ms after the start
+}
+
+TEST(NodeTicker, APendingStopSignalEndsItWithoutWaiting) {
+  sigset_t stop;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGUSR2);
+  sigset_t old;
+  ASSERT_EQ(pthread_sigmask(SIG_BLOCK, &stop, &old), 0);
+  NodeLink link = memq_link();
+  tsmh::bridge::NodeTicker ticker(link, 1.0, 0.0, stop);  // one period a second
+  ASSERT_EQ(pthread_kill(pthread_self(), SIGUSR2), 0);
+  const std::int64_t before = tsmh::realtime::monotonic_now_ns();
+  EXPECT_FALSE(ticker.next());
+  EXPECT_LT(tsmh::realtime::monotonic_now_ns() - before, 500'000'000);  // not the 1 s period
+  const timespec none{0, 0};
+  EXPECT_EQ(sigtimedwait(&stop, nullptr, &none), SIGUSR2);  // the signal is left pending
+  pthread_sigmask(SIG_SETMASK, &old, nullptr);
+}
+
+TEST(NodeTicker, AfterAnOverrunTheNextPeriodsWaitForDeadlinesAhead) {
+  NodeLink link = memq_link();
+  tsmh::bridge::NodeTicker ticker(link, 1000.0, 0.0, no_stop_signals());
+  ASSERT_TRUE(ticker.next());
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));  // 30 deadlines missed
+  const std::int64_t before = tsmh::realtime::monotonic_now_ns();
+  for (int i = 0; i < 5; ++i)
+    ASSERT_TRUE(ticker.next());
+  // Re-based: five periods on deadlines after the stall take >= 4 periods;
+  // running the missed deadlines back to back would take none.
+  EXPECT_GE(tsmh::realtime::monotonic_now_ns() - before, 4'000'000);
 }
 
 }  // namespace

@@ -5,7 +5,11 @@
 // to run unkeyed on a network URL), the signer/verifier/session that go with
 // a key, and LCM itself, confined to this host for a ttl=0 URL. A node built
 // on the bridge's Receiver/Sender (virtual-slave) takes the same options and
-// resolves them with resolve_node_link() into its BridgeConfig.
+// resolves them with resolve_node_link() into its BridgeConfig. Then the
+// node's period (NodeTicker): the project's pacing, LCM drained, the session
+// ticked, until a stop signal or the end of --duration.
+
+#include <signal.h>
 
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
@@ -17,6 +21,7 @@
 #include "bridge/link_auth.hpp"
 #include "bridge/link_security.hpp"
 #include "bridge/link_session.hpp"
+#include "realtime/pacing.hpp"
 
 namespace tsmh::bridge {
 
@@ -72,6 +77,41 @@ int start_node_link(const char* program, const NodeLinkOptions& options, NodeLin
 /// by a second key holder, the same words in every node.
 void print_session_fault(const char* program, const char* peer, const SessionFault& fault,
                          const char* consequence);
+
+/// The periods of a standalone node's loop: absolute deadlines on the
+/// project's pacing (realtime::Pacer: after an overrun the schedule re-bases
+/// on the next deadline ahead instead of running late periods back to back);
+/// each period first drains what LCM received, without blocking, and ticks
+/// the session (a silent peer ends it after its timeout). Stopping is polled,
+/// not signalled: the loop ends at its next period after a stop signal or
+/// at the end of the duration, so it always leaves through the caller's
+/// safe exit (zero torque, hold).
+///   NodeTicker ticker(node, rate_hz, duration_s, stop_signals);
+///   while (!session_over && ticker.next()) { ... the period at ticker.now_ns() ... }
+class NodeTicker {
+ public:
+  /// `rate_hz` > 0; `duration_s` <= 0: until a stop signal; `stop_signals`:
+  /// what block_terminating_signals() returned before LCM started. The
+  /// first period is due one period from now.
+  NodeTicker(NodeLink& link, double rate_hz, double duration_s, const sigset_t& stop_signals);
+
+  /// false, without waiting, once a signal of the stop set is pending or the
+  /// duration is over; otherwise sleeps to the next deadline, drains LCM,
+  /// ticks the session and returns true.
+  bool next();
+  /// CLOCK_MONOTONIC when the last next() had drained LCM, ns.
+  std::int64_t now_ns() const noexcept { return now_; }
+  std::int64_t period_ns() const noexcept { return pace_.period_ns(); }
+
+ private:
+  NodeLink& link_;
+  sigset_t stop_signals_;
+  double duration_s_;
+  std::int64_t start_ns_;
+  realtime::Pacer pace_;
+  bool ticked_ = false;
+  std::int64_t now_ = 0;
+};
 
 /// Sends one of our messages (lcm-gen's type) on `channel`: encoded, signed
 /// with the link's key when it has one, published. `bytes` is the caller's
