@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "estimator/baselines.hpp"
@@ -85,6 +86,52 @@ TEST(Baselines, BadParametersAreRefusedNamingTheField) {
   }
   EXPECT_THROW(DahlModel({0.0, 1.0}), std::invalid_argument);
   EXPECT_THROW(CoulombCapstanModel({1.0, 1.5, 0.01}), std::invalid_argument);
+}
+
+// Each value's rule and its words, at and beside the boundary: the message
+// names the value and what it must be; NaN is refused everywhere.
+template <class Model>
+void expect_refused(typename Model::Params p, const std::string& message) {
+  try {
+    Model m(p);
+    ADD_FAILURE() << "accepted; expected " << message;
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), message);
+  }
+}
+
+TEST(Baselines, EachValueIsCheckedByItsOwnRule) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  expect_refused<DahlModel>({0.0, 9.2}, "params.sigma0: must be > 0");
+  expect_refused<DahlModel>({148.4, nan}, "params.fc: must be > 0");
+  expect_refused<LuGreModel>({148.4, -0.1, 0.0, 9.2, 15.0, 0.2}, "params.sigma1: must be >= 0");
+  expect_refused<LuGreModel>({148.4, 1.0, -1e-9, 9.2, 15.0, 0.2}, "params.sigma2: must be >= 0");
+  expect_refused<LuGreModel>({148.4, 1.0, 0.0, 9.2, 0.0, 0.2}, "params.fs: must be > 0");
+  expect_refused<CoulombCapstanModel>({-1.0, 0.3, 0.02}, "params.f0: must be >= 0");
+  expect_refused<CoulombCapstanModel>({9.2, 1.0, 0.02}, "params.capstan: must be in [0, 1)");
+  expect_refused<CoulombCapstanModel>({9.2, -0.1, 0.02}, "params.capstan: must be in [0, 1)");
+  expect_refused<CoulombCapstanModel>({9.2, 0.3, 0.0}, "params.v_eps: must be > 0");
+  // The first bad value is the one named.
+  expect_refused<LuGreModel>({-1.0, -1.0, 0.0, 9.2, 15.0, 0.2}, "params.sigma0: must be > 0");
+  // On the boundary of >= 0 and [0, 1): accepted.
+  EXPECT_NO_THROW(LuGreModel({148.4, 0.0, 0.0, 9.2, 15.0, 0.2}));
+  EXPECT_NO_THROW(CoulombCapstanModel({0.0, 0.0, 0.02}));
+  EXPECT_NO_THROW(CoulombCapstanModel({0.0, 0.999, 0.02}));
+  // parameters(): name, fit bounds and unit per value, in Params' order.
+  const auto lugre = LuGreModel().parameters();
+  ASSERT_EQ(lugre.size(), 6U);
+  EXPECT_EQ(lugre[1].name, "params.sigma1");
+  EXPECT_DOUBLE_EQ(lugre[1].value, 1.0);
+  EXPECT_DOUBLE_EQ(lugre[1].upper, 100.0);
+  EXPECT_EQ(lugre[1].unit, "N s/rad");
+  EXPECT_EQ(lugre[5].name, "params.vs");
+  EXPECT_DOUBLE_EQ(lugre[5].lower, 1e-3);
+  const auto capstan = CoulombCapstanModel().parameters();
+  ASSERT_EQ(capstan.size(), 3U);
+  EXPECT_EQ(capstan[1].name, "params.capstan");
+  EXPECT_DOUBLE_EQ(capstan[1].upper, 0.99);
+  EXPECT_EQ(capstan[1].unit, "");
+  EXPECT_FALSE(capstan[2].fixed);
 }
 
 // Every baseline: set_values takes one value per parameter, in parameters()'

@@ -11,21 +11,31 @@ bool finite_step(const Motion& m, double dt) {
   return std::isfinite(m.xd) && std::isfinite(m.load) && dt > 0.0 && std::isfinite(dt);
 }
 
-void require(bool ok, const std::string& field, const char* why) {
-  if (!ok) throw std::invalid_argument(field + ": " + why);
-}
+// Each baseline's values: name, member, the fit's bounds and unit, the values
+// the model accepts (BaselineField).
+using DahlValid = DahlModel::Field::Valid;
+constexpr DahlModel::Field kDahlFields[] = {
+    {"params.sigma0", &DahlParams::sigma0, 1.0, 1e4, "N/rad", DahlValid::kPositive},
+    {"params.fc", &DahlParams::fc, 0.01, 200.0, "N", DahlValid::kPositive}};
+
+using LuGreValid = LuGreModel::Field::Valid;
+constexpr LuGreModel::Field kLuGreFields[] = {
+    {"params.sigma0", &LuGreParams::sigma0, 1.0, 1e4, "N/rad", LuGreValid::kPositive},
+    {"params.sigma1", &LuGreParams::sigma1, 0.0, 100.0, "N s/rad", LuGreValid::kNonNegative},
+    {"params.sigma2", &LuGreParams::sigma2, 0.0, 100.0, "N s/rad", LuGreValid::kNonNegative},
+    {"params.fc", &LuGreParams::fc, 0.01, 200.0, "N", LuGreValid::kPositive},
+    {"params.fs", &LuGreParams::fs, 0.01, 200.0, "N", LuGreValid::kPositive},
+    {"params.vs", &LuGreParams::vs, 1e-3, 10.0, "rad/s", LuGreValid::kPositive}};
+
+using CapstanValid = CoulombCapstanModel::Field::Valid;
+constexpr CoulombCapstanModel::Field kCoulombCapstanFields[] = {
+    {"params.f0", &CoulombCapstanParams::f0, 0.0, 200.0, "N", CapstanValid::kNonNegative},
+    {"params.capstan", &CoulombCapstanParams::capstan, 0.0, 0.99, "", CapstanValid::kFraction},
+    {"params.v_eps", &CoulombCapstanParams::v_eps, 1e-4, 1.0, "rad/s", CapstanValid::kPositive}};
 
 }  // namespace
 
-DahlModel::DahlModel(Params p) : BaselineModel(p) {
-  require(std::isfinite(p_.sigma0) && p_.sigma0 > 0.0, "params.sigma0", "must be > 0");
-  require(std::isfinite(p_.fc) && p_.fc > 0.0, "params.fc", "must be > 0");
-}
-
-std::vector<Parameter> DahlModel::parameters() const {
-  return {{"params.sigma0", p_.sigma0, 1.0, 1e4, false, "N/rad"},
-          {"params.fc", p_.fc, 0.01, 200.0, false, "N"}};
-}
+DahlModel::DahlModel(Params p) : BaselineModel(p, kDahlFields) {}
 
 double DahlModel::step(const Motion& m, double dt) noexcept {
   if (!finite_step(m, dt) || m.xd == 0.0) return f_;
@@ -34,23 +44,7 @@ double DahlModel::step(const Motion& m, double dt) noexcept {
   return f_;
 }
 
-LuGreModel::LuGreModel(Params p) : BaselineModel(p) {
-  require(std::isfinite(p_.sigma0) && p_.sigma0 > 0.0, "params.sigma0", "must be > 0");
-  require(std::isfinite(p_.sigma1) && p_.sigma1 >= 0.0, "params.sigma1", "must be >= 0");
-  require(std::isfinite(p_.sigma2) && p_.sigma2 >= 0.0, "params.sigma2", "must be >= 0");
-  require(std::isfinite(p_.fc) && p_.fc > 0.0, "params.fc", "must be > 0");
-  require(std::isfinite(p_.fs) && p_.fs > 0.0, "params.fs", "must be > 0");
-  require(std::isfinite(p_.vs) && p_.vs > 0.0, "params.vs", "must be > 0");
-}
-
-std::vector<Parameter> LuGreModel::parameters() const {
-  return {{"params.sigma0", p_.sigma0, 1.0, 1e4, false, "N/rad"},
-          {"params.sigma1", p_.sigma1, 0.0, 100.0, false, "N s/rad"},
-          {"params.sigma2", p_.sigma2, 0.0, 100.0, false, "N s/rad"},
-          {"params.fc", p_.fc, 0.01, 200.0, false, "N"},
-          {"params.fs", p_.fs, 0.01, 200.0, false, "N"},
-          {"params.vs", p_.vs, 1e-3, 10.0, false, "rad/s"}};
-}
+LuGreModel::LuGreModel(Params p) : BaselineModel(p, kLuGreFields) {}
 
 double LuGreModel::step(const Motion& m, double dt) noexcept {
   if (!finite_step(m, dt)) return f_;
@@ -67,18 +61,7 @@ double LuGreModel::step(const Motion& m, double dt) noexcept {
   return f_;
 }
 
-CoulombCapstanModel::CoulombCapstanModel(Params p) : BaselineModel(p) {
-  require(std::isfinite(p_.f0) && p_.f0 >= 0.0, "params.f0", "must be >= 0");
-  require(std::isfinite(p_.capstan) && p_.capstan >= 0.0 && p_.capstan < 1.0, "params.capstan",
-          "must be in [0, 1)");
-  require(std::isfinite(p_.v_eps) && p_.v_eps > 0.0, "params.v_eps", "must be > 0");
-}
-
-std::vector<Parameter> CoulombCapstanModel::parameters() const {
-  return {{"params.f0", p_.f0, 0.0, 200.0, false, "N"},
-          {"params.capstan", p_.capstan, 0.0, 0.99, false, ""},
-          {"params.v_eps", p_.v_eps, 1e-4, 1.0, false, "rad/s"}};
-}
+CoulombCapstanModel::CoulombCapstanModel(Params p) : BaselineModel(p, kCoulombCapstanFields) {}
 
 double CoulombCapstanModel::step(const Motion& m, double dt) noexcept {
   if (!finite_step(m, dt)) return f_;

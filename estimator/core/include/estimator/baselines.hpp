@@ -3,26 +3,48 @@
 // paper's model (docs/friction-model.md): Dahl, LuGre, and Kaneko's
 // Coulomb/capstan model of a tendon-sheath pair.
 
+#include <cmath>
 #include <cstddef>
 #include <span>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "estimator/friction_model.hpp"
 
 namespace tsmh::estimator {
 
-/// What the baselines share: their parameters, the friction they gave last,
-/// their kind (Derived::kKind), setting their values, resetting and copying
-/// themselves. `Derived` is the model, `P` its parameters: doubles only, in
-/// the order parameters() lists them.
+/// One value of a baseline's Params: its name, where it is, the fit's bounds
+/// and unit as parameters() lists them, and the values the model accepts.
+template <class P>
+struct BaselineField {
+  enum class Valid { kPositive, kNonNegative, kFraction };  ///< > 0, >= 0, in [0, 1)
+  const char* name;                                         ///< "params.<field>"
+  double P::*value;
+  double fit_lower, fit_upper;
+  const char* unit;
+  Valid valid;
+};
+
+/// What the baselines share: their parameters (a table of BaselineField, one
+/// row per value of Params, in its order), checked when the model is built,
+/// the friction they gave last, their kind (Derived::kKind), setting their
+/// values, resetting and copying themselves. `Derived` is the model, `P` its
+/// parameters: doubles only.
 template <class Derived, class P>
 class BaselineModel : public FrictionModel {
  public:
   using Params = P;
+  using Field = BaselineField<P>;
   std::string kind() const override { return Derived::kKind; }
+  std::vector<Parameter> parameters() const override {
+    std::vector<Parameter> out;
+    for (const Field& f : fields_)
+      out.push_back({f.name, p_.*f.value, f.fit_lower, f.fit_upper, false, f.unit});
+    return out;
+  }
   double friction() const noexcept override { return f_; }
   /// The model rebuilt (its constructor checks them) from one value per
   /// field of Params, in parameters()' order.
@@ -38,7 +60,22 @@ class BaselineModel : public FrictionModel {
   }
 
  protected:
-  explicit BaselineModel(Params p) : p_(p) {}
+  /// `fields`: a table with static storage, one row per value of Params.
+  /// Throws std::invalid_argument naming the first value out of its range.
+  BaselineModel(Params p, std::span<const Field, sizeof(P) / sizeof(double)> fields)
+      : p_(p), fields_(fields) {
+    for (const Field& f : fields_) {
+      const double v = p_.*f.value;
+      const bool ok = f.valid == Field::Valid::kPositive      ? v > 0.0
+                      : f.valid == Field::Valid::kNonNegative ? v >= 0.0
+                                                              : v >= 0.0 && v < 1.0;
+      if (!(std::isfinite(v) && ok))
+        throw std::invalid_argument(std::string(f.name) + ": must be " +
+                                    (f.valid == Field::Valid::kPositive      ? "> 0"
+                                     : f.valid == Field::Valid::kNonNegative ? ">= 0"
+                                                                             : "in [0, 1)"));
+    }
+  }
   Params p_;
   double f_ = 0.0;
 
@@ -50,6 +87,7 @@ class BaselineModel : public FrictionModel {
   static Params params_of(std::span<const double> v, std::index_sequence<I...>) {
     return Params{v[I]...};
   }
+  std::span<const Field, kCount> fields_;
 };
 
 /// Dahl: dF/dt = sigma0 (xd - |xd| F / Fc). Integrated exactly for the
@@ -63,7 +101,6 @@ class DahlModel final : public BaselineModel<DahlModel, DahlParams> {
  public:
   static constexpr const char* kKind = "dahl";
   explicit DahlModel(Params p = {});
-  std::vector<Parameter> parameters() const override;
   double step(const Motion& m, double dt) noexcept override;
 };
 
@@ -83,7 +120,6 @@ class LuGreModel final : public BaselineModel<LuGreModel, LuGreParams> {
  public:
   static constexpr const char* kKind = "lugre";
   explicit LuGreModel(Params p = {});
-  std::vector<Parameter> parameters() const override;
   void reset() noexcept override {
     z_ = 0.0;
     f_ = 0.0;
@@ -109,7 +145,6 @@ class CoulombCapstanModel final : public BaselineModel<CoulombCapstanModel, Coul
  public:
   static constexpr const char* kKind = "coulomb_capstan";
   explicit CoulombCapstanModel(Params p = {});
-  std::vector<Parameter> parameters() const override;
   double step(const Motion& m, double dt) noexcept override;
 };
 
