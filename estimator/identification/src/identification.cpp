@@ -16,6 +16,7 @@
 #include <random>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include "estimator/fit_metrics.hpp"
 #include "estimator/parameter_map.hpp"
@@ -130,25 +131,20 @@ class Objective {
   std::size_t full_size_ = 0;
 };
 
+// NLopt's endings that leave a result, in words (its codes are not 0..N, so
+// a table of pairs rather than realtime::enum_name).
 std::string stop_reason(nlopt::result r) {
-  switch (r) {
-    case nlopt::SUCCESS:
-      return "success";
-    case nlopt::STOPVAL_REACHED:
-      return "target cost reached";
-    case nlopt::FTOL_REACHED:
-      return "cost converged";
-    case nlopt::XTOL_REACHED:
-      return "parameters converged";
-    case nlopt::MAXEVAL_REACHED:
-      return "evaluation budget used";
-    case nlopt::MAXTIME_REACHED:
-      return "time budget used";
-    case nlopt::ROUNDOFF_LIMITED:
-      return "round-off limited";
-    default:
-      return "stopped (" + std::to_string(static_cast<int>(r)) + ")";
-  }
+  static constexpr std::pair<nlopt::result, const char*> kReasons[] = {
+      {nlopt::SUCCESS, "success"},
+      {nlopt::STOPVAL_REACHED, "target cost reached"},
+      {nlopt::FTOL_REACHED, "cost converged"},
+      {nlopt::XTOL_REACHED, "parameters converged"},
+      {nlopt::MAXEVAL_REACHED, "evaluation budget used"},
+      {nlopt::MAXTIME_REACHED, "time budget used"},
+      {nlopt::ROUNDOFF_LIMITED, "round-off limited"}};
+  for (const auto& [code, words] : kReasons)
+    if (code == r) return words;
+  return "stopped (" + std::to_string(static_cast<int>(r)) + ")";
 }
 
 // Runs one NLopt optimisation; NLopt reports some endings (round-off) as

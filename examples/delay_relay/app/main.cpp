@@ -99,8 +99,14 @@ int main(int argc, char** argv) {
   std::string to_slave_re = ".*MASTER_COMMAND";
   std::string to_server_re = ".*SLAVE_STATE|.*SLAVE_TRUTH";
   double delay_ms = 0, jitter_ms = 0, drop = 0, duration_s = 0;
-  double fwd_delay = -1, fwd_jitter = -1, fwd_drop = -1;
-  double back_delay = -1, back_jitter = -1, back_drop = -1;
+  // A direction's own --delay-ms, --jitter-ms and --drop; -1: the common one.
+  struct Overrides {
+    const char* name;
+    const char* help;
+    double delay_ms = -1, jitter_ms = -1, drop = -1;
+  };
+  Overrides to_slave_set{"to-slave", "override for server -> slave"};
+  Overrides to_server_set{"to-server", "override for slave -> server"};
   std::uint64_t seed = 1;
   app.add_option("--slave-url", slave_url, "LCM URL the slave publishes and listens on")
       ->required();
@@ -108,12 +114,12 @@ int main(int argc, char** argv) {
   app.add_option("--delay-ms", delay_ms, "one-way delay, each direction (ms)");
   app.add_option("--jitter-ms", jitter_ms, "+- uniform jitter on the delay (ms, <= delay)");
   app.add_option("--drop", drop, "fraction of messages lost, each direction (0..1)");
-  app.add_option("--to-slave-delay-ms", fwd_delay, "override for server -> slave");
-  app.add_option("--to-slave-jitter-ms", fwd_jitter, "override for server -> slave");
-  app.add_option("--to-slave-drop", fwd_drop, "override for server -> slave");
-  app.add_option("--to-server-delay-ms", back_delay, "override for slave -> server");
-  app.add_option("--to-server-jitter-ms", back_jitter, "override for slave -> server");
-  app.add_option("--to-server-drop", back_drop, "override for slave -> server");
+  for (Overrides* d : {&to_slave_set, &to_server_set}) {
+    const std::string option = std::string("--") + d->name;
+    app.add_option(option + "-delay-ms", d->delay_ms, d->help);
+    app.add_option(option + "-jitter-ms", d->jitter_ms, d->help);
+    app.add_option(option + "-drop", d->drop, d->help);
+  }
   app.add_option("--to-slave-channels", to_slave_re, "channel regex relayed server -> slave");
   app.add_option("--to-server-channels", to_server_re, "channel regex relayed slave -> server");
   app.add_option("--seed", seed, "random seed (same seed, same drops and jitter)");
@@ -123,14 +129,16 @@ int main(int argc, char** argv) {
   if (const int rc = tsmh::cli_words::check_words(app, argc, argv)) return rc;
   CLI11_PARSE(app, argc, argv);
 
-  const auto pick = [](double over, double base) { return over >= 0 ? over : base; };
-  const ImpairmentParams to_slave{pick(fwd_delay, delay_ms) * 1e-3,
-                                  pick(fwd_jitter, jitter_ms) * 1e-3, pick(fwd_drop, drop)};
-  const ImpairmentParams to_server{pick(back_delay, delay_ms) * 1e-3,
-                                   pick(back_jitter, jitter_ms) * 1e-3, pick(back_drop, drop)};
+  const auto impairment = [&](const Overrides& d) {
+    const auto pick = [](double over, double base) { return over >= 0 ? over : base; };
+    const ImpairmentParams p{pick(d.delay_ms, delay_ms) * 1e-3, pick(d.jitter_ms, jitter_ms) * 1e-3,
+                             pick(d.drop, drop)};
+    tsmh::delay_relay::validate(p, d.name);
+    return p;
+  };
   try {
-    tsmh::delay_relay::validate(to_slave, "to-slave");
-    tsmh::delay_relay::validate(to_server, "to-server");
+    const ImpairmentParams to_slave = impairment(to_slave_set);
+    const ImpairmentParams to_server = impairment(to_server_set);
     if (slave_url == server_url)
       throw std::invalid_argument(
           "--slave-url and --server-url must differ (the relay would "

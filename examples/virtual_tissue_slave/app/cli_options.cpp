@@ -26,6 +26,18 @@ CLI::Validator joint_option(std::size_t count) {
       "joint1..joint" + std::to_string(count));
 }
 
+// --wrap / --pretension: "V1[,V2]" sets `field` of the joint's sheath 01 (and
+// 02); one value sets sheath 01 alone. Empty: the preset's values stay.
+void set_sheaths(JointParams& joint, const std::string& text, const char* option, const char* must,
+                 double TendonParams::*field) {
+  if (text.empty()) return;
+  const auto [v1, v2] = parse_pair(text, option);
+  if (v1 < 0 || (!std::isnan(v2) && v2 < 0))
+    throw std::invalid_argument(std::string(option) + ": " + must);
+  joint.tendon1.*field = v1;
+  if (!std::isnan(v2)) joint.tendon2.*field = v2;
+}
+
 }  // namespace
 
 void add_options(CLI::App& app, CliOptions& o) {
@@ -99,20 +111,9 @@ Setup make_setup(const CliOptions& o, const Scenario* scenario) {
   s.joint_index = o.joint;
   JointParams& jp = s.params.joints[static_cast<std::size_t>(s.joint_index)];
 
-  if (!o.wrap.empty()) {
-    const auto [w1, w2] = parse_pair(o.wrap, "--wrap");
-    if (w1 < 0 || (!std::isnan(w2) && w2 < 0))
-      throw std::invalid_argument("--wrap: wraps must be >= 0 rad");
-    jp.tendon1.wrap_rad = w1;
-    if (!std::isnan(w2)) jp.tendon2.wrap_rad = w2;
-  }
-  if (!o.pretension.empty()) {
-    const auto [p1, p2] = parse_pair(o.pretension, "--pretension");
-    if (p1 < 0 || (!std::isnan(p2) && p2 < 0))
-      throw std::invalid_argument("--pretension: tensions must be >= 0 N");
-    jp.tendon1.pretension_n = p1;
-    if (!std::isnan(p2)) jp.tendon2.pretension_n = p2;
-  }
+  set_sheaths(jp, o.wrap, "--wrap", "wraps must be >= 0 rad", &TendonParams::wrap_rad);
+  set_sheaths(jp, o.pretension, "--pretension", "tensions must be >= 0 N",
+              &TendonParams::pretension_n);
   if (o.mu) {
     if (!(std::isfinite(*o.mu) && *o.mu >= 0)) throw std::invalid_argument("--mu must be >= 0");
     for (auto& j : s.params.joints)

@@ -5,24 +5,32 @@
 
 namespace tsmh::virtual_tissue_slave {
 
+namespace {
+
+struct Sheath {
+  double wrap_rad;
+  double pretension_n;
+};
+
+JointParams& set_joint(JointParams& j, const char* name, Sheath sheath01, Sheath sheath02) {
+  j.name = name;
+  j.tendon1.wrap_rad = sheath01.wrap_rad;
+  j.tendon1.pretension_n = sheath01.pretension_n;
+  j.tendon2.wrap_rad = sheath02.wrap_rad;
+  j.tendon2.pretension_n = sheath02.pretension_n;
+  return j;
+}
+
+}  // namespace
+
 SlaveParams paper_slave() {
   SlaveParams p;
   // Joint1, the gripper. Sheath 01 is wound more than sheath 02 (they follow
   // different sides of the endoscope's tool channel), so the friction loop is
   // asymmetric: the puller's capstan gain e^(mu Theta) differs per direction.
-  JointParams& j1 = p.joints[0];
-  j1.name = "joint1";
-  j1.tendon1.wrap_rad = 3.4;
-  j1.tendon1.pretension_n = 21.0;
-  j1.tendon2.wrap_rad = 1.2;
-  j1.tendon2.pretension_n = 20.0;
+  set_joint(p.joints[0], "joint1", {3.4, 21.0}, {1.2, 20.0});
   // Joint2: the other way round, a slightly heavier link.
-  JointParams& j2 = p.joints[1];
-  j2.name = "joint2";
-  j2.tendon1.wrap_rad = 1.6;
-  j2.tendon1.pretension_n = 20.0;
-  j2.tendon2.wrap_rad = 3.0;
-  j2.tendon2.pretension_n = 22.0;
+  JointParams& j2 = set_joint(p.joints[1], "joint2", {1.6, 20.0}, {3.0, 22.0});
   j2.output_inertia = 8e-6;
   j2.output_damping = 6e-3;
   return p;
