@@ -1,6 +1,7 @@
 #include "bridge/node_link.hpp"
 
 #include <cstdio>
+#include <string>
 
 #include "bridge/host_only.hpp"
 #include "bridge/lcm_url.hpp"
@@ -103,6 +104,14 @@ void print_session_fault(const char* program, const char* peer, const SessionFau
                "second keyed %s, a restarted one or a replay)%s\n",
                program, peer, static_cast<unsigned long long>(fault.sender_id),
                static_cast<unsigned long long>(fault.names), peer, consequence);
+}
+
+int session_fault_exit(const char* program, const char* peer, const SessionFault& fault,
+                       const char* action, std::int64_t other_session, const char* messages) {
+  const std::string consequence = std::string("; ") + action + ", exit 4 (" +
+                                  std::to_string(other_session) + " such " + messages + ")";
+  print_session_fault(program, peer, fault, consequence.c_str());
+  return 4;
 }
 
 }  // namespace tsmh::bridge

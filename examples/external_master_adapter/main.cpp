@@ -283,12 +283,8 @@ int main(int argc, char** argv) {
       static_cast<long long>(inbox.link.rejected()),
       inbox.link.rejected() > 0 ? " (the last: " : "", inbox.link.last_rejection(),
       inbox.link.rejected() > 0 ? ")" : "", static_cast<long long>(inbox.link.unauthentic()));
-  if (session_over) {
-    tsmh::bridge::print_session_fault(
-        "external-master-adapter", "server", session->fault(),
-        ("; torque zero, exit 4 (" + std::to_string(inbox.link.other_session()) + " such forces)")
-            .c_str());
-    return 4;
-  }
+  if (session_over)
+    return tsmh::bridge::session_fault_exit("external-master-adapter", "server", session->fault(),
+                                            "torque zero", inbox.link.other_session(), "forces");
   return 0;
 }

@@ -246,12 +246,8 @@ int main(int argc, char** argv) {
       static_cast<long long>(seq), static_cast<long long>(holds),
       static_cast<long long>(inbox.link.rejected()),
       static_cast<long long>(inbox.link.unauthentic()));
-  if (session_over) {
-    tsmh::bridge::print_session_fault(
-        "slave-node-skeleton", "master", session->fault(),
-        ("; holding, exit 4 (" + std::to_string(inbox.link.other_session()) + " such commands)")
-            .c_str());
-    return 4;
-  }
+  if (session_over)
+    return tsmh::bridge::session_fault_exit("slave-node-skeleton", "master", session->fault(),
+                                            "holding", inbox.link.other_session(), "commands");
   return 0;
 }

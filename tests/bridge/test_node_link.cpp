@@ -222,4 +222,19 @@ TEST(NodeTicker, AfterAnOverrunTheNextPeriodsWaitForDeadlinesAhead) {
   EXPECT_GE(tsmh::realtime::monotonic_now_ns() - before, 4'000'000);
 }
 
+TEST(NodeLinkEnd, ASessionFaultSaysWhatTheNodeDidAndExits4) {
+  ::testing::internal::CaptureStderr();
+  const int status = tsmh::bridge::session_fault_exit("node-under-test", "master",
+                                                      tsmh::bridge::SessionFault{0xabc, 0x12},
+                                                      "holding", 3, "commands");
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(status, 4);
+  EXPECT_EQ(err.rfind("node-under-test: FAULT: another master session on the link (sender "
+                      "0000000000000abc naming 0000000000000012: ",
+                      0),
+            0U)
+      << err;
+  EXPECT_NE(err.find("; holding, exit 4 (3 such commands)\n"), std::string::npos) << err;
+}
+
 }  // namespace

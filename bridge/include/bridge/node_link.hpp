@@ -78,6 +78,12 @@ int start_node_link(const char* program, const NodeLinkOptions& options, NodeLin
 void print_session_fault(const char* program, const char* peer, const SessionFault& fault,
                          const char* consequence);
 
+/// A standalone node's end after a session FAULT: print_session_fault() with
+/// "; <action>, exit 4 (<N> such <messages>)", N the keyed messages of the
+/// other session its inbox counted; returns 4, the nodes' exit status for it.
+int session_fault_exit(const char* program, const char* peer, const SessionFault& fault,
+                       const char* action, std::int64_t other_session, const char* messages);
+
 /// The periods of a standalone node's loop: absolute deadlines on the
 /// project's pacing (realtime::Pacer: after an overrun the schedule re-bases
 /// on the next deadline ahead instead of running late periods back to back);
