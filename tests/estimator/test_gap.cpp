@@ -430,6 +430,13 @@ TEST(GapCommand, WritesTheContractReportSummaryParamsAndPlots) {
     EXPECT_TRUE(r["gap_base"][k].is_number()) << k;
     EXPECT_TRUE(r["gap_final"][k].is_number()) << k;
   }
+  // Each regime as tsm fit reports it too: its scores, share and errors.
+  ASSERT_FALSE(r["regimes_base"].empty());
+  for (const char* k : {"name", "group", "where", "rmse", "p2p", "fit_percent", "bias", "samples",
+                        "concentration", "mean_error", "magnitude_excess"}) {
+    EXPECT_TRUE(r["regimes_base"][0].contains(k)) << k;
+    EXPECT_TRUE(r["regimes_final"][0].contains(k)) << k;
+  }
   ASSERT_TRUE(r["effects"].is_array());
   ASSERT_FALSE(r["effects"].empty());
   EXPECT_EQ(r["effects"][0]["name"], "position_dependent");

@@ -344,6 +344,10 @@ TEST(FitCommand, WritesParamsReportAndPlots) {
     EXPECT_TRUE(rep["validation"][k].is_number()) << k;
   EXPECT_TRUE(rep["seconds"].is_number());
   EXPECT_EQ(rep["regimes"].size(), 13U);
+  // Each regime as tsm gap reports it too: its scores, share and errors.
+  for (const char* k : {"name", "group", "where", "rmse", "p2p", "fit_percent", "bias", "samples",
+                        "concentration", "mean_error", "magnitude_excess"})
+    EXPECT_TRUE(rep["regimes"][0].contains(k)) << k;
   EXPECT_FALSE(rep["parameters"].empty());
   EXPECT_EQ(rep["optimiser"]["method"], "lm");
   EXPECT_TRUE(rep["optimiser"]["library"].is_string());

@@ -210,6 +210,7 @@ nlohmann::json to_json(const std::vector<RegimeError>& regimes) {
     j["group"] = r.group;
     j["where"] = r.where;
     j["concentration"] = r.concentration;
+    j["mean_error"] = r.mean_error;
     j["magnitude_excess"] = r.magnitude_excess;
     a.push_back(std::move(j));
   }

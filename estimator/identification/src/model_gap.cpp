@@ -1380,21 +1380,6 @@ GapResult find_model_gaps(FitData data, const FrictionModel& base, const std::st
 
 namespace {
 
-nlohmann::json regimes_json(const std::vector<RegimeError>& rs) {
-  nlohmann::json a = nlohmann::json::array();
-  for (const auto& r : rs) {
-    a.push_back({{"name", r.name},
-                 {"group", r.group},
-                 {"where", r.where},
-                 {"rmse", r.metrics.rmse},
-                 {"mean_error", r.mean_error},
-                 {"magnitude_excess", r.magnitude_excess},
-                 {"concentration", r.concentration},
-                 {"samples", r.metrics.samples}});
-  }
-  return a;
-}
-
 nlohmann::json diagnostics_json(const ResidualDiagnostics& dg) {
   nlohmann::json regs = nlohmann::json::array();
   for (const auto& r : dg.regressors)
@@ -1509,8 +1494,8 @@ nlohmann::json gap_report_json(const GapResult& g, const GapOptions& o,
             {"block_s", g.data.block_s}}},
           {"noise_floor", g.noise},
           {"acceptance", acceptance_json(o)},
-          {"regimes_base", regimes_json(g.regimes_base)},
-          {"regimes_final", regimes_json(g.regimes_final)},
+          {"regimes_base", to_json(g.regimes_base)},
+          {"regimes_final", to_json(g.regimes_final)},
           {"diagnostics_base", diagnostics_json(g.diagnostics_base)},
           {"diagnostics_final", diagnostics_json(g.diagnostics_final)},
           {"rounds", rounds_json(g.rounds)},
