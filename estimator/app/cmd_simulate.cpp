@@ -40,7 +40,9 @@ std::vector<double> causal_friction(const estimator::FrictionModel& model,
   std::vector<double> f(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
     const double tension = has_tensions ? 0.5 * (rec.T1[i] + rec.T3[i]) : std::nan("");
-    f[i] = est.update(rec.t[i], rec.x_in[i], has_load ? rec.tau_in[i] : 0.0, tension).friction;
+    f[i] =
+        est.update(rec.t[i], rec.x_in[i], has_load ? rec.tau_in[i] : 0.0, tension, rec.x_out_at(i))
+            .friction;
   }
   return f;
 }

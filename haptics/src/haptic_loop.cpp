@@ -341,7 +341,8 @@ void HapticLoop::estimate() noexcept {
       estimators_[j]->set_level_scales(calibration_.applied_scale(static_cast<int>(j), false),
                                        calibration_.applied_scale(static_cast<int>(j), true));
     e = joints_ok ? estimators_[j]->update_tensions(static_cast<double>(state_.utime) * 1e-6,
-                                                    state_.x_in[j], state_.T1[j], state_.T3[j])
+                                                    state_.x_in[j], state_.T1[j], state_.T3[j],
+                                                    state_.x_out[j])
                   : estimator::Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
     if (e.valid) {
       // The recalibrated friction scale, the drift monitor, the collection.

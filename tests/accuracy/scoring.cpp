@@ -66,8 +66,9 @@ OnlineScore score_online(const estimator::FrictionModel& model, const Scored& s,
   std::vector<double> tip(rec.size());
   for (std::size_t i = 0; i < rec.size(); ++i) {
     const estimator::Estimate e =
-        tensions ? est.update_tensions(rec.t[i], rec.x_in[i], rec.T1[i], rec.T3[i])
-                 : est.update(rec.t[i], rec.x_in[i], rec.tau_in[i]);
+        tensions ? est.update_tensions(rec.t[i], rec.x_in[i], rec.T1[i], rec.T3[i], rec.x_out_at(i))
+                 : est.update(rec.t[i], rec.x_in[i], rec.tau_in[i],
+                              std::numeric_limits<double>::quiet_NaN(), rec.x_out_at(i));
     tip[i] = e.valid ? e.tau_out_est : std::numeric_limits<double>::quiet_NaN();
   }
   return score_estimate(s, tip);

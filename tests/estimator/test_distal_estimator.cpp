@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <initializer_list>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -321,10 +322,12 @@ class CountingModel final : public FrictionDynamics {
   void reset() noexcept override { inner_.reset(); }
   double step(const Motion& m, double dt) noexcept override {
     ++calls;
+    x_out = m.x_out;
     return inner_.step(m, dt);
   }
   StepResult step_with_level(const Motion& m, double dt) noexcept override {
     ++calls;
+    x_out = m.x_out;
     return inner_.step_with_level(m, dt);
   }
   double friction() const noexcept override {
@@ -345,6 +348,7 @@ class CountingModel final : public FrictionDynamics {
     inner_.restore_state(s);
   }
   mutable long calls = 0, saves = 0, restores = 0;
+  double x_out = 0.0;  ///< the distal angle of the last step
 
  private:
   TsmFrictionModel inner_{paper_spec()};
@@ -371,6 +375,37 @@ TEST(DistalEstimator, OneModelCallPerSample) {
     EXPECT_EQ(model.calls - calls, 200) << "hindsight " << hindsight;
     // The hindsight's checkpoints: one state in 4 samples.
     EXPECT_EQ(model.saves - saves, hindsight ? 50 : 0);
+  }
+}
+
+// The distal angle reaches the model with the sample it came with, on both
+// paths (with the hindsight's history and without), from update(),
+// update_tensions() and update_exact(); an encoder reading Inf or none at
+// all reaches it as NaN, which a model reads as a rigid tendon.
+TEST(DistalEstimator, PassesTheDistalAngleToTheModel) {
+  for (const bool hindsight : {false, true}) {
+    auto owned = std::make_unique<CountingModel>();
+    CountingModel& model = *owned;
+    const CorrectionsConfig corrections =
+        hindsight ? CorrectionsConfig{} : CorrectionsConfig{.hindsight = {.lag = 0.0}};
+    DistalTorqueEstimator est(std::move(owned), 0.01, {}, StartState::kFreeTip, corrections);
+    ASSERT_EQ(est.hindsight(), hindsight);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    double t = 0.0;
+    for (int k = 0; k < 20; ++k, t += 1e-3)
+      est.update(t, t, 0.05, 20.0, 0.5 * t);
+    EXPECT_DOUBLE_EQ(model.x_out, 0.5 * (t - 1e-3)) << "hindsight " << hindsight;
+    est.update_tensions(t, t, 21.0, 19.0, -0.25);
+    EXPECT_EQ(model.x_out, -0.25);
+    t += 1e-3;
+    est.update(t, t, 0.05);
+    EXPECT_TRUE(std::isnan(model.x_out));
+    t += 1e-3;
+    est.update(t, t, 0.05, 20.0, std::numeric_limits<double>::infinity());
+    EXPECT_TRUE(std::isnan(model.x_out));
+    t += 1e-3;
+    est.update_exact(t, t, 1.0, 0.0, 0.05, nan, 0.125);
+    EXPECT_EQ(model.x_out, 0.125);
   }
 }
 

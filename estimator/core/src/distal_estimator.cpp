@@ -7,6 +7,11 @@
 namespace tsmh::estimator {
 
 namespace {
+constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
+// An encoder that reads Inf is as good as none.
+double known(double v) noexcept {
+  return std::isfinite(v) ? v : kUnknown;
+}
 bool hindsight_possible(const DifferentiatorConfig& diff, const FrictionDynamics* model) {
   DynamicsState probe;
   return model != nullptr && diff.sign_mode == SignMode::kSmooth && diff.fine_psd > 0.0 &&
@@ -44,15 +49,23 @@ void DistalTorqueEstimator::reset() noexcept {
   hindsight_.forget();
 }
 
-Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in,
-                                       double tension) noexcept {
+Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in, double tension,
+                                       double x_out) noexcept {
   if (!std::isfinite(tau_in))
     return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
   const Derivatives d = diff_.update(t, x_in);
   if (!d.valid) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
   const double load = std::fabs(tau_in) / radius_, drive = tau_in / radius_;
   if (!hindsight_.enabled()) {
-    const Motion m{t, x_in, d.xd, d.xdd, d.acc_sign, load, drive, tension};
+    const Motion m{.t = t,
+                   .x = x_in,
+                   .xd = d.xd,
+                   .xdd = d.xdd,
+                   .acc_sign = d.acc_sign,
+                   .load = load,
+                   .drive = drive,
+                   .tension = tension,
+                   .x_out = known(x_out)};
     return finish(m, d.xdd, tau_in);
   }
   // A gap that restarts the differentiator breaks the history as well.
@@ -67,7 +80,8 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in,
   m.load = load;
   m.drive = drive;
   m.tension = tension;
-  m.distal = std::numeric_limits<double>::quiet_NaN();
+  m.distal = kUnknown;
+  m.x_out = known(x_out);
   Estimate e = finish(m, d.xdd, tau_in);
   const double f = hindsight_.after_step(e.friction, diff_, *model_);
   if (f != e.friction) {
@@ -79,12 +93,19 @@ Estimate DistalTorqueEstimator::update(double t, double x_in, double tau_in,
 }
 
 Estimate DistalTorqueEstimator::update_exact(double t, double x_in, double xd, double xdd,
-                                             double tau_in, double tension) noexcept {
+                                             double tau_in, double tension, double x_out) noexcept {
   const bool ok = std::isfinite(t) && std::isfinite(x_in) && std::isfinite(xd) &&
                   std::isfinite(xdd) && std::isfinite(tau_in) && (!started_ || t > t_prev_);
   if (!ok) return Estimate{.tau_out_est = std::numeric_limits<double>::quiet_NaN()};
-  const Motion m{t,      x_in, xd, xdd, sign_of(xdd), std::fabs(tau_in) / radius_, tau_in / radius_,
-                 tension};
+  const Motion m{.t = t,
+                 .x = x_in,
+                 .xd = xd,
+                 .xdd = xdd,
+                 .acc_sign = sign_of(xdd),
+                 .load = std::fabs(tau_in) / radius_,
+                 .drive = tau_in / radius_,
+                 .tension = tension,
+                 .x_out = known(x_out)};
   return finish(m, xdd, tau_in);
 }
 

@@ -174,6 +174,7 @@ std::vector<Motion> offline_motion(const Recording& rec, const OfflineDerivative
     m.load = has_load ? std::fabs(rec.tau_in[i]) / rec.radius_m : 0.0;
     if (has_load) m.drive = rec.tau_in[i] / rec.radius_m;
     if (has_tensions) m.tension = 0.5 * (rec.T1[i] + rec.T3[i]);
+    m.x_out = rec.x_out_at(i);
   }
   return motion;
 }

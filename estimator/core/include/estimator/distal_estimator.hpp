@@ -55,17 +55,23 @@ class DistalTorqueEstimator {
 
   /// One sample with the proximal torque given; `tension` (N) is the mean of
   /// the two proximal tensions when known (models with tension copies use
-  /// it, distributed_slip.hpp), NaN otherwise. Never allocates or throws.
+  /// it, distributed_slip.hpp), NaN otherwise; `x_out` (rad) the distal
+  /// joint angle where an encoder measures it, NaN otherwise (a non-finite
+  /// value reads as NaN: the model takes the tendon as rigid). Never
+  /// allocates or throws.
   Estimate update(double t, double x_in, double tau_in,
-                  double tension = std::numeric_limits<double>::quiet_NaN()) noexcept;
+                  double tension = std::numeric_limits<double>::quiet_NaN(),
+                  double x_out = std::numeric_limits<double>::quiet_NaN()) noexcept;
   /// One sample from the two proximal tensions (eq. 1): tau_in = R (T1 - T3),
   /// and their mean for the model's tension copies.
-  Estimate update_tensions(double t, double x_in, double t1, double t3) noexcept {
-    return update(t, x_in, radius_ * (t1 - t3), 0.5 * (t1 + t3));
+  Estimate update_tensions(double t, double x_in, double t1, double t3,
+                           double x_out = std::numeric_limits<double>::quiet_NaN()) noexcept {
+    return update(t, x_in, radius_ * (t1 - t3), 0.5 * (t1 + t3), x_out);
   }
   /// One sample with exact derivatives (a simulator that knows them).
   Estimate update_exact(double t, double x_in, double xd, double xdd, double tau_in,
-                        double tension = std::numeric_limits<double>::quiet_NaN()) noexcept;
+                        double tension = std::numeric_limits<double>::quiet_NaN(),
+                        double x_out = std::numeric_limits<double>::quiet_NaN()) noexcept;
 
   void reset() noexcept;
   double radius() const { return radius_; }

@@ -1,6 +1,7 @@
 #pragma once
 // What a friction model sees at one sample: the input pulley's motion (from
-// the differentiator, or exact), the transmitted load and the time.
+// the differentiator, or exact), the transmitted load, the distal angle where
+// it is measured, and the time.
 
 #include <limits>
 
@@ -30,6 +31,11 @@ struct Motion {
   /// fit the measured one keeps the model from reading its own error through
   /// drive - F.
   double distal = std::numeric_limits<double>::quiet_NaN();
+  /// rad, the distal joint angle where a joint encoder measures it; NaN:
+  /// not measured. A model that drives part of the sheath from the tip reads
+  /// it (slip that the tip load drives while the input pulley stands still);
+  /// NaN reads as a rigid tendon, x_out = x.
+  double x_out = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// sgn with sgn(0) = 0, as in the paper.

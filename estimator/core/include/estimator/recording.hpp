@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,12 +34,17 @@ struct Recording {
   /// What the reader noticed but did not refuse (recording_checks.hpp): a
   /// header word that is not a contract column, times that look like ms.
   std::vector<std::string> warnings;
-  std::vector<std::string> notes;     ///< what reading tolerated (Table::notes)
+  std::vector<std::string> notes;  ///< what reading tolerated (Table::notes)
 
   std::size_t size() const { return t.size(); }
   bool has_tau_in() const { return !tau_in.empty(); }
   bool has_tau_out() const { return !tau_out.empty(); }
   bool has_derivatives() const { return !xd_in.empty() && !xdd_in.empty(); }
+  bool has_x_out() const { return !x_out.empty() && x_out.size() == t.size(); }
+  /// x_out at sample i, NaN where the recording has no joint angle.
+  double x_out_at(std::size_t i) const {
+    return has_x_out() ? x_out[i] : std::numeric_limits<double>::quiet_NaN();
+  }
   /// Measured total friction F = (tau_in - tau_out)/R, N. Needs tau_in, tau_out, radius.
   std::vector<double> measured_friction() const;
 };
