@@ -1,5 +1,7 @@
 #include "master_devices/protocol.hpp"
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdio>
 
 #include "realtime/enum_names.hpp"
@@ -79,16 +81,35 @@ Error check_versioned_frame(std::span<const std::uint8_t> b, std::size_t size, s
   return {};
 }
 
-// A reserved field of `width` bytes (1, 2 or 4) at `at` that is not zero.
-Error check_reserved(std::span<const std::uint8_t> b, std::size_t at, std::size_t width,
+// A reserved field: `width` bytes (1, 2 or 4) at `at`, zero on the wire.
+// Each report's list is its layout's (the comment above each report): the
+// encoder writes them zero, the decoder refuses a report where one is not.
+struct Reserved {
+  std::size_t at, width;
+};
+constexpr Reserved kInputReserved[] = {{21, 1}};
+constexpr Reserved kOutputReserved[] = {{8, 2}};
+constexpr Reserved kInfoReserved[] = {{9, 1}, {26, 4}};
+constexpr Reserved kCalibReserved[] = {{1, 1}, {18, 4}};
+
+// The first reserved field of `fields` that is not zero, in their order.
+Error check_reserved(std::span<const std::uint8_t> b, std::span<const Reserved> fields,
                      const char* report) {
-  const std::uint32_t v = width == 1 ? b[at] : width == 2 ? get_u16(b, at) : get_u32(b, at);
-  if (v != 0) return make_error(ErrorCode::kReservedNotZero, report, "reserved", v);
+  for (const Reserved& f : fields) {
+    const std::uint32_t v = f.width == 1   ? b[f.at]
+                            : f.width == 2 ? get_u16(b, f.at)
+                                           : get_u32(b, f.at);
+    if (v != 0) return make_error(ErrorCode::kReservedNotZero, report, "reserved", v);
+  }
   return {};
 }
 
-// Writes the CRC over the first size - 2 bytes; the encoder's result.
-Result<std::size_t> seal(std::span<std::uint8_t> b, std::size_t size) {
+// Zeroes the reserved fields and writes the CRC over the first size - 2
+// bytes: the end of every encoder, and its result.
+Result<std::size_t> seal(std::span<std::uint8_t> b, std::size_t size,
+                         std::span<const Reserved> reserved) {
+  for (const Reserved& f : reserved)
+    std::fill_n(b.begin() + static_cast<std::ptrdiff_t>(f.at), f.width, std::uint8_t{0});
   put_u16(b, size - 2, crc16(std::span<const std::uint8_t>(b.data(), size - 2)));
   return {size, {}};
 }
@@ -191,8 +212,7 @@ Result<std::size_t> encode(const InputReport& r, std::span<std::uint8_t> out) {
   put_u8(out, 17, status_byte(r.status));
   put_u16(out, 18, r.last_output_sequence);
   put_u8(out, 20, fault);
-  put_u8(out, 21, 0);
-  return seal(out, kInputReportSize);
+  return seal(out, kInputReportSize, kInputReserved);
 }
 
 Result<InputReport> decode_input(std::span<const std::uint8_t> b) {
@@ -221,7 +241,7 @@ Result<InputReport> decode_input(std::span<const std::uint8_t> b) {
     return {{}, make_error(ErrorCode::kOutOfRange, kInput, "fault", fault)};
   }
   r.fault = static_cast<FirmwareFault>(fault);
-  if (Error e = check_reserved(b, 21, 1, kInput)) return {{}, e};
+  if (Error e = check_reserved(b, kInputReserved, kInput)) return {{}, e};
   return {r, {}};
 }
 
@@ -240,8 +260,7 @@ Result<std::size_t> encode(const OutputReport& r, std::span<std::uint8_t> out) {
   put_u16(out, 2, r.sequence);
   for (std::size_t j = 0; j < kJoints; ++j)
     put_i16(out, 4 + 2 * j, r.current_ma[j]);
-  put_u16(out, 8, 0);
-  return seal(out, kOutputReportSize);
+  return seal(out, kOutputReportSize, kOutputReserved);
 }
 
 Result<OutputReport> decode_output(std::span<const std::uint8_t> b) {
@@ -258,7 +277,7 @@ Result<OutputReport> decode_output(std::span<const std::uint8_t> b) {
       return {{}, make_error(ErrorCode::kOutOfRange, kOutput, kCurrentField[j], r.current_ma[j])};
     }
   }
-  if (Error e = check_reserved(b, 8, 2, kOutput)) return {{}, e};
+  if (Error e = check_reserved(b, kOutputReserved, kOutput)) return {{}, e};
   return {r, {}};
 }
 
@@ -313,22 +332,19 @@ Result<std::size_t> encode(const DeviceInfo& r, std::span<std::uint8_t> out) {
   put_u16(out, 2, r.firmware_version);
   put_u32(out, 4, r.serial_number);
   put_u8(out, 8, r.dof);
-  put_u8(out, 9, 0);
   put_u16(out, 10, r.nominal_rate_hz);
   for (std::size_t j = 0; j < kJoints; ++j) {
     put_u32(out, 12 + 4 * j, r.counts_per_rev[j]);
     put_u16(out, 20 + 2 * j, r.max_current_ma[j]);
   }
   put_u16(out, 24, r.default_watchdog_ms);
-  put_u32(out, 26, 0);
-  return seal(out, kDeviceInfoReportSize);
+  return seal(out, kDeviceInfoReportSize, kInfoReserved);
 }
 
 Result<DeviceInfo> decode_device_info(std::span<const std::uint8_t> b) {
   if (Error e = check_versioned_frame(b, kDeviceInfoReportSize, kDeviceInfoReportId, kInfo))
     return {{}, e};
-  if (Error e = check_reserved(b, 9, 1, kInfo)) return {{}, e};
-  if (Error e = check_reserved(b, 26, 4, kInfo)) return {{}, e};
+  if (Error e = check_reserved(b, kInfoReserved, kInfo)) return {{}, e};
   DeviceInfo r;
   r.firmware_version = get_u16(b, 2);
   r.serial_number = get_u32(b, 4);
@@ -352,22 +368,19 @@ Result<std::size_t> encode(const Calibration& r, std::span<std::uint8_t> out) {
     return {0, make_error(ErrorCode::kBufferTooSmall, kCalib)};
   if (Error e = validate(r)) return {0, e};
   put_u8(out, 0, kCalibrationReportId);
-  put_u8(out, 1, 0);
   put_u16(out, 2, r.watchdog_ms);
   for (std::size_t j = 0; j < kJoints; ++j) {
     put_i32(out, 4 + 4 * j, r.zero_offset_counts[j]);
     put_u16(out, 12 + 2 * j, r.current_limit_ma[j]);
     put_u8(out, 16 + j, static_cast<std::uint8_t>(r.direction[j]));
   }
-  put_u32(out, 18, 0);
-  return seal(out, kCalibrationReportSize);
+  return seal(out, kCalibrationReportSize, kCalibReserved);
 }
 
 Result<Calibration> decode_calibration(std::span<const std::uint8_t> b) {
   if (Error e = check_frame(b, kCalibrationReportSize, kCalibrationReportId, kCalib))
     return {{}, e};
-  if (Error e = check_reserved(b, 1, 1, kCalib)) return {{}, e};
-  if (Error e = check_reserved(b, 18, 4, kCalib)) return {{}, e};
+  if (Error e = check_reserved(b, kCalibReserved, kCalib)) return {{}, e};
   Calibration r;
   r.watchdog_ms = get_u16(b, 2);
   for (std::size_t j = 0; j < kJoints; ++j) {
