@@ -59,59 +59,65 @@ constexpr const char* kZeroField[kJoints] = {"zero_offset_counts[0]", "zero_offs
 constexpr const char* kLimitField[kJoints] = {"current_limit_ma[0]", "current_limit_ma[1]"};
 constexpr const char* kDirectionField[kJoints] = {"direction[0]", "direction[1]"};
 
-// Checks length, report ID and CRC: the frame of every report.
-Error check_frame(std::span<const std::uint8_t> b, std::size_t size, std::uint8_t id,
-                  const char* report) {
-  if (b.size() != size) {
-    return make_error(ErrorCode::kWrongLength, report, "", static_cast<std::int64_t>(b.size()));
-  }
-  if (b[0] != id) return make_error(ErrorCode::kWrongReportId, report, "report_id", b[0]);
-  const std::uint16_t stored = get_u16(b, size - 2);
-  if (crc16(b.first(size - 2)) != stored) {
-    return make_error(ErrorCode::kBadChecksum, report, "crc", stored);
-  }
-  return {};
-}
-
-// check_frame, and the protocol version in byte 1 (the reports that carry it).
-Error check_versioned_frame(std::span<const std::uint8_t> b, std::size_t size, std::uint8_t id,
-                            const char* report) {
-  if (Error e = check_frame(b, size, id, report)) return e;
-  if (b[1] != kVersion) return make_error(ErrorCode::kUnsupportedVersion, report, "version", b[1]);
-  return {};
-}
-
 // A reserved field: `width` bytes (1, 2 or 4) at `at`, zero on the wire.
-// Each report's list is its layout's (the comment above each report): the
-// encoder writes them zero, the decoder refuses a report where one is not.
 struct Reserved {
   std::size_t at, width;
 };
-constexpr Reserved kInputReserved[] = {{21, 1}};
-constexpr Reserved kOutputReserved[] = {{8, 2}};
-constexpr Reserved kInfoReserved[] = {{9, 1}, {26, 4}};
-constexpr Reserved kCalibReserved[] = {{1, 1}, {18, 4}};
 
-// The first reserved field of `fields` that is not zero, in their order.
-Error check_reserved(std::span<const std::uint8_t> b, std::span<const Reserved> fields,
-                     const char* report) {
-  for (const Reserved& f : fields) {
-    const std::uint32_t v = f.width == 1   ? b[f.at]
-                            : f.width == 2 ? get_u16(b, f.at)
-                                           : get_u32(b, f.at);
-    if (v != 0) return make_error(ErrorCode::kReservedNotZero, report, "reserved", v);
+// A report's frame, said once for its encoder and its decoder: its name in
+// errors, report ID (byte 0), size (the CRC in the last two bytes), whether
+// byte 1 carries the protocol version, and its reserved fields (the layout
+// comment above each report).
+struct Layout {
+  const char* name;
+  std::uint8_t id;
+  std::size_t size;
+  bool versioned;
+  std::span<const Reserved> reserved;
+};
+
+// Length, report ID, CRC, and the protocol version where the report has it.
+Error check_frame(std::span<const std::uint8_t> b, const Layout& l) {
+  if (b.size() != l.size) {
+    return make_error(ErrorCode::kWrongLength, l.name, "", static_cast<std::int64_t>(b.size()));
+  }
+  if (b[0] != l.id) return make_error(ErrorCode::kWrongReportId, l.name, "report_id", b[0]);
+  const std::uint16_t stored = get_u16(b, l.size - 2);
+  if (crc16(b.first(l.size - 2)) != stored) {
+    return make_error(ErrorCode::kBadChecksum, l.name, "crc", stored);
+  }
+  if (l.versioned && b[1] != kVersion) {
+    return make_error(ErrorCode::kUnsupportedVersion, l.name, "version", b[1]);
   }
   return {};
 }
 
-// Zeroes the reserved fields and writes the CRC over the first size - 2
-// bytes: the end of every encoder, and its result.
-Result<std::size_t> seal(std::span<std::uint8_t> b, std::size_t size,
-                         std::span<const Reserved> reserved) {
-  for (const Reserved& f : reserved)
+// The first reserved field that is not zero, in the layout's order.
+Error check_reserved(std::span<const std::uint8_t> b, const Layout& l) {
+  for (const Reserved& f : l.reserved) {
+    const std::uint32_t v = f.width == 1   ? b[f.at]
+                            : f.width == 2 ? get_u16(b, f.at)
+                                           : get_u32(b, f.at);
+    if (v != 0) return make_error(ErrorCode::kReservedNotZero, l.name, "reserved", v);
+  }
+  return {};
+}
+
+// An encoder's first check: the caller's buffer holds the report.
+Error check_room(std::span<const std::uint8_t> out, const Layout& l) {
+  if (out.size() < l.size) return make_error(ErrorCode::kBufferTooSmall, l.name);
+  return {};
+}
+
+// The end of every encoder, and its result: the report ID, the version where
+// the report has it, the reserved fields zero, the CRC over the rest.
+Result<std::size_t> seal(std::span<std::uint8_t> b, const Layout& l) {
+  put_u8(b, 0, l.id);
+  if (l.versioned) put_u8(b, 1, kVersion);
+  for (const Reserved& f : l.reserved)
     std::fill_n(b.begin() + static_cast<std::ptrdiff_t>(f.at), f.width, std::uint8_t{0});
-  put_u16(b, size - 2, crc16(std::span<const std::uint8_t>(b.data(), size - 2)));
-  return {size, {}};
+  put_u16(b, l.size - 2, crc16(std::span<const std::uint8_t>(b.data(), l.size - 2)));
+  return {l.size, {}};
 }
 
 bool counts_ok(std::int32_t c) {
@@ -134,6 +140,17 @@ constexpr const char* kInput = "input";
 constexpr const char* kOutput = "output";
 constexpr const char* kInfo = "device info";
 constexpr const char* kCalib = "calibration";
+
+constexpr Reserved kInputReserved[] = {{21, 1}};
+constexpr Reserved kOutputReserved[] = {{8, 2}};
+constexpr Reserved kInfoReserved[] = {{9, 1}, {26, 4}};
+constexpr Reserved kCalibReserved[] = {{1, 1}, {18, 4}};
+constexpr Layout kInputLayout{kInput, kInputReportId, kInputReportSize, true, kInputReserved};
+constexpr Layout kOutputLayout{kOutput, kOutputReportId, kOutputReportSize, false, kOutputReserved};
+constexpr Layout kInfoLayout{kInfo, kDeviceInfoReportId, kDeviceInfoReportSize, true,
+                             kInfoReserved};
+constexpr Layout kCalibLayout{kCalib, kCalibrationReportId, kCalibrationReportSize, false,
+                              kCalibReserved};
 
 }  // namespace
 
@@ -192,7 +209,7 @@ std::string describe(const Error& e) {
 // | 17 status | 18 last_output_seq u16 | 20 fault u8 | 21 reserved | 22 crc
 
 Result<std::size_t> encode(const InputReport& r, std::span<std::uint8_t> out) {
-  if (out.size() < kInputReportSize) return {0, make_error(ErrorCode::kBufferTooSmall, kInput)};
+  if (Error e = check_room(out, kInputLayout)) return {0, e};
   for (std::size_t j = 0; j < kJoints; ++j) {
     if (!counts_ok(r.counts[j])) {
       return {0, make_error(ErrorCode::kOutOfRange, kInput, kCountsField[j], r.counts[j])};
@@ -202,8 +219,6 @@ Result<std::size_t> encode(const InputReport& r, std::span<std::uint8_t> out) {
   if (fault > kFirmwareFaultMax || (fault != 0) != r.status.fault) {
     return {0, make_error(ErrorCode::kOutOfRange, kInput, "fault", fault)};
   }
-  put_u8(out, 0, kInputReportId);
-  put_u8(out, 1, kVersion);
   put_u16(out, 2, r.sequence);
   put_u32(out, 4, r.device_time_us);
   for (std::size_t j = 0; j < kJoints; ++j)
@@ -212,11 +227,11 @@ Result<std::size_t> encode(const InputReport& r, std::span<std::uint8_t> out) {
   put_u8(out, 17, status_byte(r.status));
   put_u16(out, 18, r.last_output_sequence);
   put_u8(out, 20, fault);
-  return seal(out, kInputReportSize, kInputReserved);
+  return seal(out, kInputLayout);
 }
 
 Result<InputReport> decode_input(std::span<const std::uint8_t> b) {
-  if (Error e = check_versioned_frame(b, kInputReportSize, kInputReportId, kInput)) return {{}, e};
+  if (Error e = check_frame(b, kInputLayout)) return {{}, e};
   InputReport r;
   r.sequence = get_u16(b, 2);
   r.device_time_us = get_u32(b, 4);
@@ -241,7 +256,7 @@ Result<InputReport> decode_input(std::span<const std::uint8_t> b) {
     return {{}, make_error(ErrorCode::kOutOfRange, kInput, "fault", fault)};
   }
   r.fault = static_cast<FirmwareFault>(fault);
-  if (Error e = check_reserved(b, kInputReserved, kInput)) return {{}, e};
+  if (Error e = check_reserved(b, kInputLayout)) return {{}, e};
   return {r, {}};
 }
 
@@ -249,22 +264,21 @@ Result<InputReport> decode_input(std::span<const std::uint8_t> b) {
 // 0 id | 1 flags | 2 seq u16 | 4 current_ma i16 x2 | 8 reserved u16 | 10 crc
 
 Result<std::size_t> encode(const OutputReport& r, std::span<std::uint8_t> out) {
-  if (out.size() < kOutputReportSize) return {0, make_error(ErrorCode::kBufferTooSmall, kOutput)};
+  if (Error e = check_room(out, kOutputLayout)) return {0, e};
   for (std::size_t j = 0; j < kJoints; ++j) {
     if (!current_ok(r.current_ma[j])) {
       return {0, make_error(ErrorCode::kOutOfRange, kOutput, kCurrentField[j], r.current_ma[j])};
     }
   }
-  put_u8(out, 0, kOutputReportId);
   put_u8(out, 1, static_cast<std::uint8_t>((r.enable ? 1u : 0u) | (r.clear_fault ? 2u : 0u)));
   put_u16(out, 2, r.sequence);
   for (std::size_t j = 0; j < kJoints; ++j)
     put_i16(out, 4 + 2 * j, r.current_ma[j]);
-  return seal(out, kOutputReportSize, kOutputReserved);
+  return seal(out, kOutputLayout);
 }
 
 Result<OutputReport> decode_output(std::span<const std::uint8_t> b) {
-  if (Error e = check_frame(b, kOutputReportSize, kOutputReportId, kOutput)) return {{}, e};
+  if (Error e = check_frame(b, kOutputLayout)) return {{}, e};
   OutputReport r;
   const std::uint8_t flags = b[1];
   if (flags & 0xFCu) return {{}, make_error(ErrorCode::kReservedNotZero, kOutput, "flags", flags)};
@@ -277,7 +291,7 @@ Result<OutputReport> decode_output(std::span<const std::uint8_t> b) {
       return {{}, make_error(ErrorCode::kOutOfRange, kOutput, kCurrentField[j], r.current_ma[j])};
     }
   }
-  if (Error e = check_reserved(b, kOutputReserved, kOutput)) return {{}, e};
+  if (Error e = check_reserved(b, kOutputLayout)) return {{}, e};
   return {r, {}};
 }
 
@@ -322,41 +336,56 @@ Error validate(const Calibration& r) {
   }
   return {};
 }
+
+// The feature reports (device info, calibration) are checked whole, by
+// validate(): before their fields are written, after they are read (and
+// after the frame and the reserved fields). `write` / `read` move the fields.
+template <class Report, class Write>
+Result<std::size_t> encode_feature(const Report& r, std::span<std::uint8_t> out, const Layout& l,
+                                   Write write) {
+  if (Error e = check_room(out, l)) return {0, e};
+  if (Error e = validate(r)) return {0, e};
+  write(out);
+  return seal(out, l);
+}
+
+template <class Report, class Read>
+Result<Report> decode_feature(std::span<const std::uint8_t> b, const Layout& l, Read read) {
+  if (Error e = check_frame(b, l)) return {{}, e};
+  if (Error e = check_reserved(b, l)) return {{}, e};
+  Report r;
+  read(r);
+  if (Error e = validate(r)) return {{}, e};
+  return {r, {}};
+}
 }  // namespace
 
 Result<std::size_t> encode(const DeviceInfo& r, std::span<std::uint8_t> out) {
-  if (out.size() < kDeviceInfoReportSize) return {0, make_error(ErrorCode::kBufferTooSmall, kInfo)};
-  if (Error e = validate(r)) return {0, e};
-  put_u8(out, 0, kDeviceInfoReportId);
-  put_u8(out, 1, kVersion);
-  put_u16(out, 2, r.firmware_version);
-  put_u32(out, 4, r.serial_number);
-  put_u8(out, 8, r.dof);
-  put_u16(out, 10, r.nominal_rate_hz);
-  for (std::size_t j = 0; j < kJoints; ++j) {
-    put_u32(out, 12 + 4 * j, r.counts_per_rev[j]);
-    put_u16(out, 20 + 2 * j, r.max_current_ma[j]);
-  }
-  put_u16(out, 24, r.default_watchdog_ms);
-  return seal(out, kDeviceInfoReportSize, kInfoReserved);
+  return encode_feature(r, out, kInfoLayout, [&r](std::span<std::uint8_t> o) {
+    put_u16(o, 2, r.firmware_version);
+    put_u32(o, 4, r.serial_number);
+    put_u8(o, 8, r.dof);
+    put_u16(o, 10, r.nominal_rate_hz);
+    for (std::size_t j = 0; j < kJoints; ++j) {
+      put_u32(o, 12 + 4 * j, r.counts_per_rev[j]);
+      put_u16(o, 20 + 2 * j, r.max_current_ma[j]);
+    }
+    put_u16(o, 24, r.default_watchdog_ms);
+  });
 }
 
 Result<DeviceInfo> decode_device_info(std::span<const std::uint8_t> b) {
-  if (Error e = check_versioned_frame(b, kDeviceInfoReportSize, kDeviceInfoReportId, kInfo))
-    return {{}, e};
-  if (Error e = check_reserved(b, kInfoReserved, kInfo)) return {{}, e};
-  DeviceInfo r;
-  r.firmware_version = get_u16(b, 2);
-  r.serial_number = get_u32(b, 4);
-  r.dof = b[8];
-  r.nominal_rate_hz = get_u16(b, 10);
-  for (std::size_t j = 0; j < kJoints; ++j) {
-    r.counts_per_rev[j] = get_u32(b, 12 + 4 * j);
-    r.max_current_ma[j] = get_u16(b, 20 + 2 * j);
-  }
-  r.default_watchdog_ms = get_u16(b, 24);
-  if (Error e = validate(r)) return {{}, e};
-  return {r, {}};
+  return decode_feature<DeviceInfo>(b, kInfoLayout, [b](DeviceInfo& r) {
+    r.firmware_version = get_u16(b, 2);
+    r.serial_number = get_u32(b, 4);
+    r.dof = b[8];
+    r.nominal_rate_hz = get_u16(b, 10);
+    for (std::size_t j = 0; j < kJoints; ++j) {
+      r.counts_per_rev[j] = get_u32(b, 12 + 4 * j);
+      r.max_current_ma[j] = get_u16(b, 20 + 2 * j);
+    }
+    r.default_watchdog_ms = get_u16(b, 24);
+  });
 }
 
 // ---- calibration feature report ----
@@ -364,32 +393,25 @@ Result<DeviceInfo> decode_device_info(std::span<const std::uint8_t> b) {
 // | 16 direction i8 x2 | 18 reserved x4 | 22 crc
 
 Result<std::size_t> encode(const Calibration& r, std::span<std::uint8_t> out) {
-  if (out.size() < kCalibrationReportSize)
-    return {0, make_error(ErrorCode::kBufferTooSmall, kCalib)};
-  if (Error e = validate(r)) return {0, e};
-  put_u8(out, 0, kCalibrationReportId);
-  put_u16(out, 2, r.watchdog_ms);
-  for (std::size_t j = 0; j < kJoints; ++j) {
-    put_i32(out, 4 + 4 * j, r.zero_offset_counts[j]);
-    put_u16(out, 12 + 2 * j, r.current_limit_ma[j]);
-    put_u8(out, 16 + j, static_cast<std::uint8_t>(r.direction[j]));
-  }
-  return seal(out, kCalibrationReportSize, kCalibReserved);
+  return encode_feature(r, out, kCalibLayout, [&r](std::span<std::uint8_t> o) {
+    put_u16(o, 2, r.watchdog_ms);
+    for (std::size_t j = 0; j < kJoints; ++j) {
+      put_i32(o, 4 + 4 * j, r.zero_offset_counts[j]);
+      put_u16(o, 12 + 2 * j, r.current_limit_ma[j]);
+      put_u8(o, 16 + j, static_cast<std::uint8_t>(r.direction[j]));
+    }
+  });
 }
 
 Result<Calibration> decode_calibration(std::span<const std::uint8_t> b) {
-  if (Error e = check_frame(b, kCalibrationReportSize, kCalibrationReportId, kCalib))
-    return {{}, e};
-  if (Error e = check_reserved(b, kCalibReserved, kCalib)) return {{}, e};
-  Calibration r;
-  r.watchdog_ms = get_u16(b, 2);
-  for (std::size_t j = 0; j < kJoints; ++j) {
-    r.zero_offset_counts[j] = get_i32(b, 4 + 4 * j);
-    r.current_limit_ma[j] = get_u16(b, 12 + 2 * j);
-    r.direction[j] = static_cast<std::int8_t>(b[16 + j]);
-  }
-  if (Error e = validate(r)) return {{}, e};
-  return {r, {}};
+  return decode_feature<Calibration>(b, kCalibLayout, [b](Calibration& r) {
+    r.watchdog_ms = get_u16(b, 2);
+    for (std::size_t j = 0; j < kJoints; ++j) {
+      r.zero_offset_counts[j] = get_i32(b, 4 + 4 * j);
+      r.current_limit_ma[j] = get_u16(b, 12 + 2 * j);
+      r.direction[j] = static_cast<std::int8_t>(b[16 + j]);
+    }
+  });
 }
 
 // ---- HID report descriptor ----
