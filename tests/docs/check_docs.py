@@ -11,6 +11,15 @@
       file that does not exist, or to a heading anchor (#...) that the target
       file does not have (GitHub's anchor rules).
 
+  check_docs.py commands ROOT BINDIR
+      Fails when a command printed in a markdown file of the tree (a code
+      span or a code block) names a program `build/bin/X` that BINDIR does
+      not hold, a script `scripts/X` that does not exist, a subcommand
+      (`tsm X`, `tsm-link X`, `tsm-devices X`) the program's --help does not
+      list, or a `--flag` that the --help of the program (and subcommand)
+      it is given to does not list. Only programs that answer --help with
+      their usage are asked (a benchmark that would run instead is not).
+
 ROOT is the source tree. The files are the ones git tracks there (a clean
 clone, CI) or, without git, every file below ROOT outside build trees.
 Each problem is printed as FILE:LINE: what, and the exit status is 1.
@@ -156,12 +165,153 @@ def links(root):
     return problems
 
 
+def code_texts(text):
+    """(line number, code) for each code block line and each code span."""
+    fenced = False
+    pending, start = "", 0
+    for number, line in enumerate(text.splitlines(), 1):
+        if FENCE.match(line):
+            fenced = not fenced
+            continue
+        if fenced or line.startswith("    "):
+            # A shell line continued with a backslash is one command.
+            if not pending:
+                start = number
+            if line.rstrip().endswith("\\"):
+                pending += line.rstrip()[:-1] + " "
+                continue
+            yield start, pending + line
+            pending = ""
+            continue
+        for m in re.finditer(r"(`+)(.+?)\1", line):
+            yield number, m.group(2)
+
+
+SEGMENT_SPLIT = re.compile(r"\|\||&&|[|;&()]|\$\(")
+SUBCOMMAND_PROGRAMS = ("tsm", "tsm-link", "tsm-devices")
+
+
+class Programs:
+    """The programs of BINDIR and what their --help says, asked once each."""
+
+    def __init__(self, bindir):
+        self.bindir = bindir
+        self.names = set(os.listdir(bindir)) if os.path.isdir(bindir) else set()
+        self.helps = {}
+
+    def answers_help(self, name):
+        # Only a program whose binary knows the word --help prints its usage
+        # for it; others (benchmarks, tools with their own argument loop)
+        # would run instead.
+        try:
+            with open(os.path.join(self.bindir, name), "rb") as f:
+                return b"--help" in f.read()
+        except OSError:
+            return False
+
+    def help(self, name, sub=None):
+        key = (name, sub)
+        if key not in self.helps:
+            text = None
+            if self.answers_help(name):
+                argv = [os.path.join(self.bindir, name)] + ([sub] if sub else []) + ["--help"]
+                try:
+                    r = subprocess.run(argv, capture_output=True, timeout=20,
+                                       stdin=subprocess.DEVNULL)
+                    text = (r.stdout + r.stderr).decode("utf-8", "replace")
+                except (OSError, subprocess.TimeoutExpired):
+                    text = None
+            self.helps[key] = text
+        return self.helps[key]
+
+    def subcommands(self, name):
+        text = self.help(name) or ""
+        m = re.search(r"^Subcommands:\n((?:  .*\n?)*)", text, re.M)
+        if not m:
+            return set()
+        return {line.split()[0] for line in m.group(1).splitlines() if line.strip()}
+
+
+def has_flag(help_text, flag):
+    return re.search(r"(?<![\w-])" + re.escape(flag) + r"(?![\w-])", help_text) is not None
+
+
+def commands(root, bindir):
+    programs = Programs(bindir)
+    if not programs.names:
+        return [f"{bindir}: no programs there (build first)"]
+    problems = []
+    for name in tracked_files(root):
+        if not name.endswith(".md"):
+            continue
+        text = read_text(os.path.join(root, name))
+        if text is None:
+            continue
+        for number, code in code_texts(text):
+            for segment in SEGMENT_SPLIT.split(code):
+                words = segment.split()
+                while words and (re.match(r"^[A-Za-z_][A-Za-z0-9_]*=", words[0]) or
+                                 words[0] in ("sudo", "exec", "time", "then", "do", "!")):
+                    words = words[1:]
+                if not words:
+                    continue
+                word = words[0].strip("[]")
+                where = f"{name}:{number}"
+                if word.startswith(("scripts/", "./scripts/")):
+                    script = word[2:] if word.startswith("./") else word
+                    if "*" not in script and not os.path.exists(os.path.join(root, script)):
+                        problems.append(f"{where}: '{word}': {script} does not exist")
+                    continue
+                if word.startswith(("build/bin/", "./build/bin/")):
+                    program = word.split("build/bin/", 1)[1]
+                    if not program or "*" in program or "<" in program or program.endswith("_"):
+                        continue  # a family: build/bin/bench_*
+                    if program not in programs.names:
+                        problems.append(f"{where}: '{word}': {bindir} has no program '{program}'")
+                        continue
+                elif word in programs.names:
+                    program = word
+                else:
+                    continue
+                sub = None
+                rest = words[1:]
+                if program in SUBCOMMAND_PROGRAMS and rest and re.match(r"^[a-z][a-z-]*$", rest[0]):
+                    subs = programs.subcommands(program)
+                    if subs and rest[0] not in subs:
+                        problems.append(f"{where}: '{program} {rest[0]}': not a subcommand of "
+                                        f"{program} (it has: {', '.join(sorted(subs))})")
+                        continue
+                    sub = rest[0]
+                help_text = programs.help(program)
+                if help_text is None:
+                    continue
+                if sub:
+                    help_text += programs.help(program, sub) or ""
+                else:
+                    # `tsm ... --flag`: an option of any of its subcommands.
+                    for other in sorted(programs.subcommands(program)):
+                        help_text += programs.help(program, other) or ""
+                for token in rest:
+                    flag = re.match(r"^[\[{(\"']*(--[A-Za-z][A-Za-z0-9_-]*)", token)
+                    if flag and not has_flag(help_text, flag.group(1)):
+                        shown = f"{program} {sub}" if sub else program
+                        problems.append(f"{where}: '{shown} {flag.group(1)}': not an option "
+                                        f"of {shown} (its --help does not list it)")
+    return problems
+
+
 def main():
-    if len(sys.argv) != 3 or sys.argv[1] not in ("no-issue-citations", "links"):
+    modes = {"no-issue-citations": 3, "links": 3, "commands": 4}
+    if len(sys.argv) < 2 or modes.get(sys.argv[1]) != len(sys.argv):
         print(__doc__, file=sys.stderr)
         return 2
     root = sys.argv[2]
-    problems = no_issue_citations(root) if sys.argv[1] == "no-issue-citations" else links(root)
+    if sys.argv[1] == "commands":
+        problems = commands(root, sys.argv[3])
+    elif sys.argv[1] == "no-issue-citations":
+        problems = no_issue_citations(root)
+    else:
+        problems = links(root)
     for p in problems:
         print(p)
     if problems:
