@@ -94,6 +94,13 @@ int main(int argc, char** argv) {
         sl.weight[estimator::kSlidingIndex], sl.weight[estimator::kSlidingIndex + 1],
         sl.weight[estimator::kSlidingIndex + 2], sl.weight[estimator::kSlidingIndex + 3],
         sl.tension_copies, sl.drive_copies, sl.load_copies, tsm->spec().terms.size());
+    if (sl.distal_elements > 0) {
+      std::printf("  distal family:");
+      for (std::size_t j = 0; j < sl.distal_count(); ++j)
+        std::printf(" %.3g N at %.3g rad", sl.weight[estimator::kDistalIndex + j],
+                    sl.distal_width(j));
+      std::printf("\n");
+    }
   }
 
   for (std::size_t ki = 0; ki < kinds.size(); ++ki) {
@@ -113,11 +120,14 @@ int main(int argc, char** argv) {
     estimator::DistalTorqueEstimator dep(fit.fit.model->clone(), r);
     estimator::DistalTorqueEstimator ex(fit.fit.model->clone(), r);
     std::vector<double> e_dep(n), e_ex(n), e_fl(n), xd_est(n), f_dep(n);
+    // The distal angle where the recording has one (a joint encoder), as
+    // SLAVE_STATE carries it online.
+    const auto x_out = [&](std::size_t i) { return rec.x_out.size() == n ? rec.x_out[i] : kNaN; };
     for (std::size_t i = 0; i < n; ++i) {
-      const auto a = dep.update_tensions(rec.t[i], rec.x_in[i], rec.T1[i], rec.T3[i]);
+      const auto a = dep.update_tensions(rec.t[i], rec.x_in[i], rec.T1[i], rec.T3[i], x_out(i));
       const auto b =
           ex.update_exact(rec.t[i], rec.x_in[i], w.recording.xd_in[i], w.recording.xdd_in[i],
-                          rec.tau_in[i], 0.5 * (rec.T1[i] + rec.T3[i]));
+                          rec.tau_in[i], 0.5 * (rec.T1[i] + rec.T3[i]), x_out(i));
       e_dep[i] = a.tau_out_est - s.tau_out_true[i];
       e_ex[i] = b.tau_out_est - s.tau_out_true[i];
       e_fl[i] = rec.tau_in[i] - r * s.friction_true[i] - s.tau_out_true[i];
@@ -127,15 +137,22 @@ int main(int argc, char** argv) {
     std::vector<double> e_or;
     std::string oracle_notes;
     if (oracle) try {
-        const estimator::FitRun of = estimator::run_fit(rec, *initial, model_name, fo);
+        // The oracle asks less of its data than a calibration: a creep run
+        // reverses only slowly.
+        estimator::FitWorkflowOptions oo = fo;
+        oo.requirements.reversal_speed = 0.002;
+        oo.requirements.min_reversals = 1;
+        const estimator::FitRun of = estimator::run_fit(rec, *initial, model_name, oo);
         estimator::DistalTorqueEstimator o(of.fit.model->clone(), r);
         e_or.assign(n, 0.0);
         for (std::size_t i = 0; i < n; ++i)
-          e_or[i] = o.update_tensions(rec.t[i], rec.x_in[i], rec.T1[i], rec.T3[i]).tau_out_est -
-                    s.tau_out_true[i];
+          e_or[i] =
+              o.update_tensions(rec.t[i], rec.x_in[i], rec.T1[i], rec.T3[i], x_out(i)).tau_out_est -
+              s.tau_out_true[i];
         for (const auto& note : of.fit.notes)
           if (note.find("chosen") != std::string::npos ||
-              note.find("hysteresis") != std::string::npos)
+              note.find("hysteresis") != std::string::npos ||
+              note.find("distal") != std::string::npos)
             oracle_notes += " [" + note + "]";
       } catch (const std::exception& ex_fit) {
         e_or.clear();

@@ -78,6 +78,7 @@ Scored from_slave(const std::string& scenario, std::uint64_t seed, double durati
     s.rec.T1.push_back(m.T1);
     s.rec.T3.push_back(m.T3);
     s.rec.tau_in.push_back(radius * (m.T1 - m.T3));
+    s.rec.x_out.push_back(m.x_out);  // NaN without a joint encoder
     // The slave's recordings carry the true tip torque as tau_out.
     s.rec.tau_out.push_back(t.tau_out);
     s.friction_true.push_back(t.friction);

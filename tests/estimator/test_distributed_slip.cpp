@@ -456,12 +456,12 @@ TEST(DistributedSlip, TendonWidthsScaleWithTheTensionAndASlackTendonCarriesNone)
   SlipState st;
   SlipBasis b;
   // Tendon 1 at 40 N (twice the reference), tendon 2 slack (T - u/2 < 0).
-  kernel.advance(st, 0.0, 0.0, 15.0, 50.0, b);
+  kernel.advance(st, 0.0, 0.0, 15.0, 50.0, std::nan(""), b);
   EXPECT_DOUBLE_EQ(b.scale[0], 2.0);
   EXPECT_DOUBLE_EQ(b.scale[1], 0.0);
   // A long stroke saturates every element: family 1 at twice its break
   // forces, family 2 at none.
-  kernel.advance(st, 1.0, 1.0, 15.0, 50.0, b);
+  kernel.advance(st, 1.0, 1.0, 15.0, 50.0, std::nan(""), b);
   double level = 0.0;
   double family1 = 0.0;
   for (std::size_t i = 0; i < 6; ++i)
@@ -473,14 +473,14 @@ TEST(DistributedSlip, TendonWidthsScaleWithTheTensionAndASlackTendonCarriesNone)
   // takes twice the displacement to saturate at twice the tension.
   const double r0 = s.slip.width(0);
   SlipState a, c;
-  kernel.advance(a, 0.0, 0.0, 20.0, 0.0, b);  // both at the reference
-  kernel.advance(c, 0.0, 0.0, 40.0, 0.0, b);  // both at twice it
-  kernel.advance(a, 1.5 * r0, 1.0, 20.0, 0.0, b);
+  kernel.advance(a, 0.0, 0.0, 20.0, 0.0, std::nan(""), b);  // both at the reference
+  kernel.advance(c, 0.0, 0.0, 40.0, 0.0, std::nan(""), b);  // both at twice it
+  kernel.advance(a, 1.5 * r0, 1.0, 20.0, 0.0, std::nan(""), b);
   EXPECT_DOUBLE_EQ(b.phi[0], 1.0);  // saturated at 1
-  kernel.advance(c, 1.5 * r0, 1.0, 40.0, 0.0, b);
+  kernel.advance(c, 1.5 * r0, 1.0, 40.0, 0.0, std::nan(""), b);
   EXPECT_DOUBLE_EQ(b.phi[0], 1.5);  // still on its spring, limit 2
   // Without measured tensions the families are the plain elements.
-  kernel.advance(a, 0.0, -1.0, std::nan(""), std::nan(""), b);
+  kernel.advance(a, 0.0, -1.0, std::nan(""), std::nan(""), std::nan(""), b);
   EXPECT_DOUBLE_EQ(b.scale[0], 1.0);
   EXPECT_DOUBLE_EQ(b.scale[1], 1.0);
 }
@@ -615,6 +615,203 @@ TEST(DistributedSlip, SeparableFitFindsTheSpreadFromTheCatalogStart) {
       sse += e * e, n += 1.0;
     }
   EXPECT_LT(std::sqrt(sse / n), 1.15 * 0.05);
+}
+
+}  // namespace
+}  // namespace tsmh::estimator
+
+namespace tsmh::estimator {
+namespace {
+
+// Slip driven from the tip: six elements on the input angle, a Coulomb
+// level, and a distal family of four halfway to the distal angle.
+TsmModelSpec distal_truth() {
+  TsmModelSpec s = elements_only(6, 2e-3, 0.15, {0.5, 0.9, 1.2, 0.6, 0.8, 0.4});
+  s.slip.weight[kSlidingIndex + 0] = 1.5;
+  s.slip.weight[kSlidingIndex + 1] = 1.2;
+  s.slip.smoothing = 0.02;
+  s.slip.distal_elements = 4;
+  s.slip.distal_position = 0.5;
+  const double v[4] = {0.7, 1.5, 0.4, 0.9};
+  for (std::size_t j = 0; j < 4; ++j)
+    s.slip.weight[kDistalIndex + j] = v[j];
+  return s;
+}
+
+// The input pulley still while the tip moves (its load changes, the tendon
+// stretches): a model driven by x_in alone keeps its friction, the distal
+// family turns by its drive a (x_out - x_in).
+TEST(DistributedSlip, DistalFamilyTurnsWhenTheTipMovesAlone) {
+  const TsmModelSpec s = distal_truth();
+  TsmModelSpec rigid = s;
+  rigid.slip.distal_elements = 0;
+  const auto friction_after = [](const TsmModelSpec& spec, double tip_back, double* held) {
+    TsmFrictionModel m(spec);
+    m.reset();
+    Motion mo;
+    double f = 0.0;
+    // Both ends slide 0.4 rad positive (every element saturates), then stop.
+    for (int k = 0; k <= 800; ++k) {
+      mo.t = k * 1e-3, mo.x = 5e-4 * k, mo.x_out = mo.x, mo.xd = 0.5;
+      f = m.step(mo, 1e-3);
+    }
+    mo.xd = 0.0;
+    mo.t += 1e-3;
+    *held = m.step(mo, 1e-3);
+    // The tip moves back alone.
+    for (int k = 1; k <= 100; ++k) {
+      mo.t += 1e-3, mo.x_out = 0.4 - tip_back * k / 100.0;
+      f = m.step(mo, 1e-3);
+    }
+    return f;
+  };
+  double held = 0.0, held_rigid = 0.0;
+  const double f = friction_after(s, 0.02, &held);
+  const double f_rigid = friction_after(rigid, 0.02, &held_rigid);
+  double proximal = 0.0, distal = 0.0;
+  for (std::size_t i = 0; i < 6; ++i)
+    proximal += s.slip.weight[i];
+  for (std::size_t j = 0; j < 4; ++j)
+    distal += s.slip.weight[kDistalIndex + j] *
+              std::clamp(1.0 - 0.5 * 0.02 / s.slip.distal_width(j), -1.0, 1.0);
+  EXPECT_NEAR(held, proximal + 3.5, 1e-9);  // saturated; at rest the Coulomb share is 0
+  EXPECT_NEAR(f, proximal + distal, 1e-9);
+  EXPECT_LT(f, held - 1.0);
+  EXPECT_NEAR(f_rigid, held_rigid, 1e-12);  // x_in alone cannot see it
+}
+
+// Without a joint encoder (x_out NaN) the family follows x_in, a rigid
+// tendon: the same friction as its elements on the input angle. When the
+// encoder appears (x_out offset by the stretch) the family re-anchors
+// instead of stepping; a saved state continues alike.
+TEST(DistributedSlip, DistalFamilyFallsBackToTheInputAndReanchors) {
+  const TsmModelSpec s = distal_truth();
+  TsmModelSpec base = s;
+  base.slip.distal_elements = 0;
+  std::vector<double> v;
+  for (std::size_t j = 0; j < 4; ++j)
+    v.push_back(s.slip.weight[kDistalIndex + j]);
+  TsmModelSpec alone = elements_only(4, 2e-3, 0.15, v);
+  TsmFrictionModel a(s), b(base), c(alone);
+  a.reset(), b.reset(), c.reset();
+  const auto x = wandering_angle(4000, 1e-3);
+  Motion mo;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    mo.t = static_cast<double>(k) * 1e-3;
+    mo.x = x[k];
+    mo.xd = k ? (x[k] - x[k - 1]) / 1e-3 : 0.0;
+    const double fa = a.step(mo, 1e-3);
+    EXPECT_NEAR(fa, b.step(mo, 1e-3) + c.step(mo, 1e-3), 1e-9) << k;
+  }
+  // The encoder appears 0.05 rad away while the input holds: no step.
+  mo.xd = 0.0;
+  mo.t += 1e-3;
+  const double before = a.step(mo, 1e-3);
+  mo.t += 1e-3;
+  mo.x_out = mo.x + 0.05;
+  EXPECT_DOUBLE_EQ(a.step(mo, 1e-3), before);
+  DynamicsState saved;
+  ASSERT_TRUE(a.save_state(saved));
+  TsmFrictionModel d(s);
+  d.reset();
+  d.restore_state(saved);
+  for (int k = 1; k <= 50; ++k) {
+    mo.t += 1e-3, mo.x_out += 2e-4;
+    EXPECT_DOUBLE_EQ(a.step(mo, 1e-3), d.step(mo, 1e-3));
+  }
+  // It then follows x_out: the input last moved negative, the tip moving
+  // positive turns the distal family.
+  EXPECT_GT(a.friction(), before + 1.0);
+}
+
+// The fit's view: the tip moves apart from the input by a stretch that
+// varies on its own (tip loads); the friction from the truth plus noise.
+FitData distal_data(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
+  FitData d;
+  const double dt = 1e-3;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, noise);
+  TsmFrictionModel model(truth);
+  model.reset();
+  for (std::size_t k = 0; k < 40000; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    Motion m;
+    m.t = t;
+    m.x = 0.5 * std::sin(0.7 * t) + 0.15 * std::sin(2.9 * t + 1.0) + 0.02 * std::sin(11.0 * t);
+    m.xd = 0.35 * std::cos(0.7 * t) + 0.435 * std::cos(2.9 * t + 1.0) + 0.22 * std::cos(11.0 * t);
+    m.x_out = m.x + 0.06 * std::sin(0.37 * t) + 0.02 * std::sin(1.7 * t + 0.4);
+    d.measured.push_back(model.step(m, dt) + g(rng));
+    d.motion.push_back(m);
+    d.role.push_back(role_at(t));
+  }
+  d.radius_m = 0.01;
+  return d;
+}
+
+TEST(DistributedSlip, LeastSquaresRecoversTheDistalFamily) {
+  const TsmModelSpec truth = distal_truth();
+  const FitData d = distal_data(truth, 0.05, 23);
+  TsmModelSpec s = truth;
+  s.slip.weight.fill(1.0);
+  const double mse = solve_slip_weights(s, d);
+  EXPECT_NEAR(std::sqrt(mse), 0.05, 0.005);
+  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
+    const std::size_t i = truth.slip.basis_index(k);
+    EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
+  }
+  // Elements on the input angle alone stay well above the noise.
+  TsmModelSpec rigid = truth;
+  rigid.slip.distal_elements = 0;
+  EXPECT_GT(std::sqrt(solve_slip_weights(rigid, d)), 3.0 * 0.05);
+}
+
+TEST(DistributedSlip, DistalFamilyRoundTripsThroughTheParamsFile) {
+  const TsmModelSpec truth = distal_truth();
+  const std::string yaml = model_to_yaml(TsmFrictionModel(truth));
+  EXPECT_NE(yaml.find("distal_elements: 4"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("distal_position: 0.5"), std::string::npos) << yaml;
+  const auto back = parse_model(yaml, "round trip");
+  const auto& tsm = dynamic_cast<const TsmFrictionModel&>(*back);
+  EXPECT_EQ(tsm.spec().slip.distal_elements, 4);
+  EXPECT_EQ(tsm.spec().slip.basis_count(), 14u);
+  const FitData d = distal_data(truth, 0.0, 1);
+  TsmFrictionModel a(truth), b(tsm.spec());
+  a.reset(), b.reset();
+  for (std::size_t k = 0; k < 3000; ++k)
+    EXPECT_DOUBLE_EQ(a.step(d.motion[k], 1e-3), b.step(d.motion[k], 1e-3));
+  // The parameters carry the count (fixed) and the weights d1 .. d4.
+  const auto params = TsmFrictionModel(truth).parameters();
+  const auto named = [&](const std::string& n) {
+    return std::find_if(params.begin(), params.end(),
+                        [&](const Parameter& p) { return p.name == n; }) != params.end();
+  };
+  EXPECT_TRUE(named("distributed_slip.distal_elements"));
+  EXPECT_TRUE(named("distributed_slip.weights.d4"));
+  // Off, the file has no such key; bad values are named.
+  TsmModelSpec off = truth;
+  off.slip.distal_elements = 0;
+  EXPECT_EQ(model_to_yaml(TsmFrictionModel(off)).find("distal"), std::string::npos);
+  const auto names_field = [&](const std::string& from, const std::string& to,
+                               const std::string& field) {
+    std::string bad = yaml;
+    bad.replace(bad.find(from), from.size(), to);
+    try {
+      parse_model(bad, "bad.yaml");
+      ADD_FAILURE() << "accepted " << to;
+    } catch (const ParamsError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  names_field("distal_position: 0.5", "distal_position: 1.5", "distributed_slip.distal_position");
+  names_field("distal_elements: 4", "distal_elements: 13", "distributed_slip.distal_elements");
+  TsmModelSpec negative = truth;
+  negative.slip.weight[kDistalIndex + 2] = -0.1;
+  try {
+    validate(negative);
+    ADD_FAILURE() << "a negative distal break force was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("weights.d3"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -14,6 +14,12 @@ double DistributedSlipSpec::width(std::size_t i) const {
   return width_min * std::pow(width_max / width_min, f);
 }
 
+double DistributedSlipSpec::distal_width(std::size_t j) const {
+  if (distal_elements <= 1) return width_min;
+  const double f = static_cast<double>(j) / static_cast<double>(distal_elements - 1);
+  return width_min * std::pow(width_max / width_min, f);
+}
+
 DistributedSlipSpec default_distributed_slip() {
   DistributedSlipSpec s;
   s.enabled = true;
@@ -33,7 +39,11 @@ const char* slip_basis_name(std::size_t idx) {
   static constexpr const char* kElements[] = {
       "e1",  "e2",  "e3",  "e4",  "e5",  "e6",  "e7",  "e8",  "e9",  "e10", "e11", "e12",
       "e13", "e14", "e15", "e16", "e17", "e18", "e19", "e20", "e21", "e22", "e23", "e24"};
+  static constexpr const char* kDistal[] = {"d1", "d2", "d3", "d4",  "d5",  "d6",
+                                            "d7", "d8", "d9", "d10", "d11", "d12"};
   static_assert(std::size(kElements) == kMaxSlipElements);
+  static_assert(std::size(kDistal) == kMaxDistalElements);
+  if (idx >= kDistalIndex) return kDistal[idx - kDistalIndex];
   return idx < kSlidingIndex ? kElements[idx] : kSliding[idx - kSlidingIndex];
 }
 
@@ -50,6 +60,10 @@ void validate(const DistributedSlipSpec& s) {
   if (s.tendon_widths && s.element_count() > kMaxSlipElements)
     bad("elements", "must be 1 .. " + std::to_string(kMaxSlipElements / 2) +
                         " with tendon_widths (one family per tendon)");
+  if (s.distal_elements < 0 || s.distal_elements > static_cast<int>(kMaxDistalElements))
+    bad("distal_elements", "must be 0 .. " + std::to_string(kMaxDistalElements));
+  if (!(s.distal_position > 0.0 && s.distal_position <= 1.0))
+    bad("distal_position", "must be a number in (0, 1]");
   positive("width_min", s.width_min);
   positive("width_max", s.width_max);
   if (s.width_max < s.width_min) bad("width_max", "must be >= width_min");
@@ -61,7 +75,7 @@ void validate(const DistributedSlipSpec& s) {
     const std::size_t idx = s.basis_index(k);
     const std::string name = slip_basis_name(idx);
     if (!std::isfinite(s.weight[idx])) bad("weights." + name, "must be a finite number");
-    if (idx < kSlidingIndex + 3 && s.weight[idx] < 0.0)
+    if ((idx < kSlidingIndex + 3 || idx >= kDistalIndex) && s.weight[idx] < 0.0)
       bad("weights." + name, "must be >= 0 (a negative break force is not passive)");
     if (!std::isfinite(s.tension_weight[idx]))
       bad("tension_weights." + name, "must be a finite number");
@@ -76,6 +90,8 @@ SlipKernel::SlipKernel(const DistributedSlipSpec& spec) : spec_(spec) {
   validate(spec_);
   for (std::size_t i = 0; i < spec_.element_count(); ++i)
     inv_width_[i] = 1.0 / spec_.width(i);
+  for (std::size_t j = 0; j < spec_.distal_count(); ++j)
+    inv_distal_width_[j] = 1.0 / spec_.distal_width(j);
   inv_tension_ref_ = spec_.tension_ref > 0.0 ? 1.0 / spec_.tension_ref : 0.0;
   inv_smoothing_ = 1.0 / spec_.smoothing;
   inv_stribeck_ = 1.0 / spec_.stribeck_speed;
@@ -86,8 +102,22 @@ SlipKernel::SlipKernel(const DistributedSlipSpec& spec) : spec_(spec) {
 }
 
 void SlipKernel::advance(SlipState& s, double x, double xd, double tension, double drive,
-                         SlipBasis& out) const noexcept {
+                         double x_out, SlipBasis& out) const noexcept {
   const double dx = s.started ? x - s.x_prev : 0.0;
+  if (spec_.distal_elements > 0) {
+    // The distal family follows x_out, or x without a joint encoder; a
+    // change of source re-anchors it (the two angles differ by the stretch).
+    const bool measured = std::isfinite(x_out);
+    const double y = measured ? x + spec_.distal_position * (x_out - x) : x;
+    const double dy = s.started && measured == s.y_measured ? y - s.y_prev : 0.0;
+    s.y_prev = y;
+    s.y_measured = measured;
+    for (std::size_t j = 0; j < spec_.distal_count(); ++j) {
+      const double d = std::min(std::max(s.d[j] + dy * inv_distal_width_[j], -k_neg_), k_pos_);
+      s.d[j] = d;
+      out.phi[kDistalIndex + j] = d;
+    }
+  }
   s.x_prev = x;
   s.started = true;
   const std::size_t n = static_cast<std::size_t>(spec_.elements);
@@ -132,8 +162,14 @@ double SlipKernel::friction(const SlipBasis& b, double tension, double drive, do
     capacity += w * b.scale[i < per_family ? 0 : 1];
     slope += b.phi[i] * spec_.load_weight[i];
   }
-  for (std::size_t i = kSlidingIndex; i < kMaxSlipBasis; ++i) {
+  for (std::size_t i = kSlidingIndex; i < kDistalIndex; ++i) {
     sliding += b.phi[i] * (weight(i, dt) + u * spec_.drive_weight[i]);
+    slope += b.phi[i] * spec_.load_weight[i];
+  }
+  for (std::size_t i = kDistalIndex; i < kDistalIndex + spec_.distal_count(); ++i) {
+    const double w = weight(i, dt) + u * spec_.drive_weight[i];
+    elements += b.phi[i] * w;
+    capacity += w;
     slope += b.phi[i] * spec_.load_weight[i];
   }
   const double a = elements + sliding + extra;
@@ -152,6 +188,8 @@ double SlipKernel::element_capacity(double tension) const noexcept {
   double sum = 0.0;
   for (std::size_t i = 0; i < spec_.element_count(); ++i)
     sum += weight(i, dt) * g;
+  for (std::size_t j = 0; j < spec_.distal_count(); ++j)
+    sum += weight(kDistalIndex + j, dt);
   return sum;
 }
 
@@ -163,12 +201,17 @@ std::array<double, 2> SlipKernel::family_scales(double tension, double drive) co
           std::max(tension - half, 0.0) * inv_tension_ref_};
 }
 
-void SlipKernel::preset(SlipState& s, double x, double fraction, double tension) const noexcept {
+void SlipKernel::preset(SlipState& s, double x, double fraction, double tension,
+                        double x_out) const noexcept {
   const double u = std::clamp(fraction, -1.0, 1.0);
   const double level = u >= 0.0 ? u * k_pos_ : u * k_neg_;
   const double e = level * family_scales(tension, 0.0)[0];
   for (std::size_t i = 0; i < spec_.element_count(); ++i)
     s.e[i] = e;
+  for (std::size_t j = 0; j < spec_.distal_count(); ++j)
+    s.d[j] = level;
+  s.y_measured = std::isfinite(x_out);
+  s.y_prev = s.y_measured ? x + spec_.distal_position * (x_out - x) : x;
   s.coulomb = level;
   s.x_prev = x;
   s.started = true;

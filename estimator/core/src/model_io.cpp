@@ -51,7 +51,8 @@ void read_weights(const YAML::Node& node, const DistributedSlipSpec& s, const st
   if (!node.IsSequence() || node.size() != s.basis_count())
     fail(origin, where,
          "must be a list of " + std::to_string(s.basis_count()) + " numbers (one per element, " +
-             "then coulomb_positive, coulomb_negative, stribeck, viscous)");
+             "then coulomb_positive, coulomb_negative, stribeck, viscous" +
+             (s.distal_elements > 0 ? ", then one per distal element)" : ")"));
   for (std::size_t k = 0; k < s.basis_count(); ++k) {
     const std::size_t i = s.basis_index(k);
     out[i] = number(node[k], origin, where + "." + slip_basis_name(i));
@@ -63,7 +64,7 @@ DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin
   reject_unknown_keys(node,
                       {"elements", "width_min", "width_max", "smoothing", "stribeck_speed",
                        "weights", "tension_ref", "tension_weights", "load_weights", "drive_weights",
-                       "tendon_widths", "coulomb_play"},
+                       "tendon_widths", "coulomb_play", "distal_elements", "distal_position"},
                       origin, "distributed_slip");
   DistributedSlipSpec s;
   s.enabled = true;
@@ -92,6 +93,18 @@ DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin
     if (!cp.IsScalar() || (cp.Scalar() != "true" && cp.Scalar() != "false"))
       fail(origin, "distributed_slip.coulomb_play", "must be true or false");
     s.coulomb_play = cp.Scalar() == "true";
+  }
+  if (node["distal_elements"]) {
+    const double d = number(node["distal_elements"], origin, "distributed_slip.distal_elements");
+    if (d != std::round(d) || d < 0.0 || d > static_cast<double>(kMaxDistalElements))
+      fail(origin, "distributed_slip.distal_elements",
+           "must be an integer 0 .. " + std::to_string(kMaxDistalElements));
+    s.distal_elements = static_cast<int>(d);
+  }
+  if (node["distal_position"]) {
+    s.distal_position = number(node["distal_position"], origin, "distributed_slip.distal_position");
+    if (!(s.distal_position > 0.0 && s.distal_position <= 1.0))
+      fail(origin, "distributed_slip.distal_position", "must be a number in (0, 1]");
   }
   if (!node["weights"]) fail(origin, "distributed_slip.weights", "missing");
   read_weights(node["weights"], s, origin, "weights", s.weight);
@@ -130,6 +143,10 @@ void emit_slip(YAML::Emitter& out, const DistributedSlipSpec& s) {
   out << YAML::Key << "stribeck_speed" << YAML::Value << s.stribeck_speed;
   if (s.tendon_widths) out << YAML::Key << "tendon_widths" << YAML::Value << true;
   if (s.coulomb_play) out << YAML::Key << "coulomb_play" << YAML::Value << true;
+  if (s.distal_elements > 0) {
+    out << YAML::Key << "distal_elements" << YAML::Value << s.distal_elements;
+    out << YAML::Key << "distal_position" << YAML::Value << s.distal_position;
+  }
   emit_weights(out, "weights", s, s.weight);
   if (s.tension_copies || s.tendon_widths)
     out << YAML::Key << "tension_ref" << YAML::Value << s.tension_ref;

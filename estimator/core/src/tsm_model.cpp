@@ -194,6 +194,9 @@ void append_slip_parameters(const DistributedSlipSpec& s, const IsFixed& is_fixe
   add("smoothing", s.smoothing, 1e-4, 1.0, false, "rad/s");
   add("stribeck_speed", s.stribeck_speed, 1e-3, 10.0, false, "rad/s");
   add("tension_ref", s.tension_ref, -1e6, 1e6, true, "N");
+  if (s.distal_elements > 0)
+    add("distal_elements", s.distal_elements, 1.0, static_cast<double>(kMaxDistalElements), true,
+        "");
   for (std::size_t k = 0; k < s.basis_count(); ++k) {
     const std::size_t i = s.basis_index(k);
     const bool signed_weight = i == kSlidingIndex + 3;  // viscous may be negative
@@ -225,8 +228,9 @@ void append_slip_parameters(const DistributedSlipSpec& s, const IsFixed& is_fixe
 
 std::size_t slip_parameter_count(const DistributedSlipSpec& s) {
   if (!s.enabled) return 0;
-  return 6 + s.basis_count() * (1 + (s.tension_copies ? 1 : 0) + (s.load_copies ? 1 : 0) +
-                                (s.drive_copies ? 1 : 0));
+  return 6 + (s.distal_elements > 0 ? 1 : 0) +
+         s.basis_count() *
+             (1 + (s.tension_copies ? 1 : 0) + (s.load_copies ? 1 : 0) + (s.drive_copies ? 1 : 0));
 }
 
 // Reads append_slip_parameters()'s values back, from v[i] on.
@@ -243,6 +247,9 @@ void read_slip_parameters(DistributedSlipSpec& s, std::span<const double> v, std
   s.smoothing = v[i++];
   s.stribeck_speed = v[i++];
   s.tension_ref = v[i++];
+  if (s.distal_elements > 0 && v[i++] != static_cast<double>(s.distal_elements))
+    throw std::invalid_argument(
+        "distributed_slip.distal_elements: cannot change through the parameter values");
   for (std::size_t k = 0; k < s.basis_count(); ++k)
     s.weight[s.basis_index(k)] = v[i++];
   if (s.tension_copies) {
@@ -400,7 +407,7 @@ double TsmFrictionModel::step_with_slip(const Motion& m, double dt, double xd_mi
     }
     bouc_wen = spec_.gamma * z_;
   }
-  slip_.advance(slip_state_, m.x, m.xd, m.tension, m.drive, basis_);
+  slip_.advance(slip_state_, m.x, m.xd, m.tension, m.drive, m.x_out, basis_);
   f_ = slip_.friction(basis_, m.tension, m.drive, bouc_wen, slip_level_);
   if (bouc_wen_) slip_level_ += spec_.gamma * level_;
   return f_;
@@ -414,6 +421,12 @@ void TsmFrictionModel::save_slip(DynamicsState& out) const noexcept {
   for (std::size_t i = 0; i < spec_.slip.element_count(); ++i)
     out.v[10 + i] = slip_state_.e[i];
   out.v[10 + kMaxSlipElements] = slip_state_.coulomb;
+  if (spec_.slip.distal_elements == 0) return;
+  constexpr std::size_t kDistal = 11 + kMaxSlipElements;
+  for (std::size_t j = 0; j < spec_.slip.distal_count(); ++j)
+    out.v[kDistal + j] = slip_state_.d[j];
+  out.v[kDistal + kMaxDistalElements] = slip_state_.y_prev;
+  out.v[kDistal + kMaxDistalElements + 1] = slip_state_.y_measured ? 1.0 : 0.0;
 }
 
 void TsmFrictionModel::restore_slip(const DynamicsState& s) noexcept {
@@ -424,6 +437,12 @@ void TsmFrictionModel::restore_slip(const DynamicsState& s) noexcept {
   for (std::size_t i = 0; i < spec_.slip.element_count(); ++i)
     slip_state_.e[i] = s.v[10 + i];
   slip_state_.coulomb = s.v[10 + kMaxSlipElements];
+  if (spec_.slip.distal_elements == 0) return;
+  constexpr std::size_t kDistal = 11 + kMaxSlipElements;
+  for (std::size_t j = 0; j < spec_.slip.distal_count(); ++j)
+    slip_state_.d[j] = s.v[kDistal + j];
+  slip_state_.y_prev = s.v[kDistal + kMaxDistalElements];
+  slip_state_.y_measured = s.v[kDistal + kMaxDistalElements + 1] != 0.0;
 }
 
 void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {
@@ -439,7 +458,7 @@ void TsmFrictionModel::preset(double friction, const Motion& m) noexcept {
       level_ = bw / spec_.gamma;
       z_ = z1_ = z2_ = fraction * level_;
     }
-    slip_.preset(slip_state_, m.x, fraction, m.tension);
+    slip_.preset(slip_state_, m.x, fraction, m.tension, m.x_out);
     f_ = fraction * capacity;
     slip_level_ = capacity;
     return;

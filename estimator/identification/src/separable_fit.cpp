@@ -159,7 +159,7 @@ LinearSystem build_system(const DistributedSlipSpec& spec, const FitData& data,
   std::size_t train_seen = 0;
   for (std::size_t i = 0; i < data.size(); ++i) {
     const Motion& m = data.motion[i];
-    kernel.advance(state, m.x, m.xd, m.tension, m.drive, basis);
+    kernel.advance(state, m.x, m.xd, m.tension, m.drive, m.x_out, basis);
     if (data.role[i] != SampleRole::kTrain) continue;
     if (train_seen++ % stride != 0) continue;
     const double y = data.measured[i] - (extra.empty() ? 0.0 : extra[i]);
@@ -188,8 +188,10 @@ LinearSystem build_system(const DistributedSlipSpec& spec, const FitData& data,
   sys.gram.assign(g.data(), g.data() + p * p);
   sys.rhs.assign(h.data(), h.data() + p);
   sys.nonnegative.assign(sys.columns, false);
-  for (std::size_t c = 0; c < k; ++c)  // break forces, Coulomb and Stribeck levels
-    sys.nonnegative[c] = spec.basis_index(c) < kSlidingIndex + 3;
+  for (std::size_t c = 0; c < k; ++c) {  // break forces, Coulomb and Stribeck levels
+    const std::size_t idx = spec.basis_index(c);
+    sys.nonnegative[c] = idx < kSlidingIndex + 3 || idx >= kDistalIndex;
+  }
   return sys;
 }
 
@@ -347,7 +349,18 @@ bool earns_its_place(double candidate_mse, double base_mse) {
   return candidate_mse < (1.0 - kMargin) * (1.0 - kMargin) * base_mse;
 }
 
+// The distal family's size when the fit tries it.
+constexpr int kDistalCandidate = 8;
+constexpr double kDistalPositions[] = {0.25, 0.5, 0.75, 1.0};
+
 }  // namespace
+
+bool distal_angle_measured(const FitData& data) {
+  if (data.motion.empty()) return false;
+  for (const auto& m : data.motion)
+    if (!std::isfinite(m.x_out)) return false;
+  return true;
+}
 
 bool tensions_measured(const FitData& data) {
   if (data.motion.empty()) return false;
@@ -530,6 +543,55 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     r.notes.push_back(line);
   }
   TsmModelSpec final_spec = best_of[chosen];
+  long distal_evaluations = 0;
+  if (global && o.slip_copies_from_data && final_spec.slip.distal_elements == 0 &&
+      distal_angle_measured(data) && data.count(SampleRole::kValidation) > 0) {
+    // Slip driven from the tip: an element family beside the chosen
+    // elements, driven part of the way to the distal angle
+    // (distributed_slip.hpp), over the chosen spread; its position is the
+    // one of a few whose solved weights give the lowest validation error,
+    // and the family is kept only where it earns_its_place(). Where the tip
+    // never moves apart from the input (free motion without a load), it
+    // follows the proximal elements and cannot earn it.
+    const double mse_e = validation_mse(final_spec, data);
+    double best_mse = std::numeric_limits<double>::infinity();
+    TsmModelSpec best_d;
+    for (double a : kDistalPositions) {
+      TsmModelSpec d = final_spec;
+      d.slip.distal_elements = kDistalCandidate;
+      d.slip.distal_position = a;
+      d.slip.tension_copies = solve_tension;
+      d.slip.load_copies = solve_load;
+      d.slip.drive_copies = solve_drive;
+      // The position is chosen on the search's stride; the chosen one
+      // is solved on every train sample below.
+      solve_into(d, data, search.stride);
+      restore_held(d);
+      const double mse = validation_mse(d, data);
+      ++distal_evaluations;
+      if (mse < best_mse) best_mse = mse, best_d = d;
+    }
+    if (search.stride > 1) {
+      TsmModelSpec d = best_d;
+      d.slip.tension_copies = solve_tension;
+      d.slip.load_copies = solve_load;
+      d.slip.drive_copies = solve_drive;
+      solve_into(d, data, 1);
+      restore_held(d);
+      best_d = d;
+      best_mse = validation_mse(d, data);
+      ++distal_evaluations;
+    }
+    const bool keep = earns_its_place(best_mse, mse_e);
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "%d elements at %.2f of the way to the distal angle %s: validation RMSE %.4g N "
+                  "with them, %.4g N without",
+                  kDistalCandidate, best_d.slip.distal_position, keep ? "kept" : "left out",
+                  std::sqrt(best_mse), std::sqrt(mse_e));
+    r.notes.push_back(line);
+    if (keep) final_spec = best_d;
+  }
   long hybrid_evaluations = 0;
   if (global && o.slip_copies_from_data && start.terms.empty() &&
       data.count(SampleRole::kValidation) > 0) {
@@ -542,7 +604,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     // the spread (BOBYQA from the preset), the weights solved exactly; kept
     // only where it earns_its_place().
     const TsmModelSpec paper = paper_spec();
-    TsmModelSpec hybrid = best_of[chosen];
+    TsmModelSpec hybrid = final_spec;
     hybrid.theta = paper.theta, hybrid.gamma = paper.gamma, hybrid.n = paper.n;
     hybrid.sigma = paper.sigma, hybrid.terms = paper.terms, hybrid.fixed = paper.fixed;
     hybrid.slip.tension_copies = solve_tension;
@@ -579,7 +641,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
   r.simulated = simulate_friction(*r.model, data.motion);
   r.train_rmse =
       std::sqrt(weighted_mse(data.measured, r.simulated, data.weights(SampleRole::kTrain)));
-  r.evaluations = search.evaluations + hybrid_evaluations;
+  r.evaluations = search.evaluations + distal_evaluations + hybrid_evaluations;
   r.screened = static_cast<int>(counts.size());
   r.global_algorithm = global ? "grid over the elements' spread" : "";
   r.local_algorithm = "BOBYQA on the nonlinear values, exact NNLS for the weights";

@@ -74,6 +74,21 @@
 // rest). The fit cannot tell the two apart on data without holds (a
 // multisine), and they differ wherever the input stops.
 //
+// Slip driven from the tip (`distal_elements`): the elements above follow
+// the input angle, as if the tendon were rigid. A tendon in a sheath is not:
+// when the tip's load changes while the input stands still, the tendon
+// stretches, its distal segments slide, and the friction they carry turns
+// from that end of the sheath, which no function of x_in can follow. The
+// distal family is a second set of elements driven by the distal (joint)
+// angle x_out from a joint encoder (same scale as x_in: pulleys of equal
+// radius), with the same spread of widths:
+//   d_j <- clamp(d_j + dx_out / r_j, -k_neg, k_pos)
+// A joint's motion moves both ends alike, so the two families add up there;
+// they differ by the stretch x_out - x_in, and only the distal one turns
+// when the tip moves alone. Without a joint encoder (x_out NaN) the family
+// follows x_in (a rigid tendon), and a change of source (the encoder appears
+// or drops out) re-anchors it without a step.
+//
 // No sign of the acceleration appears anywhere.
 
 #include <array>
@@ -90,7 +105,12 @@ inline constexpr std::size_t kSlidingFunctions = 4;
 /// Index of the first sliding function in the weight arrays (fixed, so that
 /// the element count can change without moving them).
 inline constexpr std::size_t kSlidingIndex = kMaxSlipElements;
-inline constexpr std::size_t kMaxSlipBasis = kMaxSlipElements + kSlidingFunctions;
+/// Most elements of the distal family (driven by x_out).
+inline constexpr std::size_t kMaxDistalElements = 12;
+/// Index of the distal family's first element in the weight arrays, after
+/// the sliding functions (so that files without it keep their layout).
+inline constexpr std::size_t kDistalIndex = kSlidingIndex + kSlidingFunctions;
+inline constexpr std::size_t kMaxSlipBasis = kDistalIndex + kMaxDistalElements;
 /// Bound on |dF/d|D|| the model uses, so that the distal load equation keeps
 /// one solution (the load weights are clamped to it at run time).
 inline constexpr double kMaxLoadSlope = 0.9;
@@ -116,9 +136,16 @@ struct DistributedSlipSpec {
   /// The Coulomb functions read a play of width width_min (their state
   /// holds at rest) instead of tanh(xd / smoothing) (see the header).
   bool coulomb_play = false;
+  /// Elements driven by the distal angle x_out (0: none; see the header).
+  int distal_elements = 0;
+  /// Where along the sheath the distal family sits, as the share of the
+  /// distal angle in its drive x_in + a (x_out - x_in): 1 at the tip, 0.5
+  /// halfway (a uniformly stretched tendon moves there by half the stretch).
+  double distal_position = 1.0;
   /// Weights per basis function, N: elements 0 .. elements-1, then the sliding
   /// functions at kSlidingIndex + {0: coulomb +, 1: coulomb -, 2: stribeck,
-  /// 3: viscous (N s/rad)}. Unused entries are 0.
+  /// 3: viscous (N s/rad)}, then the distal family from kDistalIndex. Unused
+  /// entries are 0.
   std::array<double, kMaxSlipBasis> weight{};
   std::array<double, kMaxSlipBasis> tension_weight{};  ///< per N of (T - T_ref)
   std::array<double, kMaxSlipBasis> load_weight{};     ///< per N of |D|
@@ -128,14 +155,21 @@ struct DistributedSlipSpec {
   std::size_t element_count() const {
     return static_cast<std::size_t>(elements) * (tendon_widths ? 2 : 1);
   }
-  /// The indices of the basis functions in use, in order (elements, sliding).
-  std::size_t basis_count() const { return element_count() + kSlidingFunctions; }
+  std::size_t distal_count() const { return static_cast<std::size_t>(distal_elements); }
+  /// The indices of the basis functions in use, in order (elements, sliding,
+  /// distal elements).
+  std::size_t basis_count() const { return element_count() + kSlidingFunctions + distal_count(); }
   std::size_t basis_index(std::size_t k) const {
-    return k < element_count() ? k : kSlidingIndex + (k - element_count());
+    const std::size_t n = element_count();
+    if (k < n) return k;
+    if (k < n + kSlidingFunctions) return kSlidingIndex + (k - n);
+    return kDistalIndex + (k - n - kSlidingFunctions);
   }
   /// Width of element i at the reference tension (log-uniform from width_min
   /// to width_max; each family spans the same widths).
   double width(std::size_t i) const;
+  /// Width of distal element j (log-uniform over the same span).
+  double distal_width(std::size_t j) const;
 };
 
 /// The catalog default: 14 elements over 1 mrad .. 0.3 rad, weights that
@@ -154,6 +188,9 @@ struct SlipState {
   double x_prev = 0.0;
   double coulomb = 0.0;  ///< the Coulomb functions' play, in [-1, 1] (coulomb_play)
   bool started = false;
+  std::array<double, kMaxDistalElements> d{};  ///< the distal family's state
+  double y_prev = 0.0;                         ///< the angle the distal family last followed
+  bool y_measured = false;                     ///< whether that was x_out (else x_in)
 };
 
 /// The basis of one sample, weights applied later: phi by array index.
@@ -172,9 +209,9 @@ class SlipKernel {
 
   /// Advances the elements to angle x and fills the basis at velocity xd;
   /// `tension` (T) and `drive` (u) set the per-tendon widths' scales (NaN:
-  /// the reference tension). Never allocates; non-finite x, xd are the
-  /// caller's to refuse.
-  void advance(SlipState& s, double x, double xd, double tension, double drive,
+  /// the reference tension); `x_out` drives the distal family (NaN: x).
+  /// Never allocates; non-finite x, xd are the caller's to refuse.
+  void advance(SlipState& s, double x, double xd, double tension, double drive, double x_out,
                SlipBasis& out) const noexcept;
   /// The friction A + B |D| of a basis, solved for the distal load (see the
   /// header): `extra` is friction the rest of the model adds (Bouc-Wen);
@@ -185,8 +222,9 @@ class SlipKernel {
   double friction(const SlipBasis& b, double tension, double drive, double extra,
                   double& level) const noexcept;
   /// Sets every element's state to `fraction` of its saturation at mean
-  /// tension `tension` (NaN: the reference) (preset).
-  void preset(SlipState& s, double x, double fraction, double tension) const noexcept;
+  /// tension `tension` (NaN: the reference) (preset); `x_out` anchors the
+  /// distal family (NaN: x).
+  void preset(SlipState& s, double x, double fraction, double tension, double x_out) const noexcept;
   /// The saturated elements' friction per unit of state (sum of weights).
   double element_capacity(double tension) const noexcept;
 
@@ -202,6 +240,7 @@ class SlipKernel {
   }
   DistributedSlipSpec spec_;
   std::array<double, kMaxSlipElements> inv_width_{};
+  std::array<double, kMaxDistalElements> inv_distal_width_{};
   double inv_smoothing_ = 1.0, inv_stribeck_ = 1.0;
   double inv_tension_ref_ = 0.0;  ///< 1 / tension_ref (0: no per-tendon scaling)
   /// Each family's saturation scale g_j = max(T_j, 0) / T_ref with

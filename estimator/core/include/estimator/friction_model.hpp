@@ -34,8 +34,9 @@ struct Parameter {
 /// estimator's hindsight correction). Its meaning is the model's own.
 struct DynamicsState {
   /// The paper's state (6), the distributed-slip elements, their Coulomb
-  /// play and their last angle, and the friction of the last step.
-  std::array<double, 35> v{};
+  /// play and their last angle, the friction of the last step, and the
+  /// distal family's elements and last angle.
+  std::array<double, 49> v{};
 };
 
 /// The real-time face of a model: a stateful value object stepped once per

@@ -48,6 +48,8 @@ CopiesInData copies_in_data(const FitData& data);
 /// Both proximal tensions measured on every sample (T and u finite): what
 /// the per-tendon element families (`tendon_widths`) scale with.
 bool tensions_measured(const FitData& data);
+/// Whether every sample has the distal angle (a joint encoder's x_out).
+bool distal_angle_measured(const FitData& data);
 
 /// Sets the weights (and the copies `spec.slip` has on) of `spec` to the
 /// least-squares optimum over the train samples (every `stride`-th one),
