@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "estimator/distributed_slip.hpp"
 #include "estimator/tsm_model.hpp"
 #include "fakes.hpp"
 #include "haptics/haptic_loop.hpp"
@@ -341,6 +342,49 @@ TEST(HapticLoop, StatusRateCoversTheLastPeriod) {
   EXPECT_NEAR(rig.link.statuses.back().rate_hz, 10.0 / 0.1, 1e-6);
   EXPECT_GT(rig.loop.measured_rate_hz(), 900.0) << "the whole-run mean hides it";
   EXPECT_EQ(rig.loop.events().worst_lateness_ns.load(), 0) << "the rig passes no lateness";
+}
+
+// The slave's joint encoder (SLAVE_STATE x_out) reaches the friction model:
+// with an element family driven from the tip, the input held still while
+// the tip moves back 20 mrad turns the estimated friction by that family's
+// break forces; with the tip held too, the friction stays.
+TEST(HapticLoop, TheSlavesJointAngleReachesTheModel) {
+  estimator::TsmModelSpec spec;
+  spec.slip.enabled = true;
+  spec.slip.elements = 4;
+  spec.slip.width_min = 2e-3;
+  spec.slip.width_max = 0.1;
+  spec.slip.distal_elements = 4;
+  spec.slip.distal_position = 1.0;
+  const double proximal[4] = {0.5, 0.9, 1.2, 0.6}, distal[4] = {0.7, 1.5, 0.4, 0.9};
+  for (std::size_t i = 0; i < 4; ++i) {
+    spec.slip.weight[i] = proximal[i];
+    spec.slip.weight[estimator::kDistalIndex + i] = distal[i];
+  }
+  const auto friction_after = [&spec](double tip_back) {
+    std::vector<std::unique_ptr<estimator::DistalTorqueEstimator>> estimators;
+    for (int j = 0; j < 2; ++j)
+      estimators.push_back(std::make_unique<estimator::DistalTorqueEstimator>(
+          std::make_unique<estimator::TsmFrictionModel>(spec), 0.01));
+    FakeDevice device;
+    FakeLink link;
+    HapticLoop loop(config(), device, link, std::move(estimators));
+    std::int64_t now = 1'000 * kMs;
+    double x = 0.0;
+    const auto tick = [&](double x_out) {
+      link.push(now, x, 30.0, 20.0, x_out);
+      loop.tick(now);
+      now += kMs;
+    };
+    for (int i = 0; i < 400; ++i)
+      tick(x += 1e-3);  // both ends forward together
+    for (int i = 1; i <= 200; ++i)
+      tick(x - tip_back * i / 200.0);  // the input still
+    EXPECT_TRUE(loop.estimate(0).valid);
+    return loop.estimate(0).friction;
+  };
+  const double held = friction_after(0.0), moved = friction_after(0.02);
+  EXPECT_LT(moved, held - 2.0) << "held " << held << " N, tip moved back " << moved << " N";
 }
 
 }  // namespace
