@@ -174,7 +174,8 @@ void add_gap_command(CLI::App& app, Context& ctx) {
                   "acceleration_dependence, reversal_offset, and the structural "
                   "distributed_slip (with its tension copies, or its per-tendon families when "
                   "T1 and T3 are recorded, when tension_dependent is named too), load_copies, "
-                  "tension_copies, tendon_widths; a family brings all its forms")
+                  "tension_copies, tendon_widths, distal_slip (slip driven from the tip, when "
+                  "x_out is recorded); a family brings all its forms")
       ->delimiter(',');
   add_fit_input_options(*cmd, opts->in, ctx);
   cmd->callback([opts, &ctx] { run_gap_command(*opts, ctx); });

@@ -109,8 +109,7 @@ TEST(GapPhysicsWorld, NamesDistributedSlipAndTensionSeed6) {
 // Elements whose break forces only scale with the tensions (the copies) keep
 // a constant presliding width and end at 2.26x the sensor floor; the
 // per-tendon element families (widths and break forces x g(T_j), a slack
-// tendon's family clamped to zero) must be named on the tension line and
-// take the gap below 1.7x.
+// tendon's family clamped to zero) must be named on the tension line.
 TEST(GapPhysicsWorld, NamesPerTendonFamiliesOnTheSlackTendonSeed5) {
   const auto [w, g, found] = gap_on_world(5);
   const EffectFound* slip = effect(g, "distributed_slip");
@@ -124,7 +123,17 @@ TEST(GapPhysicsWorld, NamesPerTendonFamiliesOnTheSlackTendonSeed5) {
   // Both sheaths carry friction, each on its own tendon.
   EXPECT_GT(t["tendon_widths.break_force_T1"], 0.0) << tension->where;
   EXPECT_GT(t["tendon_widths.break_force_T3"], 0.0) << tension->where;
-  EXPECT_LE(g.gap_final.rmse, 1.7 * w.floor)
+  // Then slip driven from the tip (the calibration's slow tip torque moves
+  // the tip apart from the input): its own line, with the family's place
+  // along the sheath, and the gap within 1.35x the floor (1.53x without it).
+  const EffectFound* distal = effect(g, "distal_slip");
+  ASSERT_NE(distal, nullptr) << "named: " << found;
+  EXPECT_EQ(distal->variable, "distal_angle");
+  EXPECT_NE(distal->where.find("of the way to the distal angle"), std::string::npos)
+      << distal->where;
+  std::map<std::string, double> d(distal->parameters.begin(), distal->parameters.end());
+  EXPECT_GT(d["distal_slip.break_force"], 0.0) << distal->where;
+  EXPECT_LE(g.gap_final.rmse, 1.35 * w.floor)
       << "gap " << g.gap_base.rmse << " -> " << g.gap_final.rmse << " N, sensor floor " << w.floor
       << " N (ratio " << g.gap_final.rmse / w.floor << "); named: " << found;
 }

@@ -377,7 +377,7 @@ std::vector<TermKind> candidate_kinds(const GapOptions& o) {
     // A family name (position_dependent, load_dependent) brings all its forms.
     // The structural candidates are chosen in each round (structural_candidates).
     bool found = name == "distributed_slip" || name == "load_copies" || name == "tension_copies" ||
-                 name == "tendon_widths";
+                 name == "tendon_widths" || name == "distal_slip";
     for (const auto& info : term_catalog()) {
       if (info.name == name || term_family(info.kind) == name) {
         if (std::find(out.begin(), out.end(), info.kind) == out.end()) out.push_back(info.kind);
@@ -585,14 +585,15 @@ enum class Structural {
   kSlipWithWidths,
   kLoadCopies,
   kTensionCopies,
-  kTendonWidths
+  kTendonWidths,
+  kDistalSlip
 };
 
 const char* structural_name(Structural s) {
-  return realtime::enum_name<Structural::kTendonWidths>(
-             s,
-             {"distributed_slip", "distributed_slip+tension_copies",
-              "distributed_slip+tendon_widths", "load_copies", "tension_copies", "tendon_widths"})
+  return realtime::enum_name<Structural::kDistalSlip>(
+             s, {"distributed_slip", "distributed_slip+tension_copies",
+                 "distributed_slip+tendon_widths", "load_copies", "tension_copies", "tendon_widths",
+                 "distal_slip"})
       .data();
 }
 
@@ -606,9 +607,9 @@ std::optional<Structural> copies_of(Structural s) {
 // A pair's family is its copies' (the effect it adds beyond the elements),
 // so that it meets the load and tension level terms as a rival.
 const char* structural_family(Structural s) {
-  return realtime::enum_name<Structural::kTendonWidths>(
+  return realtime::enum_name<Structural::kDistalSlip>(
              s, {"distributed_slip", "tension_dependent", "tension_dependent", "load_dependent",
-                 "tension_dependent", "tension_dependent"})
+                 "tension_dependent", "tension_dependent", "distal_slip"})
       .data();
 }
 
@@ -620,7 +621,8 @@ bool adds_widths(Structural s) {
 std::optional<Structural> structural_from_name(const std::string& name) {
   for (Structural s :
        {Structural::kDistributedSlip, Structural::kSlipWithTension, Structural::kSlipWithWidths,
-        Structural::kLoadCopies, Structural::kTensionCopies, Structural::kTendonWidths})
+        Structural::kLoadCopies, Structural::kTensionCopies, Structural::kTendonWidths,
+        Structural::kDistalSlip})
     if (name == structural_name(s)) return s;
   return std::nullopt;
 }
@@ -633,6 +635,7 @@ bool adds_slip(const std::string& name) {
 // The families the model already has, level terms and structure.
 bool family_present(const TsmModelSpec& spec, std::string_view family) {
   if (family == "distributed_slip" && spec.slip.enabled) return true;
+  if (family == "distal_slip" && spec.slip.enabled && spec.slip.distal_elements > 0) return true;
   if (family == "load_dependent" && spec.slip.enabled && spec.slip.load_copies) return true;
   if (family == "tension_dependent" && spec.slip.enabled &&
       (spec.slip.tension_copies || spec.slip.tendon_widths))
@@ -673,6 +676,9 @@ std::vector<Structural> structural_candidates(const TsmModelSpec& spec, const Fi
     out.push_back(Structural::kTensionCopies);
   if (widths && !spec.slip.tendon_widths && wanted(Structural::kTendonWidths))
     out.push_back(Structural::kTendonWidths);
+  // Slip driven from the tip needs the distal angle on every sample.
+  if (distal_angle_measured(d) && spec.slip.distal_elements == 0 && wanted(Structural::kDistalSlip))
+    out.push_back(Structural::kDistalSlip);
   return out;
 }
 
@@ -731,8 +737,24 @@ CandidateTrial refit_structural(const FitData& d, const TsmFrictionModel& curren
       spec.slip.drive_weight = {};
     }
   }
+  long distal_solves = 0;
+  if (which == Structural::kDistalSlip) {
+    // The family's position along the sheath: the one of tsm fit's few
+    // whose weights, solved exactly over the current spread, fit best.
+    double best = std::numeric_limits<double>::infinity();
+    TsmModelSpec chosen = spec;
+    for (double a : kDistalPositions) {
+      TsmModelSpec c = spec;
+      c.slip.distal_elements = kDistalCandidateElements;
+      c.slip.distal_position = a;
+      const double mse = solve_slip_weights(c, d, 4);
+      ++distal_solves;
+      if (mse < best) best = mse, chosen = c;
+    }
+    spec = chosen;
+  }
   FitResult fit = identify(TsmFrictionModel(spec), d, fo);
-  long evaluations = fit.evaluations;
+  long evaluations = fit.evaluations + distal_solves;
   bool replaced = false;
   if (adds_elements && may_replace && !spec.terms.empty()) {
     TsmModelSpec alone = spec;
@@ -1126,6 +1148,29 @@ EffectFound describe_structural(const TsmFrictionModel& model, Structural which)
           "; sliding, the friction's magnitude grows by " + num(pos_t1, 3) + " N per N of T1 and " +
           num(pos_t3, 3) + " N per N of T3 moving positive, " + num(neg_t1, 3) + " and " +
           num(neg_t3, 3) + " moving negative";
+      break;
+    }
+    case Structural::kDistalSlip: {
+      // The family's break forces against their widths.
+      e.variable = "distal_angle";
+      e.meaning =
+          "slip driven from the tip: when the tip's load moves the tip while the input holds, "
+          "the tendon stretches and the sheath slips from its distal end, which the input angle "
+          "cannot show; a family of elasto-slide elements driven part of the way to the distal "
+          "angle, x_in + a (x_out - x_in), follows it";
+      double total = 0.0;
+      for (std::size_t j = 0; j < s.distal_count(); ++j) {
+        e.shape.push_back({s.distal_width(j), s.weight[kDistalIndex + j]});
+        total += s.weight[kDistalIndex + j];
+      }
+      e.where =
+          "where the tip moves apart from the input (its load changing in holds and slow "
+          "motion); the data chose " +
+          std::to_string(s.distal_elements) + " elements at a = " + num(s.distal_position, 3) +
+          " of the way to the distal angle (break forces " + num(total, 3) + " N in all)";
+      add("distributed_slip.distal_elements", s.distal_elements);
+      add("distributed_slip.distal_position", s.distal_position);
+      add("distal_slip.break_force", total);
       break;
     }
     case Structural::kSlipWithTension:

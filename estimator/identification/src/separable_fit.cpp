@@ -349,10 +349,6 @@ bool earns_its_place(double candidate_mse, double base_mse) {
   return candidate_mse < (1.0 - kMargin) * (1.0 - kMargin) * base_mse;
 }
 
-// The distal family's size when the fit tries it.
-constexpr int kDistalCandidate = 8;
-constexpr double kDistalPositions[] = {0.25, 0.5, 0.75, 1.0};
-
 }  // namespace
 
 bool distal_angle_measured(const FitData& data) {
@@ -558,7 +554,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     TsmModelSpec best_d;
     for (double a : kDistalPositions) {
       TsmModelSpec d = final_spec;
-      d.slip.distal_elements = kDistalCandidate;
+      d.slip.distal_elements = kDistalCandidateElements;
       d.slip.distal_position = a;
       d.slip.tension_copies = solve_tension;
       d.slip.load_copies = solve_load;
@@ -587,7 +583,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     std::snprintf(line, sizeof line,
                   "%d elements at %.2f of the way to the distal angle %s: validation RMSE %.4g N "
                   "with them, %.4g N without",
-                  kDistalCandidate, best_d.slip.distal_position, keep ? "kept" : "left out",
+                  kDistalCandidateElements, best_d.slip.distal_position, keep ? "kept" : "left out",
                   std::sqrt(best_mse), std::sqrt(mse_e));
     r.notes.push_back(line);
     if (keep) final_spec = best_d;

@@ -50,6 +50,10 @@ CopiesInData copies_in_data(const FitData& data);
 bool tensions_measured(const FitData& data);
 /// Whether every sample has the distal angle (a joint encoder's x_out).
 bool distal_angle_measured(const FitData& data);
+/// The distal family tsm fit and tsm gap try: its size, and its positions
+/// along the sheath (the share of x_out - x_in in its drive).
+inline constexpr int kDistalCandidateElements = 8;
+inline constexpr double kDistalPositions[] = {0.25, 0.5, 0.75, 1.0};
 
 /// Sets the weights (and the copies `spec.slip` has on) of `spec` to the
 /// least-squares optimum over the train samples (every `stride`-th one),
