@@ -117,10 +117,10 @@ void add_simulate_command(CLI::App& app, Context& ctx) {
       ->required();
   // The input by position or by --input: one required input, so neither is
   // marked REQUIRED on its own (the help listed both as required).
-  auto* positional = cmd->add_option(
-      "input", opts->input,
-      "Input CSV (t, x_in; optional tau_in or T1,T3; xd_in,xdd_in; tau_out to compare with); "
-      "required, here or as --input");
+  auto* positional = cmd->add_option("input", opts->input,
+                                     "Input CSV (t, x_in; optional tau_in or T1,T3; x_out; "
+                                     "xd_in,xdd_in; tau_out to compare with); "
+                                     "required, here or as --input");
   cmd->add_option("--input", opts->input, "The input CSV, as a flag (instead of the positional)")
       ->excludes(positional);
   cmd->add_option("--output", opts->output, "Output CSV (t, F[, tau_out_est])")->required();
