@@ -7,17 +7,22 @@
 
 namespace tsmh::estimator {
 
+namespace {
+// Element i of n, log-uniform from lo to hi: every family spans the same widths.
+double log_spaced(double lo, double hi, std::size_t i, int n) {
+  if (n <= 1) return lo;
+  const double f = static_cast<double>(i) / static_cast<double>(n - 1);
+  return lo * std::pow(hi / lo, f);
+}
+}  // namespace
+
 double DistributedSlipSpec::width(std::size_t i) const {
-  if (elements <= 1) return width_min;
-  i %= static_cast<std::size_t>(elements);
-  const double f = static_cast<double>(i) / static_cast<double>(elements - 1);
-  return width_min * std::pow(width_max / width_min, f);
+  const std::size_t n = static_cast<std::size_t>(std::max(elements, 1));
+  return log_spaced(width_min, width_max, i % n, elements);
 }
 
 double DistributedSlipSpec::distal_width(std::size_t j) const {
-  if (distal_elements <= 1) return width_min;
-  const double f = static_cast<double>(j) / static_cast<double>(distal_elements - 1);
-  return width_min * std::pow(width_max / width_min, f);
+  return log_spaced(width_min, width_max, j, distal_elements);
 }
 
 DistributedSlipSpec default_distributed_slip() {
