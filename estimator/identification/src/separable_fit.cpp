@@ -410,9 +410,12 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
   // Copies the data cannot determine are held: switched off for the solve,
   // restored afterwards (their friction is small where the data was taken).
   const DistributedSlipSpec held = start.slip;
-  start.slip.tension_copies = solve_tension;
-  start.slip.load_copies = solve_load;
-  start.slip.drive_copies = solve_drive;
+  const auto solve_determined_copies = [&](DistributedSlipSpec& slip) {
+    slip.tension_copies = solve_tension;
+    slip.load_copies = solve_load;
+    slip.drive_copies = solve_drive;
+  };
+  solve_determined_copies(start.slip);
 
   Search search;
   search.data = &data;
@@ -556,9 +559,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
       TsmModelSpec d = final_spec;
       d.slip.distal_elements = kDistalCandidateElements;
       d.slip.distal_position = a;
-      d.slip.tension_copies = solve_tension;
-      d.slip.load_copies = solve_load;
-      d.slip.drive_copies = solve_drive;
+      solve_determined_copies(d.slip);
       // The position is chosen on the search's stride; the chosen one
       // is solved on every train sample below.
       solve_into(d, data, search.stride);
@@ -569,9 +570,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     }
     if (search.stride > 1) {
       TsmModelSpec d = best_d;
-      d.slip.tension_copies = solve_tension;
-      d.slip.load_copies = solve_load;
-      d.slip.drive_copies = solve_drive;
+      solve_determined_copies(d.slip);
       solve_into(d, data, 1);
       restore_held(d);
       best_d = d;
@@ -603,9 +602,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     TsmModelSpec hybrid = final_spec;
     hybrid.theta = paper.theta, hybrid.gamma = paper.gamma, hybrid.n = paper.n;
     hybrid.sigma = paper.sigma, hybrid.terms = paper.terms, hybrid.fixed = paper.fixed;
-    hybrid.slip.tension_copies = solve_tension;
-    hybrid.slip.load_copies = solve_load;
-    hybrid.slip.drive_copies = solve_drive;
+    solve_determined_copies(hybrid.slip);
     Search hs;
     hs.data = &data;
     hs.stride = search.stride;
