@@ -354,13 +354,23 @@ class CountingModel final : public FrictionDynamics {
   TsmFrictionModel inner_{paper_spec()};
 };
 
+// An estimator over a CountingModel (`model` receives it), with the
+// hindsight or without.
+std::unique_ptr<DistalTorqueEstimator> counted(bool hindsight, CountingModel*& model) {
+  auto owned = std::make_unique<CountingModel>();
+  model = owned.get();
+  const CorrectionsConfig corrections =
+      hindsight ? CorrectionsConfig{} : CorrectionsConfig{.hindsight = {.lag = 0.0}};
+  return std::make_unique<DistalTorqueEstimator>(std::move(owned), 0.01, DifferentiatorConfig{},
+                                                 StartState::kFreeTip, corrections);
+}
+
 TEST(DistalEstimator, OneModelCallPerSample) {
   for (const bool hindsight : {false, true}) {
-    auto owned = std::make_unique<CountingModel>();
-    CountingModel& model = *owned;
-    const CorrectionsConfig corrections =
-        hindsight ? CorrectionsConfig{} : CorrectionsConfig{.hindsight = {.lag = 0.0}};
-    DistalTorqueEstimator est(std::move(owned), 0.01, {}, StartState::kFreeTip, corrections);
+    CountingModel* counting = nullptr;
+    const auto owner = counted(hindsight, counting);
+    CountingModel& model = *counting;
+    DistalTorqueEstimator& est = *owner;
     ASSERT_EQ(est.hindsight(), hindsight);
     // A steady stroke: nothing for the hindsight to correct.
     const auto x_at = [](double t) { return std::round(0.3 * t / 1.5e-4) * 1.5e-4; };
@@ -384,11 +394,10 @@ TEST(DistalEstimator, OneModelCallPerSample) {
 // all reaches it as NaN, which a model reads as a rigid tendon.
 TEST(DistalEstimator, PassesTheDistalAngleToTheModel) {
   for (const bool hindsight : {false, true}) {
-    auto owned = std::make_unique<CountingModel>();
-    CountingModel& model = *owned;
-    const CorrectionsConfig corrections =
-        hindsight ? CorrectionsConfig{} : CorrectionsConfig{.hindsight = {.lag = 0.0}};
-    DistalTorqueEstimator est(std::move(owned), 0.01, {}, StartState::kFreeTip, corrections);
+    CountingModel* counting = nullptr;
+    const auto owner = counted(hindsight, counting);
+    CountingModel& model = *counting;
+    DistalTorqueEstimator& est = *owner;
     ASSERT_EQ(est.hindsight(), hindsight);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     double t = 0.0;

@@ -423,10 +423,12 @@ TsmModelSpec tendon_truth() {
   return s;
 }
 
-// The fit's view of a sheath pair: x, the mean tension and the drive u all
-// measured, the friction from the truth with that drive, plus white noise.
-// The drive reaches 2 T at times, so tendon 2 goes slack.
-FitData tendon_data(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
+// The fit's view of a sheath: the input's motion (the same multisine for
+// every case), what `measured_inputs` adds at time t (tensions, the tip's
+// angle), the friction from the truth with them, plus white noise.
+template <class MeasuredInputs>
+FitData sheath_data(const TsmModelSpec& truth, double noise, std::uint32_t seed,
+                    MeasuredInputs measured_inputs) {
   FitData d;
   const double dt = 1e-3;
   std::mt19937 rng(seed);
@@ -439,14 +441,22 @@ FitData tendon_data(const TsmModelSpec& truth, double noise, std::uint32_t seed)
     m.t = t;
     m.x = 0.5 * std::sin(0.7 * t) + 0.15 * std::sin(2.9 * t + 1.0) + 0.02 * std::sin(11.0 * t);
     m.xd = 0.35 * std::cos(0.7 * t) + 0.435 * std::cos(2.9 * t + 1.0) + 0.22 * std::cos(11.0 * t);
-    m.tension = 20.0 + 4.0 * std::sin(0.13 * t + 0.5);
-    m.drive = 40.0 * std::sin(0.21 * t) * std::sin(0.05 * t + 0.3);
+    measured_inputs(t, m);
     d.measured.push_back(model.step(m, dt) + g(rng));
     d.motion.push_back(m);
     d.role.push_back(role_at(t));
   }
   d.radius_m = 0.01;
   return d;
+}
+
+// A sheath pair: the mean tension and the drive u measured; the drive
+// reaches 2 T at times, so tendon 2 goes slack.
+FitData tendon_data(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
+  return sheath_data(truth, noise, seed, [](double t, Motion& m) {
+    m.tension = 20.0 + 4.0 * std::sin(0.13 * t + 0.5);
+    m.drive = 40.0 * std::sin(0.21 * t) * std::sin(0.05 * t + 0.3);
+  });
 }
 
 TEST(DistributedSlip, TendonWidthsScaleWithTheTensionAndASlackTendonCarriesNone) {
@@ -724,28 +734,12 @@ TEST(DistributedSlip, DistalFamilyFallsBackToTheInputAndReanchors) {
   EXPECT_GT(a.friction(), before + 1.0);
 }
 
-// The fit's view: the tip moves apart from the input by a stretch that
-// varies on its own (tip loads); the friction from the truth plus noise.
+// The tip moves apart from the input by a stretch that varies on its own
+// (tip loads).
 FitData distal_data(const TsmModelSpec& truth, double noise, std::uint32_t seed) {
-  FitData d;
-  const double dt = 1e-3;
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, noise);
-  TsmFrictionModel model(truth);
-  model.reset();
-  for (std::size_t k = 0; k < 40000; ++k) {
-    const double t = static_cast<double>(k) * dt;
-    Motion m;
-    m.t = t;
-    m.x = 0.5 * std::sin(0.7 * t) + 0.15 * std::sin(2.9 * t + 1.0) + 0.02 * std::sin(11.0 * t);
-    m.xd = 0.35 * std::cos(0.7 * t) + 0.435 * std::cos(2.9 * t + 1.0) + 0.22 * std::cos(11.0 * t);
+  return sheath_data(truth, noise, seed, [](double t, Motion& m) {
     m.x_out = m.x + 0.06 * std::sin(0.37 * t) + 0.02 * std::sin(1.7 * t + 0.4);
-    d.measured.push_back(model.step(m, dt) + g(rng));
-    d.motion.push_back(m);
-    d.role.push_back(role_at(t));
-  }
-  d.radius_m = 0.01;
-  return d;
+  });
 }
 
 TEST(DistributedSlip, LeastSquaresRecoversTheDistalFamily) {
