@@ -134,15 +134,20 @@ def anchors(text):
     return found
 
 
-def links(root):
-    problems = []
-    cache = {}
+def markdown_pages(root):
+    """(name, text) of every tracked Markdown page that reads as text."""
     for name in tracked_files(root):
         if not name.endswith(".md"):
             continue
         text = read_text(os.path.join(root, name))
-        if text is None:
-            continue
+        if text is not None:
+            yield name, text
+
+
+def links(root):
+    problems = []
+    cache = {}
+    for name, text in markdown_pages(root):
         base = os.path.dirname(name)
         for number, line in prose_lines(text):
             for m in list(LINK.finditer(line)) + list(IMAGE.finditer(line)):
@@ -241,12 +246,7 @@ def commands(root, bindir):
     if not programs.names:
         return [f"{bindir}: no programs there (build first)"]
     problems = []
-    for name in tracked_files(root):
-        if not name.endswith(".md"):
-            continue
-        text = read_text(os.path.join(root, name))
-        if text is None:
-            continue
+    for name, text in markdown_pages(root):
         for number, code in code_texts(text):
             for segment in SEGMENT_SPLIT.split(code):
                 words = segment.split()
