@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -805,6 +806,106 @@ TEST(DistributedSlip, DistalFamilyRoundTripsThroughTheParamsFile) {
     ADD_FAILURE() << "a negative distal break force was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("weights.d3"), std::string::npos) << e.what();
+  }
+}
+
+// Two places along the sheath: four elements at a quarter of the way to
+// the distal angle, four at three quarters (a stretch that is not uniform).
+TsmModelSpec two_position_truth() {
+  TsmModelSpec s = distal_truth();
+  s.slip.distal_elements = 8;
+  s.slip.distal_position = 0.25;
+  s.slip.distal_position2 = 0.75;
+  const double v[8] = {0.7, 1.5, 0.4, 0.9, 1.1, 0.3, 1.3, 0.6};
+  for (std::size_t j = 0; j < 8; ++j)
+    s.slip.weight[kDistalIndex + j] = v[j];
+  return s;
+}
+
+// The two sub-families are exactly two single-position families side by
+// side, through a change of source too (the second one's last angle is
+// derived from the first's, not stored).
+TEST(DistributedSlip, TwoDistalPositionsAreTwoFamiliesSideBySide) {
+  const TsmModelSpec s = two_position_truth();
+  TsmModelSpec first = s, second = s;
+  first.slip.distal_elements = 4;
+  first.slip.distal_position2 = 0.0;
+  second.slip.distal_elements = 4;
+  second.slip.distal_position = 0.75;
+  second.slip.distal_position2 = 0.0;
+  for (std::size_t j = 0; j < 4; ++j)
+    second.slip.weight[kDistalIndex + j] = s.slip.weight[kDistalIndex + 4 + j];
+  // The second model's proximal and sliding parts would count twice.
+  TsmModelSpec base = s;
+  base.slip.distal_elements = 0;
+  base.slip.distal_position2 = 0.0;
+  TsmFrictionModel a(s), b(first), c(second), p(base);
+  a.reset(), b.reset(), c.reset(), p.reset();
+  const FitData d = distal_data(s, 0.0, 1);
+  for (std::size_t k = 0; k < 6000; ++k) {
+    Motion m = d.motion[k];
+    if (k >= 2000 && k < 3000) m.x_out = std::numeric_limits<double>::quiet_NaN();
+    const double fa = a.step(m, 1e-3);
+    EXPECT_NEAR(fa, b.step(m, 1e-3) + c.step(m, 1e-3) - p.step(m, 1e-3), 1e-9) << k;
+  }
+}
+
+TEST(DistributedSlip, LeastSquaresRecoversTwoDistalPositionsThatOneCannot) {
+  const TsmModelSpec truth = two_position_truth();
+  const FitData d = distal_data(truth, 0.05, 29);
+  TsmModelSpec s = truth;
+  s.slip.weight.fill(1.0);
+  EXPECT_NEAR(std::sqrt(solve_slip_weights(s, d)), 0.05, 0.005);
+  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
+    const std::size_t i = truth.slip.basis_index(k);
+    EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
+  }
+  // One position, anywhere along the sheath and with as many elements,
+  // stays well above the noise.
+  for (int step = 1; step <= 20; ++step) {
+    TsmModelSpec one = truth;
+    one.slip.distal_position = 0.05 * step;
+    one.slip.distal_position2 = 0.0;
+    EXPECT_GT(std::sqrt(solve_slip_weights(one, d)), 2.0 * 0.05) << one.slip.distal_position;
+  }
+}
+
+TEST(DistributedSlip, TwoDistalPositionsRoundTripThroughTheParamsFile) {
+  const TsmModelSpec truth = two_position_truth();
+  const std::string yaml = model_to_yaml(TsmFrictionModel(truth));
+  EXPECT_NE(yaml.find("distal_position2: 0.75"), std::string::npos) << yaml;
+  const auto back = parse_model(yaml, "round trip");
+  const auto& tsm = dynamic_cast<const TsmFrictionModel&>(*back);
+  EXPECT_EQ(tsm.spec().slip.distal_position2, 0.75);
+  const FitData d = distal_data(truth, 0.0, 1);
+  TsmFrictionModel a(truth), b(tsm.spec());
+  a.reset(), b.reset();
+  for (std::size_t k = 0; k < 3000; ++k)
+    EXPECT_DOUBLE_EQ(a.step(d.motion[k], 1e-3), b.step(d.motion[k], 1e-3));
+  // One position writes no such key.
+  EXPECT_EQ(model_to_yaml(TsmFrictionModel(distal_truth())).find("distal_position2"),
+            std::string::npos);
+  const auto names_field = [&](const std::string& from, const std::string& to) {
+    std::string bad = yaml;
+    bad.replace(bad.find(from), from.size(), to);
+    try {
+      parse_model(bad, "bad.yaml");
+      ADD_FAILURE() << "accepted " << to;
+    } catch (const ParamsError& e) {
+      EXPECT_NE(std::string(e.what()).find("distributed_slip.distal_position2"), std::string::npos)
+          << e.what();
+    }
+  };
+  names_field("distal_position2: 0.75", "distal_position2: 1.5");
+  names_field("distal_position2: 0.75", "distal_position2: 0.25");
+  names_field("distal_position2: 0.75", "distal_position2: nope");
+  TsmModelSpec one_element = truth;
+  one_element.slip.distal_elements = 1;
+  try {
+    validate(one_element);
+    ADD_FAILURE() << "two positions with one distal element were accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("distal_position2"), std::string::npos) << e.what();
   }
 }
 

@@ -22,6 +22,11 @@ double DistributedSlipSpec::width(std::size_t i) const {
 }
 
 double DistributedSlipSpec::distal_width(std::size_t j) const {
+  if (distal_position2 > 0.0) {
+    const std::size_t n1 = distal_first_count();
+    return j < n1 ? log_spaced(width_min, width_max, j, static_cast<int>(n1))
+                  : log_spaced(width_min, width_max, j - n1, static_cast<int>(distal_count() - n1));
+  }
   return log_spaced(width_min, width_max, j, distal_elements);
 }
 
@@ -69,6 +74,12 @@ void validate(const DistributedSlipSpec& s) {
     bad("distal_elements", "must be 0 .. " + std::to_string(kMaxDistalElements));
   if (!(s.distal_position > 0.0 && s.distal_position <= 1.0))
     bad("distal_position", "must be a number in (0, 1]");
+  if (!(s.distal_position2 == 0.0 || (s.distal_position2 > 0.0 && s.distal_position2 <= 1.0)))
+    bad("distal_position2", "must be 0 (one position) or a number in (0, 1]");
+  if (s.distal_position2 > 0.0 && s.distal_elements < 2)
+    bad("distal_position2", "needs distal_elements >= 2 (one sub-family per position)");
+  if (s.distal_position2 > 0.0 && s.distal_position2 == s.distal_position)
+    bad("distal_position2", "must differ from distal_position");
   positive("width_min", s.width_min);
   positive("width_max", s.width_max);
   if (s.width_max < s.width_min) bad("width_max", "must be >= width_min");
@@ -97,6 +108,7 @@ SlipKernel::SlipKernel(const DistributedSlipSpec& spec) : spec_(spec) {
     inv_width_[i] = 1.0 / spec_.width(i);
   for (std::size_t j = 0; j < spec_.distal_count(); ++j)
     inv_distal_width_[j] = 1.0 / spec_.distal_width(j);
+  distal_ratio_ = spec_.distal_position2 / spec_.distal_position;
   inv_tension_ref_ = spec_.tension_ref > 0.0 ? 1.0 / spec_.tension_ref : 0.0;
   inv_smoothing_ = 1.0 / spec_.smoothing;
   inv_stribeck_ = 1.0 / spec_.stribeck_speed;
@@ -114,11 +126,19 @@ void SlipKernel::advance(SlipState& s, double x, double xd, double tension, doub
     // change of source re-anchors it (the two angles differ by the stretch).
     const bool measured = std::isfinite(x_out);
     const double y = measured ? x + spec_.distal_position * (x_out - x) : x;
-    const double dy = s.started && measured == s.y_measured ? y - s.y_prev : 0.0;
+    const bool same = s.started && measured == s.y_measured;
+    const double dy = same ? y - s.y_prev : 0.0;
+    // The second sub-family's angle is x + a2 (x_out - x); its last value
+    // follows from the first one's (a1 > 0), so the state stays as it is.
+    const double dy2 = same && spec_.distal_position2 > 0.0
+                           ? dx + distal_ratio_ * ((y - x) - (s.y_prev - s.x_prev))
+                           : dy;
     s.y_prev = y;
     s.y_measured = measured;
+    const std::size_t n1 = spec_.distal_first_count();
     for (std::size_t j = 0; j < spec_.distal_count(); ++j) {
-      const double d = std::min(std::max(s.d[j] + dy * inv_distal_width_[j], -k_neg_), k_pos_);
+      const double step = j < n1 ? dy : dy2;
+      const double d = std::min(std::max(s.d[j] + step * inv_distal_width_[j], -k_neg_), k_pos_);
       s.d[j] = d;
       out.phi[kDistalIndex + j] = d;
     }

@@ -61,11 +61,12 @@ void read_weights(const YAML::Node& node, const DistributedSlipSpec& s, const st
 
 DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin) {
   if (!node.IsMap()) fail(origin, "distributed_slip", "must be a map");
-  reject_unknown_keys(node,
-                      {"elements", "width_min", "width_max", "smoothing", "stribeck_speed",
-                       "weights", "tension_ref", "tension_weights", "load_weights", "drive_weights",
-                       "tendon_widths", "coulomb_play", "distal_elements", "distal_position"},
-                      origin, "distributed_slip");
+  reject_unknown_keys(
+      node,
+      {"elements", "width_min", "width_max", "smoothing", "stribeck_speed", "weights",
+       "tension_ref", "tension_weights", "load_weights", "drive_weights", "tendon_widths",
+       "coulomb_play", "distal_elements", "distal_position", "distal_position2"},
+      origin, "distributed_slip");
   DistributedSlipSpec s;
   s.enabled = true;
   const double elements = number(node["elements"], origin, "distributed_slip.elements");
@@ -105,6 +106,17 @@ DistributedSlipSpec parse_slip(const YAML::Node& node, const std::string& origin
     s.distal_position = number(node["distal_position"], origin, "distributed_slip.distal_position");
     if (!(s.distal_position > 0.0 && s.distal_position <= 1.0))
       fail(origin, "distributed_slip.distal_position", "must be a number in (0, 1]");
+  }
+  if (node["distal_position2"]) {
+    s.distal_position2 =
+        number(node["distal_position2"], origin, "distributed_slip.distal_position2");
+    if (!(s.distal_position2 > 0.0 && s.distal_position2 <= 1.0))
+      fail(origin, "distributed_slip.distal_position2", "must be a number in (0, 1]");
+    if (s.distal_elements < 2)
+      fail(origin, "distributed_slip.distal_position2",
+           "needs distal_elements >= 2 (one sub-family per position)");
+    if (s.distal_position2 == s.distal_position)
+      fail(origin, "distributed_slip.distal_position2", "must differ from distal_position");
   }
   if (!node["weights"]) fail(origin, "distributed_slip.weights", "missing");
   read_weights(node["weights"], s, origin, "weights", s.weight);
@@ -146,6 +158,8 @@ void emit_slip(YAML::Emitter& out, const DistributedSlipSpec& s) {
   if (s.distal_elements > 0) {
     out << YAML::Key << "distal_elements" << YAML::Value << s.distal_elements;
     out << YAML::Key << "distal_position" << YAML::Value << s.distal_position;
+    if (s.distal_position2 > 0.0)
+      out << YAML::Key << "distal_position2" << YAML::Value << s.distal_position2;
   }
   emit_weights(out, "weights", s, s.weight);
   if (s.tension_copies || s.tendon_widths)

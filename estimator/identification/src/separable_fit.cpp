@@ -585,7 +585,45 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
                   kDistalCandidateElements, best_d.slip.distal_position, keep ? "kept" : "left out",
                   std::sqrt(best_mse), std::sqrt(mse_e));
     r.notes.push_back(line);
-    if (keep) final_spec = best_d;
+    if (keep) {
+      final_spec = best_d;
+      // Two places at once: a stretch that is not uniform along the sheath
+      // slips differently at each; kept only where it earns_its_place()
+      // against the single position.
+      double pair_mse = std::numeric_limits<double>::infinity();
+      TsmModelSpec pair_d;
+      for (const auto& pair : kDistalPairs) {
+        TsmModelSpec d = best_d;
+        d.slip.distal_elements = kDistalPairElements;
+        d.slip.distal_position = pair[0];
+        d.slip.distal_position2 = pair[1];
+        d.slip.tension_copies = solve_tension;
+        d.slip.load_copies = solve_load;
+        d.slip.drive_copies = solve_drive;
+        solve_into(d, data, search.stride);
+        restore_held(d);
+        const double mse = validation_mse(d, data);
+        ++distal_evaluations;
+        if (mse < pair_mse) pair_mse = mse, pair_d = d;
+      }
+      if (search.stride > 1) {
+        pair_d.slip.tension_copies = solve_tension;
+        pair_d.slip.load_copies = solve_load;
+        pair_d.slip.drive_copies = solve_drive;
+        solve_into(pair_d, data, 1);
+        restore_held(pair_d);
+        pair_mse = validation_mse(pair_d, data);
+        ++distal_evaluations;
+      }
+      const bool keep_pair = earns_its_place(pair_mse, best_mse);
+      std::snprintf(line, sizeof line,
+                    "%d distal elements at %.2f and %.2f of the way %s: validation RMSE %.4g N "
+                    "with them, %.4g N at one place",
+                    kDistalPairElements, pair_d.slip.distal_position, pair_d.slip.distal_position2,
+                    keep_pair ? "kept" : "left out", std::sqrt(pair_mse), std::sqrt(best_mse));
+      r.notes.push_back(line);
+      if (keep_pair) final_spec = pair_d;
+    }
   }
   long hybrid_evaluations = 0;
   if (global && o.slip_copies_from_data && start.terms.empty() &&

@@ -87,7 +87,8 @@
 // they differ by the stretch x_out - x_in, and only the distal one turns
 // when the tip moves alone. Without a joint encoder (x_out NaN) the family
 // follows x_in (a rigid tendon), and a change of source (the encoder appears
-// or drops out) re-anchors it without a step.
+// or drops out) re-anchors it without a step. With `distal_position2` the
+// family is split in two, each half driven at its own place along the sheath.
 //
 // No sign of the acceleration appears anywhere.
 
@@ -142,6 +143,11 @@ struct DistributedSlipSpec {
   /// distal angle in its drive x_in + a (x_out - x_in): 1 at the tip, 0.5
   /// halfway (a uniformly stretched tendon moves there by half the stretch).
   double distal_position = 1.0;
+  /// A second position (0: none). With it the distal family comes as two
+  /// sub-families: elements 0 .. ceil(n/2)-1 at distal_position, the rest
+  /// at distal_position2, each spanning the same widths: the sheath's slip
+  /// at two places along it (a stretch that is not uniform).
+  double distal_position2 = 0.0;
   /// Weights per basis function, N: elements 0 .. elements-1, then the sliding
   /// functions at kSlidingIndex + {0: coulomb +, 1: coulomb -, 2: stribeck,
   /// 3: viscous (N s/rad)}, then the distal family from kDistalIndex. Unused
@@ -156,6 +162,10 @@ struct DistributedSlipSpec {
     return static_cast<std::size_t>(elements) * (tendon_widths ? 2 : 1);
   }
   std::size_t distal_count() const { return static_cast<std::size_t>(distal_elements); }
+  /// Elements of the first sub-family (all of them with one position).
+  std::size_t distal_first_count() const {
+    return distal_position2 > 0.0 ? (distal_count() + 1) / 2 : distal_count();
+  }
   /// The indices of the basis functions in use, in order (elements, sliding,
   /// distal elements).
   std::size_t basis_count() const { return element_count() + kSlidingFunctions + distal_count(); }
@@ -168,7 +178,7 @@ struct DistributedSlipSpec {
   /// Width of element i at the reference tension (log-uniform from width_min
   /// to width_max; each family spans the same widths).
   double width(std::size_t i) const;
-  /// Width of distal element j (log-uniform over the same span).
+  /// Width of distal element j (log-uniform over the same span, per sub-family).
   double distal_width(std::size_t j) const;
 };
 
@@ -241,6 +251,7 @@ class SlipKernel {
   DistributedSlipSpec spec_;
   std::array<double, kMaxSlipElements> inv_width_{};
   std::array<double, kMaxDistalElements> inv_distal_width_{};
+  double distal_ratio_ = 0.0;  ///< distal_position2 / distal_position
   double inv_smoothing_ = 1.0, inv_stribeck_ = 1.0;
   double inv_tension_ref_ = 0.0;  ///< 1 / tension_ref (0: no per-tendon scaling)
   /// Each family's saturation scale g_j = max(T_j, 0) / T_ref with

@@ -54,6 +54,10 @@ bool distal_angle_measured(const FitData& data);
 /// along the sheath (the share of x_out - x_in in its drive).
 inline constexpr int kDistalCandidateElements = 8;
 inline constexpr double kDistalPositions[] = {0.25, 0.5, 0.75, 1.0};
+/// The two-position family tried after a kept single one: pairs of places
+/// along the sheath, half the elements at each.
+inline constexpr int kDistalPairElements = 12;
+inline constexpr double kDistalPairs[][2] = {{1.0 / 3.0, 2.0 / 3.0}, {0.25, 0.75}, {0.5, 1.0}};
 
 /// Sets the weights (and the copies `spec.slip` has on) of `spec` to the
 /// least-squares optimum over the train samples (every `stride`-th one),
