@@ -597,9 +597,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
         d.slip.distal_elements = kDistalPairElements;
         d.slip.distal_position = pair[0];
         d.slip.distal_position2 = pair[1];
-        d.slip.tension_copies = solve_tension;
-        d.slip.load_copies = solve_load;
-        d.slip.drive_copies = solve_drive;
+        solve_determined_copies(d.slip);
         solve_into(d, data, search.stride);
         restore_held(d);
         const double mse = validation_mse(d, data);
@@ -607,9 +605,7 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
         if (mse < pair_mse) pair_mse = mse, pair_d = d;
       }
       if (search.stride > 1) {
-        pair_d.slip.tension_copies = solve_tension;
-        pair_d.slip.load_copies = solve_load;
-        pair_d.slip.drive_copies = solve_drive;
+        solve_determined_copies(pair_d.slip);
         solve_into(pair_d, data, 1);
         restore_held(pair_d);
         pair_mse = validation_mse(pair_d, data);
