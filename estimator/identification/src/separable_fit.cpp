@@ -8,6 +8,7 @@
 #include <limits>
 #include <nlopt.hpp>
 #include <stdexcept>
+#include <utility>
 
 #include "estimator/parameter_map.hpp"
 #include "estimator/simulate.hpp"
@@ -553,30 +554,35 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
     // never moves apart from the input (free motion without a load), it
     // follows the proximal elements and cannot earn it.
     const double mse_e = validation_mse(final_spec, data);
-    double best_mse = std::numeric_limits<double>::infinity();
-    TsmModelSpec best_d;
-    for (double a : kDistalPositions) {
+    // The variant with the lowest validation error, each solved on the
+    // search's stride; the winner then solved on every train sample.
+    const auto best_solved = [&](const auto& variants, const auto& make) {
+      double best_mse = std::numeric_limits<double>::infinity();
+      TsmModelSpec best;
+      for (const auto& v : variants) {
+        TsmModelSpec d = make(v);
+        solve_determined_copies(d.slip);
+        solve_into(d, data, search.stride);
+        restore_held(d);
+        const double mse = validation_mse(d, data);
+        ++distal_evaluations;
+        if (mse < best_mse) best_mse = mse, best = d;
+      }
+      if (search.stride > 1) {
+        solve_determined_copies(best.slip);
+        solve_into(best, data, 1);
+        restore_held(best);
+        best_mse = validation_mse(best, data);
+        ++distal_evaluations;
+      }
+      return std::pair<TsmModelSpec, double>{best, best_mse};
+    };
+    const auto [best_d, best_mse] = best_solved(kDistalPositions, [&](double a) {
       TsmModelSpec d = final_spec;
       d.slip.distal_elements = kDistalCandidateElements;
       d.slip.distal_position = a;
-      solve_determined_copies(d.slip);
-      // The position is chosen on the search's stride; the chosen one
-      // is solved on every train sample below.
-      solve_into(d, data, search.stride);
-      restore_held(d);
-      const double mse = validation_mse(d, data);
-      ++distal_evaluations;
-      if (mse < best_mse) best_mse = mse, best_d = d;
-    }
-    if (search.stride > 1) {
-      TsmModelSpec d = best_d;
-      solve_determined_copies(d.slip);
-      solve_into(d, data, 1);
-      restore_held(d);
-      best_d = d;
-      best_mse = validation_mse(d, data);
-      ++distal_evaluations;
-    }
+      return d;
+    });
     const bool keep = earns_its_place(best_mse, mse_e);
     char line[200];
     std::snprintf(line, sizeof line,
@@ -590,27 +596,14 @@ FitResult identify_separable(const FrictionModel& initial, const FitData& data,
       // Two places at once: a stretch that is not uniform along the sheath
       // slips differently at each; kept only where it earns_its_place()
       // against the single position.
-      double pair_mse = std::numeric_limits<double>::infinity();
-      TsmModelSpec pair_d;
-      for (const auto& pair : kDistalPairs) {
-        TsmModelSpec d = best_d;
+      const TsmModelSpec single = best_d;
+      const auto [pair_d, pair_mse] = best_solved(kDistalPairs, [&single](const auto& pair) {
+        TsmModelSpec d = single;
         d.slip.distal_elements = kDistalPairElements;
         d.slip.distal_position = pair[0];
         d.slip.distal_position2 = pair[1];
-        solve_determined_copies(d.slip);
-        solve_into(d, data, search.stride);
-        restore_held(d);
-        const double mse = validation_mse(d, data);
-        ++distal_evaluations;
-        if (mse < pair_mse) pair_mse = mse, pair_d = d;
-      }
-      if (search.stride > 1) {
-        solve_determined_copies(pair_d.slip);
-        solve_into(pair_d, data, 1);
-        restore_held(pair_d);
-        pair_mse = validation_mse(pair_d, data);
-        ++distal_evaluations;
-      }
+        return d;
+      });
       const bool keep_pair = earns_its_place(pair_mse, best_mse);
       std::snprintf(line, sizeof line,
                     "%d distal elements at %.2f and %.2f of the way %s: validation RMSE %.4g N "
