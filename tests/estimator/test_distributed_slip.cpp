@@ -496,17 +496,22 @@ TEST(DistributedSlip, TendonWidthsScaleWithTheTensionAndASlackTendonCarriesNone)
   EXPECT_DOUBLE_EQ(b.scale[1], 1.0);
 }
 
-TEST(DistributedSlip, LeastSquaresRecoversTendonWidthsThatCopiesCannotMimic) {
-  const TsmModelSpec truth = tendon_truth();
-  const FitData d = tendon_data(truth, 0.05, 17);
+// Least squares from all-ones weights, on data with 0.05 N of noise: the
+// residual is the noise and every weight within 0.05 N of the truth's.
+void expect_weights_recovered(const TsmModelSpec& truth, const FitData& d) {
   TsmModelSpec s = truth;
   s.slip.weight.fill(1.0);
-  const double mse = solve_slip_weights(s, d);
-  EXPECT_NEAR(std::sqrt(mse), 0.05, 0.005);
+  EXPECT_NEAR(std::sqrt(solve_slip_weights(s, d)), 0.05, 0.005);
   for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
     const std::size_t i = truth.slip.basis_index(k);
     EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
   }
+}
+
+TEST(DistributedSlip, LeastSquaresRecoversTendonWidthsThatCopiesCannotMimic) {
+  const TsmModelSpec truth = tendon_truth();
+  const FitData d = tendon_data(truth, 0.05, 17);
+  expect_weights_recovered(truth, d);
   // One family with both copies (per-tendon break forces, fixed widths)
   // over the same widths stays well above the noise: the widths themselves
   // follow the tension, and a slack tendon's elements lose their state.
@@ -746,14 +751,7 @@ FitData distal_data(const TsmModelSpec& truth, double noise, std::uint32_t seed)
 TEST(DistributedSlip, LeastSquaresRecoversTheDistalFamily) {
   const TsmModelSpec truth = distal_truth();
   const FitData d = distal_data(truth, 0.05, 23);
-  TsmModelSpec s = truth;
-  s.slip.weight.fill(1.0);
-  const double mse = solve_slip_weights(s, d);
-  EXPECT_NEAR(std::sqrt(mse), 0.05, 0.005);
-  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
-    const std::size_t i = truth.slip.basis_index(k);
-    EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
-  }
+  expect_weights_recovered(truth, d);
   // Elements on the input angle alone stay well above the noise.
   TsmModelSpec rigid = truth;
   rigid.slip.distal_elements = 0;
@@ -853,13 +851,7 @@ TEST(DistributedSlip, TwoDistalPositionsAreTwoFamiliesSideBySide) {
 TEST(DistributedSlip, LeastSquaresRecoversTwoDistalPositionsThatOneCannot) {
   const TsmModelSpec truth = two_position_truth();
   const FitData d = distal_data(truth, 0.05, 29);
-  TsmModelSpec s = truth;
-  s.slip.weight.fill(1.0);
-  EXPECT_NEAR(std::sqrt(solve_slip_weights(s, d)), 0.05, 0.005);
-  for (std::size_t k = 0; k < truth.slip.basis_count(); ++k) {
-    const std::size_t i = truth.slip.basis_index(k);
-    EXPECT_NEAR(s.slip.weight[i], truth.slip.weight[i], 0.05) << slip_basis_name(i);
-  }
+  expect_weights_recovered(truth, d);
   // One position, anywhere along the sheath and with as many elements,
   // stays well above the noise.
   for (int step = 1; step <= 20; ++step) {
